@@ -1,0 +1,134 @@
+/* engine.h - the one header service/ and api/ include.
+ *
+ * An engine designs a part's interior.  Each exports one const struct
+ * engine_ops (its name, parameter description and lifecycle); the
+ * registry lists them.  A job (struct job_spec) names an input file, an
+ * engine with its parameters, the common placement keys, an output
+ * format and a printer profile; engine_run() executes it end to end:
+ * read -> repair -> place -> fit check -> engine prepare -> layers ->
+ * output writer -> metrics.  Design: docs/architecture.md.
+ */
+#ifndef INFILLD_ENGINE_H
+#define INFILLD_ENGINE_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "engine/core/err.h"
+#include "engine/core/metrics.h"
+#include "engine/core/param.h"
+#include "engine/core/progress.h"
+#include "engine/core/sink.h"
+#include "engine/geom/vec.h"
+#include "engine/mesh/mesh.h"
+#include "engine/output/output.h"
+#include "engine/output/printer.h"
+#include "engine/slice/layer.h"
+
+#define INFILLD_VERSION "0.1.0"
+
+/* Keys every job accepts (docs/parameters.md). */
+struct common_params {
+	int units;          /* enum mesh_units of the input file */
+	double scale;       /* uniform factor after units */
+	double height_mm;   /* > 0: scale so the printed height is this; 0 = keep */
+	int up;             /* enum mesh_up: file axis pointing up in the printer */
+	double layer_mm;    /* 0 = printer profile default (0.05 resin, 0.2 FDM) */
+	double shell_mm;    /* solid skin kept by engines that hollow or fill */
+	double alpha_deg;   /* largest self-supporting overhang, from the vertical */
+};
+
+const struct param_table *common_param_table(void);
+
+struct engine_ctx {
+	const struct mesh *mesh;           /* placed part (printer frame, mm);
+					      NULL when the input is not a mesh */
+	const struct mesh_report *report;  /* analysis of mesh, NULL with it */
+	const char *input_path;            /* the job's input file */
+	const struct common_params *common;
+	const struct printer *printer;
+	double layer_mm;                   /* resolved layer height */
+	int threads;                       /* worker threads the engine may use */
+	int want_raster;                   /* output consumes pixels */
+	int want_region;                   /* output consumes polygons */
+	const struct raster_map *map;      /* pixel map when want_raster */
+	struct progress *progress;         /* stage already set to "prepare" */
+	struct metrics *metrics;           /* engines may record as they go */
+};
+
+#define ENGINE_F_LATTICE_INPUT 0x1u /* accepts a lattice file instead of a mesh */
+#define ENGINE_F_MESH_OUTPUT 0x2u   /* can write its result as a mesh (stl/obj) */
+
+struct engine_ops {
+	const char *name;    /* "solid", "lattice", ... */
+	const char *summary; /* one line for `infilld engines` */
+	const char *paper;   /* citation of the method, NULL for solid */
+	struct param_table params; /* the engine's own keys */
+	size_t params_size;        /* sizeof the engine's parameter struct */
+	unsigned flags;
+
+	/* Cross-field checks beyond the table's ranges.  NULL = none. */
+	int (*validate)(const void *params, const struct common_params *common,
+			const struct printer *printer, struct err *e);
+	/* Build per-job state (all heavy generation happens here, with
+	 * progress).  *state is the engine's; freed by release(). */
+	int (*prepare)(const struct engine_ctx *ctx, const void *params, void **state,
+		       struct err *e);
+	/* Printed extent in the printer frame (mm), when it differs from the
+	 * placed mesh's bbox or there is no mesh.  NULL = mesh bbox. */
+	int (*extent)(void *state, struct box3 *bbox, struct err *e);
+	/* Fill layer ly (index, z, raster set by the caller; see layer.h).
+	 * Called once per layer in increasing order on the job's thread. */
+	int (*layer)(void *state, struct layer *ly, struct err *e);
+	/* Record the engine's figures under "<name>." into m.  NULL = none. */
+	int (*metrics)(void *state, struct metrics *m, struct err *e);
+	/* ENGINE_F_MESH_OUTPUT: the designed part as a mesh, borrowed from
+	 * state.  NULL otherwise. */
+	int (*result_mesh)(void *state, const struct mesh **out, struct err *e);
+	void (*release)(void *state);
+};
+
+/* Registry: NULL-terminated array of every engine. */
+const struct engine_ops *const *engine_list(void);
+const struct engine_ops *engine_find(const char *name);
+
+struct job_spec {
+	const char *input_path;            /* borrowed */
+	enum mesh_format input_format;     /* MESH_FMT_AUTO unless told */
+	const struct engine_ops *engine;
+	void *engine_params;               /* owned, engine->params_size bytes */
+	struct common_params common;
+	enum out_format format;
+	struct printer printer;            /* profile with overrides applied */
+	int threads;                       /* 0 = all online CPUs */
+	uint64_t output_limit_bytes;       /* 0 = none */
+	const char *job_name;              /* borrowed; NULL = from input name */
+	int64_t created_unix;              /* 0 = now; fixed by tests */
+};
+
+/* Set up a job with defaults: engine by name (NULL = "solid"), format by
+ * name (NULL = from output path, or "sl1"), printer by name (NULL = the
+ * format's default).  Caller calls job_spec_fini() even on failure. */
+int job_spec_init(struct job_spec *js, const char *engine, const char *format,
+		  const char *printer, struct err *e);
+void job_spec_fini(struct job_spec *js);
+
+/* Apply KEY=VALUE: the common table, then the engine's, then the
+ * printer's.  Unknown key: ERR_PARAM with field = key and a message that
+ * says which tables were searched. */
+int job_spec_set(struct job_spec *js, const char *key, const char *value, struct err *e);
+
+/* Ranges, cross-field rules, engine validate().  Everything that can be
+ * known before reading the input. */
+int job_spec_validate(const struct job_spec *js, struct err *e);
+
+/* Run a job end to end, streaming the output to out.  m receives the
+ * metrics (docs/metrics.md); progress/cancel through hooks (may be NULL). */
+int engine_run(const struct job_spec *js, struct sink *out, const struct progress_hooks *hooks,
+	       struct metrics *m, struct err *e);
+
+/* Read, repair and place a mesh as a job would, and describe it in m
+ * (`infilld analyze`, POST /v1/meshes). */
+int engine_analyze(const struct job_spec *js, struct metrics *m, struct err *e);
+
+#endif

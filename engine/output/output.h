@@ -1,0 +1,82 @@
+/* output.h - what printers consume: SL1/SL1S archives, PNG-stack zips,
+ * G-code, and meshes.
+ *
+ * A writer receives layers in order 0..N-1 and streams its format to a
+ * sink; memory is bounded by a few layers in flight, never by the layer
+ * count (formatting in sl1.c/zip, gcode_write.c; toolpath planning in
+ * toolpath.c).  Writers may encode layers on worker threads (pipeline.h)
+ * but write to the sink only from the caller's thread.
+ */
+#ifndef INFILLD_OUTPUT_H
+#define INFILLD_OUTPUT_H
+
+#include <stddef.h>
+#include <time.h>
+
+#include "engine/geom/raster.h"
+#include "engine/geom/vec.h"
+#include "engine/slice/layer.h"
+
+struct err;
+struct sink;
+struct mesh;
+struct metrics;
+struct printer;
+
+enum out_format { OUT_SL1, OUT_SL1S, OUT_ZIP, OUT_GCODE, OUT_STL, OUT_OBJ, OUT_FORMAT_COUNT };
+
+/* "sl1" -> OUT_SL1 ...; ERR_PARAM (field "format") if unknown. */
+int out_format_parse(const char *name, enum out_format *f, struct err *e);
+/* From the output file's extension (.sl1 .sl1s .zip .gcode .stl .obj). */
+int out_format_from_path(const char *path, enum out_format *f, struct err *e);
+const char *out_format_name(enum out_format f);
+const char *out_format_mime(enum out_format f);      /* Content-Type */
+const char *out_format_extension(enum out_format f); /* ".sl1" */
+int out_format_is_raster(enum out_format f);         /* sl1, sl1s, zip */
+int out_format_is_mesh(enum out_format f);           /* stl, obj */
+/* Profile used when the job names none: sl1, sl1s, sl1 (zip), generic-fdm. */
+const char *out_format_default_printer(enum out_format f);
+
+struct out_info {
+	enum out_format format;
+	const struct printer *printer; /* borrowed for the writer's life */
+	int layer_count;
+	double layer_mm;
+	struct box3 part_bbox;         /* printer frame, mm */
+	const struct mesh *mesh;       /* placed part for thumbnails; NULL = render
+					  thumbnails from the layers */
+	const char *job_name;          /* base name: jobDir, G-code comments */
+	const char *engine_name;
+	int threads;                   /* encoder threads, >= 1 */
+	time_t created;                /* timestamp written into the output */
+};
+
+struct out_writer;
+
+/* Start a writer on sink s (borrowed).  Caller frees with out_free(). */
+int out_open(const struct out_info *info, struct sink *s, struct out_writer **w,
+	     struct err *e);
+
+/* What the writer needs from each layer. */
+int out_wants_raster(const struct out_writer *w);
+int out_wants_region(const struct out_writer *w);
+
+/* A zeroed raster of the printer's image size for the next layer (may
+ * block until an in-flight layer frees one).  Ownership passes to the
+ * caller, and back to the writer with out_layer(). */
+int out_raster_get(struct out_writer *w, struct raster **r, struct err *e);
+/* The pixel map of those rasters (printer mm -> pixels). */
+const struct raster_map *out_raster_map(const struct out_writer *w);
+
+/* Hand over layer ly (next in order).  The writer takes ownership of
+ * ly->region and ly->raster (ly is left empty) and rasterises region
+ * itself when the output wants pixels and !ly->raster_ready. */
+int out_layer(struct out_writer *w, struct layer *ly, struct err *e);
+
+/* Flush everything, write trailers/manifests, and record the output's
+ * figures in m: "material_volume_mm3" and a "<format>" object
+ * (sl1: used_material_ml, print_time_s; gcode: filament_mm, print_time_s...). */
+int out_close(struct out_writer *w, struct metrics *m, struct err *e);
+void out_free(struct out_writer *w);
+
+#endif

@@ -1,0 +1,40 @@
+/* layer.h - one printed layer and the layer schedule.
+ *
+ * Schedule: layer k (0-based) spans [k*layer_mm, (k+1)*layer_mm] above the
+ * build plate and is sampled at its middle, z = (k + 0.5) * layer_mm, so
+ * no sampling plane ever passes through a vertex or a horizontal face at
+ * the part's top or bottom (which sit at layer boundaries after
+ * placement).  The layer count is ceil(height_mm / layer_mm).
+ */
+#ifndef INFILLD_LAYER_H
+#define INFILLD_LAYER_H
+
+#include "engine/geom/path.h"
+#include "engine/geom/raster.h"
+
+enum layer_fill {
+	LAYER_FILL_PART = 0, /* region is the part's bulk: FDM may use sparse
+				infill plus top/bottom skins */
+	LAYER_FILL_SOLID     /* region is designed material: deposit all of it */
+};
+
+struct layer {
+	int index, count;
+	double z_mm;        /* sample height, middle of the layer (printer frame) */
+	double z_top_mm;    /* top of the layer: where an FDM nozzle prints it */
+	double height_mm;
+	struct paths region;   /* material region, normalised (path.h); filled by
+				  the engine when the output wants regions */
+	struct raster *raster; /* non-NULL when the output wants pixels: zeroed;
+				  an engine MAY render into it and set
+				  raster_ready, else the driver rasterises region */
+	int raster_ready;
+	enum layer_fill fill;
+};
+
+/* Number of layers for a part of this height (>= 1 for height > 0). */
+int layer_count_for(double height_mm, double layer_mm);
+/* Fill index/z fields of ly for layer k. */
+void layer_place(struct layer *ly, int k, int count, double layer_mm);
+
+#endif

@@ -1,0 +1,68 @@
+/* slice.h - mesh -> layer contours, contours -> pixels, fields -> contours.
+ *
+ * Design and complexity: docs/slicing.md.
+ *
+ * Contours: a z-sweep.  Triangles are sorted by min z once (O(n log n));
+ * planes are visited in increasing z with an active list of triangles
+ * spanning the plane, so a full schedule costs O(n log n + k) for k
+ * triangle/plane intersections.  Segments are chained into loops through
+ * the mesh's shared edges (exact, topological: no epsilon matching).
+ * Degenerate cases: planes are sampled at mid-layer heights (layer.h); a
+ * vertex lying exactly on the plane is treated as lying just above it
+ * (symbolic perturbation), so every triangle is cut in 0 or 2 edges and
+ * horizontal faces contribute nothing.  Open meshes leave open chains;
+ * these are closed (nearest-end joining, then straight closure) and the
+ * result is normalised under the nonzero rule; the count of closed chains
+ * is reported so callers can say what was repaired.
+ *
+ * Raster: exact-area anti-aliasing (signed-area accumulation per cell)
+ * or binary centre sampling, nonzero winding rule.  Nonzero, not
+ * even-odd, because normalised regions are already non-overlapping
+ * (both agree there) and for raw self-overlapping input nonzero treats
+ * overlapping shells of a multi-body mesh as solid, as printers expect.
+ */
+#ifndef INFILLD_SLICE_H
+#define INFILLD_SLICE_H
+
+#include <stddef.h>
+
+#include "engine/geom/path.h"
+#include "engine/geom/raster.h"
+
+struct err;
+struct mesh;
+
+struct slicer;
+
+struct slice_stats {
+	size_t segments;      /* triangle/plane intersections */
+	size_t loops;         /* closed loops found directly */
+	size_t chains_closed; /* open chains that had to be closed (open mesh) */
+};
+
+/* Prepare a sweep over m (borrowed; must outlive the slicer).  Caller
+ * frees with slice_free().  O(n log n). */
+int slice_new(const struct mesh *m, struct slicer **out, struct err *e);
+void slice_free(struct slicer *s);
+
+/* Region (normalised, nm) where the plane z = z_mm cuts the solid.
+ * Successive calls with non-decreasing z are O(active + new); a lower z
+ * restarts the sweep.  stats may be NULL; they accumulate per call. */
+int slice_at(struct slicer *s, double z_mm, struct paths *region, struct slice_stats *stats,
+	     struct err *e);
+
+/* Rasterise a region (nonzero rule) into r through map.  antialias: 1 =
+ * exact area coverage (0..255), 0 = pixel centre inside -> 255.  Pixels
+ * are OR-ed (max) into r, so callers clear r first. */
+int slice_rasterize(const struct paths *region, const struct raster_map *map, int antialias,
+		    struct raster *r, struct err *e);
+
+/* Contours of a scalar field sampled at pixel centres (marching squares
+ * with linear interpolation, saddles resolved by the cell centre value):
+ * the region where field > iso, mapped to printer nm through map's
+ * inverse.  field: w*h floats, row-major, row stride w.  Outside the grid
+ * the field counts as below iso, so contours close. */
+int slice_field_contours(const float *field, int w, int h, float iso,
+			 const struct raster_map *map, struct paths *region, struct err *e);
+
+#endif

@@ -1,0 +1,104 @@
+/* test_path_clip.c - integer paths and the Clipper shim. */
+#include "harness.h"
+
+#include "engine/core/err.h"
+#include "engine/geom/clip.h"
+#include "engine/geom/path.h"
+#include "engine/geom/raster.h"
+
+static void square(struct paths *ps, double x0, double y0, double s, int ccw)
+{
+	struct pt2 p[4] = {{geom_mm_to_nm(x0), geom_mm_to_nm(y0)},
+			   {geom_mm_to_nm(x0 + s), geom_mm_to_nm(y0)},
+			   {geom_mm_to_nm(x0 + s), geom_mm_to_nm(y0 + s)},
+			   {geom_mm_to_nm(x0), geom_mm_to_nm(y0 + s)}};
+	paths_add_pts(ps, p, 4);
+	if (!ccw)
+		path_reverse(&ps->v[ps->n - 1]);
+}
+
+static void test_area_winding(void)
+{
+	struct paths ps;
+
+	paths_init(&ps);
+	square(&ps, 0, 0, 10, 1);
+	square(&ps, 2, 2, 2, 0); /* hole */
+	CHECK_NEAR(paths_area_mm2(&ps), 100 - 4, 1e-9);
+	CHECK_EQ_INT(paths_winding(&ps, (struct pt2){geom_mm_to_nm(1), geom_mm_to_nm(1)}), 1);
+	CHECK_EQ_INT(paths_winding(&ps, (struct pt2){geom_mm_to_nm(3), geom_mm_to_nm(3)}), 0);
+	CHECK_EQ_INT(paths_winding(&ps, (struct pt2){geom_mm_to_nm(11), geom_mm_to_nm(3)}), 0);
+	CHECK_EQ_INT(paths_winding(&ps, (struct pt2){geom_mm_to_nm(10), geom_mm_to_nm(3)}), 1);
+	CHECK_NEAR(paths_distance_mm(&ps, (struct pt2){geom_mm_to_nm(5), geom_mm_to_nm(3)}), 1,
+		   1e-9);
+	CHECK_NEAR(path_length_mm(&ps.v[0], 1), 40, 1e-9);
+	paths_fini(&ps);
+}
+
+static void test_clip(void)
+{
+	struct paths a, b, out;
+	struct err e;
+
+	paths_init(&a);
+	paths_init(&b);
+	paths_init(&out);
+	err_clear(&e);
+	square(&a, 0, 0, 10, 1);
+	square(&b, 5, 5, 10, 0); /* CW input: nonzero union still sees it as filled */
+	REQUIRE_OK(clip_union(&b, CLIP_FILL_NONZERO, &out, &e), &e);
+	CHECK_NEAR(paths_area_mm2(&out), 100, 1e-9); /* normalised to CCW */
+	paths_fini(&b);
+	paths_init(&b);
+	square(&b, 5, 5, 10, 1);
+	REQUIRE_OK(clip_boolean(CLIP_UNION, &a, &b, CLIP_FILL_NONZERO, &out, &e), &e);
+	CHECK_NEAR(paths_area_mm2(&out), 175, 1e-9);
+	REQUIRE_OK(clip_boolean(CLIP_INTERSECTION, &a, &b, CLIP_FILL_NONZERO, &out, &e), &e);
+	CHECK_NEAR(paths_area_mm2(&out), 25, 1e-9);
+	REQUIRE_OK(clip_boolean(CLIP_DIFFERENCE, &a, &b, CLIP_FILL_NONZERO, &out, &e), &e);
+	CHECK_NEAR(paths_area_mm2(&out), 75, 1e-9);
+	/* inward offset of a 10 mm square by 1 mm: an 8 mm square */
+	REQUIRE_OK(clip_offset(&a, -1e6, CLIP_JOIN_MITER, 2, 0, &out, &e), &e);
+	CHECK_NEAR(paths_area_mm2(&out), 64, 1e-6);
+	/* outward round offset: 100 + 4*10*1 + pi (within arc tolerance) */
+	REQUIRE_OK(clip_offset(&a, 1e6, CLIP_JOIN_ROUND, 0, 1000, &out, &e), &e);
+	CHECK_NEAR(paths_area_mm2(&out), 140 + M_PI, 0.01);
+	/* line clipping */
+	{
+		struct paths lines;
+		struct pt2 l[2] = {{geom_mm_to_nm(-5), geom_mm_to_nm(5)},
+				   {geom_mm_to_nm(15), geom_mm_to_nm(5)}};
+		paths_init(&lines);
+		paths_add_pts(&lines, l, 2);
+		REQUIRE_OK(clip_lines(&lines, &a, &out, &e), &e);
+		CHECK_EQ_INT(out.n, 1);
+		CHECK_NEAR(path_length_mm(&out.v[0], 0), 10, 1e-9);
+		paths_fini(&lines);
+	}
+	paths_fini(&a);
+	paths_fini(&b);
+	paths_fini(&out);
+}
+
+static void test_raster_map(void)
+{
+	/* 0.05 mm pixels, column = x / 0.05, row = (10 - y) / 0.05 */
+	struct raster_map m = {{{20, 0}, {0, -20}}, {0, 200}};
+	double u, v, x, y;
+
+	raster_map_apply(&m, 1.0, 2.0, &u, &v);
+	CHECK_NEAR(u, 20, 1e-12);
+	CHECK_NEAR(v, 160, 1e-12);
+	CHECK_EQ_INT(raster_map_invert(&m, u, v, &x, &y), 0);
+	CHECK_NEAR(x, 1.0, 1e-12);
+	CHECK_NEAR(y, 2.0, 1e-12);
+	CHECK_NEAR(raster_map_pixel_area_mm2(&m), 0.0025, 1e-15);
+}
+
+int main(void)
+{
+	RUN(test_area_winding);
+	RUN(test_clip);
+	RUN(test_raster_map);
+	return harness_report();
+}
