@@ -58,7 +58,7 @@ UNIT_BIN := $(patsubst tests/unit/%.c,$(BUILD)/tests/unit/%,$(UNIT_SRC))
 LIBS := $(BUILD)/libapi.a $(BUILD)/libdb.a $(BUILD)/libengine.a
 BIN := $(BUILD)/infilld
 
-.PHONY: all deps build run test check test-unit bench bench-large fuzz check-style clean
+.PHONY: all deps build units run test check test-unit bench bench-large fuzz check-style clean
 all: build
 
 deps:
@@ -103,7 +103,8 @@ test: deps
 	@tests/run.sh $(BUILD) $(if $(filter 1,$(SANITIZE)),sanitize)
 
 # Only the unit tests (fast inner loop while developing).
-test-unit: build
+units: $(UNIT_BIN)
+test-unit: units
 	@tests/run.sh $(BUILD) $(if $(filter 1,$(SANITIZE)),sanitize) unit
 
 # Fuzz targets (clang + libFuzzer); `make fuzz FUZZ_SECONDS=600` for a long run.

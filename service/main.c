@@ -1,11 +1,52 @@
-/* main.c - the infilld binary: CLI entry point (service/cli.c holds the
- * commands once they exist). */
+/* main.c - the infilld binary: one job from the shell, or the service.
+ * Dispatches to the sub-commands of commands.h. */
 #include <stdio.h>
+#include <string.h>
+
+#include "engine/engine.h"
+#include "service/commands.h"
+
+struct command {
+	const char *name;
+	int (*fn)(int argc, char **argv);
+	const char *usage;
+};
+
+static const struct command commands[] = {
+	{"run", cmd_run,
+	 "run MESH -o OUT [--engine NAME] [--format sl1|sl1s|zip|gcode|stl|obj]\n"
+	 "              [--printer NAME] [--set KEY=VALUE]... [--params FILE.json]\n"
+	 "              [--metrics FILE.json] [--threads N] [--quiet]"},
+	{"analyze", cmd_analyze, "analyze MESH [--set KEY=VALUE]...   (JSON report on stdout)"},
+	{"engines", cmd_engines, "engines                              (JSON: engines and parameters)"},
+};
+
+static void usage(FILE *f)
+{
+	fprintf(f, "infilld %s - interiors for 3D-printed parts\n\nusage:\n", INFILLD_VERSION);
+	for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
+		fprintf(f, "  infilld %s\n", commands[i].usage);
+	fprintf(f, "\nSee README.md and docs/ for parameters and formats.\n");
+}
 
 int main(int argc, char **argv)
 {
-	(void)argc;
-	(void)argv;
-	fputs("usage: infilld run MESH -o OUT [options]\n", stderr);
+	if (argc < 2) {
+		usage(stderr);
+		return 2;
+	}
+	if (!strcmp(argv[1], "-h") || !strcmp(argv[1], "--help") || !strcmp(argv[1], "help")) {
+		usage(stdout);
+		return 0;
+	}
+	if (!strcmp(argv[1], "--version") || !strcmp(argv[1], "version")) {
+		printf("infilld %s\n", INFILLD_VERSION);
+		return 0;
+	}
+	for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
+		if (!strcmp(argv[1], commands[i].name))
+			return commands[i].fn(argc - 1, argv + 1);
+	fprintf(stderr, "infilld: unknown command '%s'\n", argv[1]);
+	usage(stderr);
 	return 2;
 }

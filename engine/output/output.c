@@ -1,0 +1,145 @@
+/* output.c - output formats and the writer dispatch (see output.h). */
+#include "engine/output/output.h"
+#include "engine/core/err.h"
+#include "engine/core/mem.h"
+#include "engine/output/writer.h"
+
+#include <string.h>
+#include <strings.h>
+
+struct format_desc {
+	const char *name, *ext, *mime, *printer;
+	int raster, mesh;
+	const struct writer_ops *ops; /* NULL: mesh formats, written by the job driver */
+};
+
+static const struct format_desc formats[OUT_FORMAT_COUNT] = {
+	[OUT_SL1] = {"sl1", ".sl1", "application/vnd.prusa.sl1", "sl1", 1, 0, &sl1_writer_ops},
+	[OUT_SL1S] = {"sl1s", ".sl1s", "application/vnd.prusa.sl1s", "sl1s", 1, 0, &sl1_writer_ops},
+	[OUT_ZIP] = {"zip", ".zip", "application/zip", "sl1", 1, 0, &zip_writer_ops},
+	[OUT_GCODE] = {"gcode", ".gcode", "text/x.gcode", "generic-fdm", 0, 0, &gcode_writer_ops},
+	[OUT_STL] = {"stl", ".stl", "model/stl", NULL, 0, 1, NULL},
+	[OUT_OBJ] = {"obj", ".obj", "model/obj", NULL, 0, 1, NULL},
+};
+
+int out_format_parse(const char *name, enum out_format *f, struct err *e)
+{
+	for (int i = 0; i < OUT_FORMAT_COUNT; i++) {
+		if (name && strcmp(name, formats[i].name) == 0) {
+			*f = (enum out_format)i;
+			return 0;
+		}
+	}
+	return ERR_FIELD(e, "format", "unknown format '%s' (known: sl1, sl1s, zip, gcode, stl, obj)",
+			 name ? name : "");
+}
+
+int out_format_from_path(const char *path, enum out_format *f, struct err *e)
+{
+	const char *dot = path ? strrchr(path, '.') : NULL;
+
+	for (int i = 0; dot && i < OUT_FORMAT_COUNT; i++) {
+		if (strcasecmp(dot, formats[i].ext) == 0) {
+			*f = (enum out_format)i;
+			return 0;
+		}
+	}
+	return ERR_FIELD(e, "format",
+			 "cannot tell the format from '%s': use --format or an extension "
+			 ".sl1, .sl1s, .zip, .gcode, .stl or .obj",
+			 path ? path : "");
+}
+
+const char *out_format_name(enum out_format f)
+{
+	return f < OUT_FORMAT_COUNT ? formats[f].name : "?";
+}
+const char *out_format_mime(enum out_format f)
+{
+	return f < OUT_FORMAT_COUNT ? formats[f].mime : "application/octet-stream";
+}
+const char *out_format_extension(enum out_format f)
+{
+	return f < OUT_FORMAT_COUNT ? formats[f].ext : "";
+}
+int out_format_is_raster(enum out_format f)
+{
+	return f < OUT_FORMAT_COUNT && formats[f].raster;
+}
+int out_format_is_mesh(enum out_format f)
+{
+	return f < OUT_FORMAT_COUNT && formats[f].mesh;
+}
+const char *out_format_default_printer(enum out_format f)
+{
+	return f < OUT_FORMAT_COUNT ? formats[f].printer : NULL;
+}
+
+struct out_writer {
+	const struct writer_ops *ops;
+	void *state;
+};
+
+int out_open(const struct out_info *info, struct sink *s, struct out_writer **out,
+	     struct err *e)
+{
+	struct out_writer *w;
+	int rc;
+
+	if (info->format >= OUT_FORMAT_COUNT || !formats[info->format].ops)
+		return ERR_SET(e, ERR_UNSUPPORTED, "format %s is not a layer format",
+			       out_format_name(info->format));
+	w = mem_calloc(1, sizeof *w);
+	if (!w)
+		return ERR_SET(e, ERR_NOMEM, "out of memory opening the %s writer",
+			       out_format_name(info->format));
+	w->ops = formats[info->format].ops;
+	rc = w->ops->open(info, s, &w->state, e);
+	if (rc) {
+		mem_free(w);
+		return rc;
+	}
+	*out = w;
+	return 0;
+}
+
+int out_wants_raster(const struct out_writer *w)
+{
+	return w->ops->wants_raster;
+}
+
+int out_wants_region(const struct out_writer *w)
+{
+	return w->ops->wants_region;
+}
+
+int out_raster_get(struct out_writer *w, struct raster **r, struct err *e)
+{
+	if (!w->ops->raster_get)
+		return ERR_SET(e, ERR_INTERNAL, "the %s writer takes no rasters", w->ops->name);
+	return w->ops->raster_get(w->state, r, e);
+}
+
+const struct raster_map *out_raster_map(const struct out_writer *w)
+{
+	return w->ops->raster_map ? w->ops->raster_map(w->state) : NULL;
+}
+
+int out_layer(struct out_writer *w, struct layer *ly, struct err *e)
+{
+	return w->ops->layer(w->state, ly, e);
+}
+
+int out_close(struct out_writer *w, struct metrics *m, struct err *e)
+{
+	return w->ops->close(w->state, m, e);
+}
+
+void out_free(struct out_writer *w)
+{
+	if (!w)
+		return;
+	if (w->ops->free_state)
+		w->ops->free_state(w->state);
+	mem_free(w);
+}
