@@ -67,6 +67,10 @@ struct engine_ops {
 	size_t params_size;        /* sizeof the engine's parameter struct */
 	unsigned flags;
 
+	/* ENGINE_F_LATTICE_INPUT: nonzero when the engine reads this input
+	 * file itself (e.g. a lattice file, by magic number or extension);
+	 * the driver then reads no mesh and ctx.mesh is NULL.  NULL = never. */
+	int (*owns_input)(const char *path);
 	/* Cross-field checks beyond the table's ranges.  NULL = none. */
 	int (*validate)(const void *params, const struct common_params *common,
 			const struct printer *printer, struct err *e);
