@@ -46,7 +46,10 @@ struct mesh_read_info {
 	char first_warning[256]; /* the first of them, "" if none */
 };
 
-/* Allocate an empty mesh; caller frees with mesh_free() (NULL-safe). */
+/* Allocate an empty mesh; caller frees with mesh_free() (NULL-safe).
+ * mesh_reserve/mesh_add_* and mesh_free only take meshes made by
+ * mesh_new(), mesh_clone() or a reader (they keep hidden capacities);
+ * every other function also accepts a caller-built struct mesh. */
 struct mesh *mesh_new(void);
 void mesh_free(struct mesh *m);
 /* Reserve room; 0 or ERR_NOMEM. */
@@ -79,6 +82,7 @@ int mesh_weld(struct mesh *m, double tol_mm, size_t *merged_vertices, size_t *dr
 
 struct mesh_report {
 	size_t triangles, vertices;
+	size_t edges;               /* distinct undirected edges (for V - E + F) */
 	struct box3 bbox;           /* mm (or file units before placement) */
 	double volume_mm3;          /* signed (divergence theorem); < 0 = inside out */
 	double area_mm2;
@@ -91,7 +95,8 @@ struct mesh_report {
 	/* repairs performed by mesh_repair() */
 	size_t welded_vertices;
 	size_t dropped_triangles;
-	int flipped;                /* whole mesh was inside out and got reversed */
+	int flipped;                /* some component was inside out and got reversed */
+	size_t flipped_components;  /* how many components were reversed as a whole */
 	size_t reoriented_faces;    /* faces flipped to agree with their component */
 };
 
@@ -130,6 +135,11 @@ void mesh_bvh_free(struct mesh_bvh *b);
 /* Closest point on the surface to p; returns the distance (mm) and, if
  * non-NULL, the point and triangle index. */
 double mesh_bvh_closest(const struct mesh_bvh *b, struct vec3 p, struct vec3 *q, size_t *tri);
+/* Generalised winding number of the surface at p: ~1 inside a closed
+ * outward mesh, ~0 outside, smooth across small holes.  Exact (sum of
+ * triangle solid angles) near p, hierarchical dipole expansion far away
+ * (relative error well below 1e-3 of a full turn; docs/mesh.md). */
+double mesh_bvh_winding(const struct mesh_bvh *b, struct vec3 p);
 /* Inside test by generalised winding number (robust for small holes):
  * winding > 0.5 counts as inside. */
 int mesh_bvh_inside(const struct mesh_bvh *b, struct vec3 p);
