@@ -8,6 +8,7 @@
 #ifndef INFILLD_MESH_INT_H
 #define INFILLD_MESH_INT_H
 
+#include <math.h>
 #include <stddef.h>
 #include <stdint.h>
 
@@ -58,10 +59,50 @@ void mesh_faces_fini(struct mesh_faces *f);
 int mesh_faces_add(struct mesh_faces *f, const uint32_t *idx, size_t k, struct err *e);
 int mesh_faces_finish(struct mesh_faces *f, struct err *e);
 
-/* Radix sort of 64-bit keys carrying a 32-bit payload in the low bits
- * (the caller packs key << 32 | payload or similar); stable, O(n) with
- * `bytes` passes over the most significant `bytes` bytes... see sort.c. */
+/* Stable LSD radix sort of a[0, n) by bytes lo_byte..hi_byte (0 = least
+ * significant) of each key; passes whose byte is constant are skipped.
+ * O(n) per pass.  0 or ERR_NOMEM (a untouched). */
 int mesh_sort_u64(uint64_t *a, size_t n, int lo_byte, int hi_byte);
+
+/* Undirected edges grouped by vertex pair: the records of edges whose
+ * smaller vertex is v are rec[off[v] .. off[v + 1]), sorted; a record is
+ * (larger vertex << 32) | MESH_EDGE_FWD if the face runs small -> large |
+ * face corner (3 t + k: edge from corner k to k + 1 of triangle t).
+ * Edges with equal ends (repeated index) are left out.  O(n) plus the
+ * sort of each vertex's fan (O(d log d) for degree d). */
+#define MESH_EDGE_FWD (UINT64_C(1) << 31)
+#define MESH_EDGE_CORNER(r) ((size_t)((r) & 0x7fffffffu))
+#define MESH_EDGE_OTHER(r) ((uint32_t)((r) >> 32))
+struct mesh_edges {
+	uint32_t *off; /* nv + 1 offsets, owned */
+	uint64_t *rec; /* owned */
+	size_t nv, nrec;
+};
+int mesh_edges_build(const struct mesh *m, struct mesh_edges *ed, struct err *e);
+void mesh_edges_fini(struct mesh_edges *ed);
+
+/* Whether triangle t counts as degenerate (zero area):
+ * repeated corner, or 2 * area <= 1e-12 * (longest edge)^2. */
+int mesh_tri_degenerate(const struct mesh *m, size_t t);
+
+/* Signed solid angle (steradians) of triangle abc seen from p: positive
+ * when p lies behind the triangle (opposite its normal (b-a)x(c-a)), so a
+ * closed outward mesh sums to 4 pi at inner points and 0 outside.  Van Oosterom & Strackee: tan(W/2) = a.(b x c) /
+ * (|a||b||c| + (a.b)|c| + (b.c)|a| + (c.a)|b|) with a, b, c relative to p. */
+static inline double mesh_solid_angle(struct vec3 a, struct vec3 b, struct vec3 c, struct vec3 p)
+{
+	double la, lb, lc, num, den;
+
+	a = v3_sub(a, p);
+	b = v3_sub(b, p);
+	c = v3_sub(c, p);
+	la = v3_len(a);
+	lb = v3_len(b);
+	lc = v3_len(c);
+	num = v3_dot(a, v3_cross(b, c));
+	den = la * lb * lc + v3_dot(a, b) * lc + v3_dot(b, c) * la + v3_dot(c, a) * lb;
+	return 2 * atan2(num, den);
+}
 
 /* Little-endian loads/stores independent of the host's byte order. */
 static inline uint32_t mesh_le32(const unsigned char *p)
