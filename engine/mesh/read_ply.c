@@ -289,7 +289,7 @@ static int read_element(struct ply *p, const struct ply_elem *el)
 				return ERR_PLACE(p->e, ERR_PARSE, place_offset(p), place_line(p),
 						 (long long)i,
 						 "%s %llu: list length %.0f is negative or longer than "
-						 "the file",
+						 "the rest of the file",
 						 el->name, i, cnt);
 			c = (unsigned long long)cnt;
 			if (pr->role == ROLE_INDICES) {
@@ -358,6 +358,9 @@ static int check_counts(struct ply *p, size_t body)
 			}
 			have_idx |= pr->role == ROLE_INDICES;
 		}
+		if (el->kind == KIND_VERTEX && !(have_x && have_y && have_z))
+			return ERR_PLACE(p->e, ERR_PARSE, 0, 0, -1,
+					 "PLY vertex element lacks an x, y or z property");
 		nvertex += el->kind == KIND_VERTEX;
 		if (nvertex > 1)
 			return ERR_PLACE(p->e, ERR_PARSE, 0, 0, -1,
@@ -384,9 +387,6 @@ static int check_counts(struct ply *p, size_t body)
 					 el->name, el->count, body);
 		}
 		need += el->count * min;
-		if (el->kind == KIND_VERTEX && !(have_x && have_y && have_z))
-			return ERR_PLACE(p->e, ERR_PARSE, 0, 0, -1,
-					 "PLY vertex element lacks an x, y or z property");
 	}
 	if (need > body + 1)
 		return ERR_PLACE(p->e, ERR_PARSE, (long long)(p->len - body), 0, -1,
