@@ -114,7 +114,7 @@ FUZZ_ENGINE_SRC = $(filter-out %.cpp,$(ENGINE_SRC))
 FUZZ_SECONDS ?= 60
 .PHONY: fuzz-build
 fuzz-build: $(FUZZ_BIN)
-build-fuzz/%: tests/fuzz/%.c $(wildcard tests/fuzz/*.h) $(ENGINE_SRC)
+build-fuzz/%: tests/fuzz/%.c $(wildcard tests/fuzz/*.h engine/*/*.h) $(ENGINE_SRC)
 	@mkdir -p $(@D)
 	clang -std=c11 -O1 -g -fsanitize=fuzzer,address,undefined $(DEFS) -I. $(PKG_CFLAGS) \
 		-Wall -Wextra -Werror -o $@ $< $(filter engine/core/% engine/geom/%.c engine/mesh/%,$(FUZZ_ENGINE_SRC)) -lm

@@ -94,7 +94,7 @@ int mesh_read_off(const unsigned char *d, size_t len, struct mesh *m,
 			       MESH_MAX_VERTICES);
 		goto out;
 	}
-	if ((unsigned long long)nv * 6 > len + 1 || (unsigned long long)nf * 8 > len + 1) {
+	if ((unsigned long long)nv > (len + 1) / 6 || (unsigned long long)nf > (len + 1) / 8) {
 		rc = ERR_PLACE(e, ERR_PARSE, 0, 0, -1,
 			       "OFF declares %lld vertices and %lld faces, more than a %zu-byte "
 			       "file can hold",

@@ -126,11 +126,8 @@ int mesh_text_int(struct mesh_text *t, long long *out)
 	}
 	if (p >= end || !is_digit(*p))
 		return -1;
-	for (; p < end && is_digit(*p); p++)
-		if (v < (1LL << 62))
-			v = v * 10 + (*p - '0');
-	if (v > (1LL << 62))
-		v = 1LL << 62;
+	for (; p < end && is_digit(*p); p++) /* saturate without overflowing */
+		v = v < (1LL << 62) / 10 ? v * 10 + (*p - '0') : 1LL << 62;
 	t->p = p;
 	*out = neg ? -v : v;
 	return 0;

@@ -90,7 +90,7 @@ static inline int mesh_text_word_is(const char *w, size_t n, const char *kw)
 		char c = w[i];
 		if (c >= 'A' && c <= 'Z')
 			c = (char)(c - 'A' + 'a');
-		if (kw[i] != c) /* kw[i] == '\0' also ends here */
+		if (kw[i] == '\0' || kw[i] != c) /* input may hold NUL bytes */
 			return 0;
 	}
 	return kw[n] == '\0';

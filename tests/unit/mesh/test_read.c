@@ -424,8 +424,39 @@ static void test_numbers(void)
 	expect_error("v 1 2 1e999\n", MESH_FMT_OBJ, ERR_PARSE, "infinite", 1);
 }
 
+/* Fuzzer findings kept as regression cases (tests/data/mesh/). */
+static void test_fuzz_regressions(void)
+{
+	static const struct {
+		const char *file;
+		enum mesh_format fmt;
+		int code;
+		const char *text;
+	} cases[] = {
+		/* NUL byte inside a keyword: the keyword compare ran off its string */
+		{"stl-nul-in-keyword", MESH_FMT_STL, ERR_PARSE, "1 bytes after its 12 declared"},
+		{"ply-nul-in-keyword", MESH_FMT_PLY, ERR_PARSE, "unknown PLY header keyword"},
+		/* 20-digit counts: integer overflow in the parser and the size check */
+		{"off-int-overflow", MESH_FMT_OFF, ERR_PARSE, "more than a 68-byte file can hold"},
+		{"off-count-overflow", MESH_FMT_OFF, ERR_PARSE, "more than a 99-byte file can hold"},
+	};
+	size_t i;
+
+	for (i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+		char path[256];
+		struct mesh *m = NULL;
+		struct err e;
+		snprintf(path, sizeof path, "tests/data/mesh/%s", cases[i].file);
+		err_clear(&e);
+		CHECK_EQ_INT(mesh_read_file(path, cases[i].fmt, &m, NULL, &e), cases[i].code);
+		CHECK_CONTAINS(e.msg, cases[i].text);
+		mesh_free(m);
+	}
+}
+
 int main(void)
 {
+	RUN(test_fuzz_regressions);
 	RUN(test_obj_basic);
 	RUN(test_obj_polygons);
 	RUN(test_obj_forward_and_errors);
