@@ -51,10 +51,18 @@ int mesh_analyze(const struct mesh *m, struct mesh_report *out, struct err *e)
 	r.vertices = m->nv;
 	r.bbox = box3_empty();
 	for (t = 0; t < 3 * m->nt; t++) {
+		struct vec3 p;
 		if (m->tri[t] >= m->nv)
 			return ERR_SET(e, ERR_GEOMETRY, "triangle %zu refers to vertex %u of %zu",
 				       t / 3, m->tri[t], m->nv);
-		box3_add(&r.bbox, m->v[m->tri[t]]);
+		/* plain comparisons: fmin/fmax are library calls (NaN rules) */
+		p = m->v[m->tri[t]];
+		r.bbox.lo.x = p.x < r.bbox.lo.x ? p.x : r.bbox.lo.x;
+		r.bbox.lo.y = p.y < r.bbox.lo.y ? p.y : r.bbox.lo.y;
+		r.bbox.lo.z = p.z < r.bbox.lo.z ? p.z : r.bbox.lo.z;
+		r.bbox.hi.x = p.x > r.bbox.hi.x ? p.x : r.bbox.hi.x;
+		r.bbox.hi.y = p.y > r.bbox.hi.y ? p.y : r.bbox.hi.y;
+		r.bbox.hi.z = p.z > r.bbox.hi.z ? p.z : r.bbox.hi.z;
 	}
 	o = m->nt ? box3_center(r.bbox) : v3(0, 0, 0);
 	for (t = 0; t < m->nt; t++) {

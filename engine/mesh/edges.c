@@ -102,6 +102,8 @@ int mesh_tri_degenerate(const struct mesh *m, size_t t)
 	ab = v3_sub(b, a);
 	bd = v3_sub(d, b);
 	da = v3_sub(a, d);
-	l2 = fmax(v3_len2(ab), fmax(v3_len2(bd), v3_len2(da)));
+	l2 = v3_len2(ab);
+	l2 = v3_len2(bd) > l2 ? v3_len2(bd) : l2;
+	l2 = v3_len2(da) > l2 ? v3_len2(da) : l2;
 	return !(v3_len(v3_cross(ab, v3_sub(d, a))) > 1e-12 * l2);
 }

@@ -62,7 +62,8 @@ struct mesh *mesh_clone(const struct mesh *m);
 /* Read a mesh file (mmap or read; never more than the file's size is
  * allocated for raw data).  name_hint: used for extension-based detection
  * and messages.  On success *out is a new mesh (caller frees) and *info
- * (may be NULL) is filled.  The mesh is not welded: call mesh_weld(). */
+ * (may be NULL) is filled.  The mesh is not welded: call mesh_weld()
+ * (STL readers already share bitwise-identical corners of the soup). */
 int mesh_read_file(const char *path, enum mesh_format fmt, struct mesh **out,
 		   struct mesh_read_info *info, struct err *e);
 /* Same from memory (fuzz targets, uploads already in memory). */

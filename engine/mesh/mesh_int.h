@@ -59,6 +59,22 @@ void mesh_faces_fini(struct mesh_faces *f);
 int mesh_faces_add(struct mesh_faces *f, const uint32_t *idx, size_t k, struct err *e);
 int mesh_faces_finish(struct mesh_faces *f, struct err *e);
 
+/* Corner sharing for soup readers (dedup.c): identical coordinates get
+ * one vertex.  mesh_dedup_add appends p to m or finds its twin; 0 or
+ * ERR_NOMEM. */
+struct mesh_dedup {
+	uint32_t *slot; /* vertex index or UINT32_MAX, owned */
+	size_t mask;
+	uint64_t seed;
+	size_t lookups, probes;
+	int off; /* sharing given up (pathological probing) */
+};
+void mesh_dedup_init(struct mesh_dedup *d);
+void mesh_dedup_fini(struct mesh_dedup *d);
+int mesh_dedup_add(struct mesh_dedup *d, struct mesh *m, struct vec3 p, uint32_t *idx);
+/* Hint: p will be looked up soon (hides the table's cache miss). */
+void mesh_dedup_prefetch(const struct mesh_dedup *d, struct vec3 p);
+
 /* Stable LSD radix sort of a[0, n) by bytes lo_byte..hi_byte (0 = least
  * significant) of each key; passes whose byte is constant are skipped.
  * O(n) per pass.  0 or ERR_NOMEM (a untouched). */

@@ -4,8 +4,9 @@
  * (even if the header starts with "solid"); ASCII when the file starts
  * with the word "solid" and has no NUL byte in its first KiB; otherwise
  * it is judged as a binary file and the size mismatch is the error.
- * Facets become an unwelded soup (3 vertices each); normals are ignored
- * (recomputed from the vertex order).  Quirks and errors: docs/mesh.md.
+ * Facets share bitwise-identical corners (dedup.c) instead of tripling
+ * the vertex count; normals are ignored (recomputed from the vertex
+ * order).  Quirks and errors: docs/mesh.md.
  */
 #include "engine/mesh/mesh.h"
 #include "engine/mesh/mesh_int.h"
@@ -51,6 +52,8 @@ static int read_binary(const unsigned char *d, size_t len, struct mesh *m,
 {
 	size_t nt = mesh_le32(d + 80), i;
 	const unsigned char *r;
+	struct mesh_dedup dd;
+	int rc;
 
 	info->binary = 1;
 	copy_name(info->name, sizeof info->name, (const char *)d, 80);
@@ -60,29 +63,43 @@ static int read_binary(const unsigned char *d, size_t len, struct mesh *m,
 		return ERR_PLACE(e, ERR_LIMIT, 80, 0, -1,
 				 "binary STL declares %zu triangles, more than the limit of %u", nt,
 				 MESH_MAX_TRIANGLES);
-	if (mesh_reserve(m, 3 * nt, nt))
+	/* Closed meshes have about nt / 2 distinct corners; more grow. */
+	if (mesh_reserve(m, nt / 2 + 16, nt))
 		return ERR_SET(e, ERR_NOMEM, "out of memory for %zu STL triangles", nt);
+	mesh_dedup_init(&dd);
 	for (i = 0, r = d + STL_HEADER; i < nt; i++, r += STL_RECORD) {
 		int k, c;
 		if (nonfinite_f32(r) || nonfinite_f32(r + 4) || nonfinite_f32(r + 8))
 			mesh_warn(info, "facet %zu: normal is NaN or infinite (ignored)", i);
+		if (i + 8 < nt) /* corners 8 facets ahead: start their table lookups */
+			for (k = 0; k < 3; k++) {
+				const unsigned char *q = r + 8 * STL_RECORD + 12 + 12 * k;
+				mesh_dedup_prefetch(&dd, v3(mesh_lef32(q), mesh_lef32(q + 4),
+							    mesh_lef32(q + 8)));
+			}
 		for (k = 0; k < 3; k++) {
 			const unsigned char *q = r + 12 + 12 * k;
 			for (c = 0; c < 3; c++)
-				if (nonfinite_f32(q + 4 * c))
-					return ERR_PLACE(e, ERR_PARSE, (long long)(q + 4 * c - d), 0,
-							 (long long)i,
-							 "facet %zu vertex %d: coordinate is %s", i, k,
-							 isnan(mesh_lef32(q + 4 * c)) ? "NaN"
-										      : "infinite");
-			m->v[3 * i + (size_t)k] =
-				v3(mesh_lef32(q), mesh_lef32(q + 4), mesh_lef32(q + 8));
-			m->tri[3 * i + (size_t)k] = (uint32_t)(3 * i + (size_t)k);
+				if (nonfinite_f32(q + 4 * c)) {
+					rc = ERR_PLACE(e, ERR_PARSE, (long long)(q + 4 * c - d), 0,
+						       (long long)i, "facet %zu vertex %d: coordinate is %s",
+						       i, k,
+						       isnan(mesh_lef32(q + 4 * c)) ? "NaN" : "infinite");
+					goto out;
+				}
+			if (mesh_dedup_add(&dd, m,
+					   v3(mesh_lef32(q), mesh_lef32(q + 4), mesh_lef32(q + 8)),
+					   &m->tri[3 * i + (size_t)k])) {
+				rc = ERR_SET(e, ERR_NOMEM, "out of memory for %zu STL triangles", nt);
+				goto out;
+			}
 		}
 	}
-	m->nv = 3 * nt;
 	m->nt = nt;
-	return 0;
+	rc = 0;
+out:
+	mesh_dedup_fini(&dd);
+	return rc;
 }
 
 /* Parser state for ASCII STL. */
@@ -92,6 +109,8 @@ struct stl_ascii {
 	struct mesh_read_info *info;
 	struct err *e;
 	size_t facet;
+	struct mesh_dedup dd;
+	uint32_t corner[3];
 };
 
 static int syntax(struct stl_ascii *s, const char *expected)
@@ -127,7 +146,7 @@ static int read_facet(struct stl_ascii *s)
 {
 	struct mesh_text *t = &s->t;
 	const char *w;
-	size_t n, base = s->m->nv;
+	size_t n;
 	int k, c, rc;
 
 	mesh_text_skip_blank(t);
@@ -180,7 +199,7 @@ static int read_facet(struct stl_ascii *s)
 						 isnan(xyz[c]) ? "NaN" : "infinite");
 		}
 		p = v3(xyz[0], xyz[1], xyz[2]);
-		if (mesh_add_vertex(s->m, p))
+		if (mesh_dedup_add(&s->dd, s->m, p, &s->corner[k]))
 			return ERR_SET(s->e, ERR_NOMEM, "out of memory reading STL facet %zu",
 				       s->facet);
 	}
@@ -195,7 +214,7 @@ static int read_facet(struct stl_ascii *s)
 		return ERR_PLACE(s->e, ERR_LIMIT, (long long)(t->p - t->base), t->line,
 				 (long long)s->facet, "more than the limit of %u triangles",
 				 MESH_MAX_TRIANGLES);
-	if (mesh_add_triangle(s->m, (uint32_t)base, (uint32_t)base + 1, (uint32_t)base + 2))
+	if (mesh_add_triangle(s->m, s->corner[0], s->corner[1], s->corner[2]))
 		return ERR_SET(s->e, ERR_NOMEM, "out of memory reading STL facet %zu", s->facet);
 	return 0;
 }
@@ -212,60 +231,71 @@ static void line_rest(struct mesh_text *t, const char **s, size_t *n)
 	mesh_text_next_line(t);
 }
 
+/* The grammar (the state is set up by read_ascii). */
+static int parse_ascii(struct stl_ascii *s)
+{
+	const char *w, *name;
+	size_t n, nn;
+	int rc, ended = 0;
+
+	if ((rc = expect(s, "solid")))
+		return rc;
+	line_rest(&s->t, &name, &nn);
+	copy_name(s->info->name, sizeof s->info->name, name, nn);
+	for (;;) {
+		mesh_text_skip_ws(&s->t);
+		if (s->t.p >= s->t.end)
+			break;
+		n = mesh_text_word(&s->t, &w);
+		if (mesh_text_word_is(w, n, "facet")) {
+			if (ended)
+				return syntax(s, "solid or the end of the file");
+			s->t.p += n;
+			if ((rc = read_facet(s)))
+				return rc;
+			s->facet++;
+		} else if (mesh_text_word_is(w, n, "endsolid") && !ended) {
+			char end_name[sizeof s->info->name];
+			s->t.p += n;
+			line_rest(&s->t, &name, &nn);
+			copy_name(end_name, sizeof end_name, name, nn);
+			if (end_name[0] && strcmp(end_name, s->info->name) != 0)
+				mesh_warn(s->info, "endsolid name '%s' differs from solid name '%s'",
+					  end_name, s->info->name);
+			ended = 1;
+		} else if (mesh_text_word_is(w, n, "solid") && ended) {
+			/* Several solids in one file: merged into one mesh. */
+			s->t.p += n;
+			line_rest(&s->t, &name, &nn);
+			ended = 0;
+		} else if (ended) {
+			mesh_warn(s->info, "line %ld: %zu bytes of trailing data after endsolid ignored",
+				  s->t.line, (size_t)(s->t.end - s->t.p));
+			break;
+		} else {
+			return syntax(s, "facet or endsolid");
+		}
+	}
+	if (!ended)
+		mesh_warn(s->info, "missing endsolid at the end of the file");
+	return 0;
+}
+
 static int read_ascii(const unsigned char *d, size_t len, struct mesh *m,
 		      struct mesh_read_info *info, struct err *e)
 {
 	struct stl_ascii s;
-	const char *w, *name;
-	size_t n, nn;
-	int rc, ended = 0;
+	int rc;
 
 	memset(&s, 0, sizeof s);
 	mesh_text_init(&s.t, d, len);
 	s.m = m;
 	s.info = info;
 	s.e = e;
-	if ((rc = expect(&s, "solid")))
-		return rc;
-	line_rest(&s.t, &name, &nn);
-	copy_name(info->name, sizeof info->name, name, nn);
-	for (;;) {
-		mesh_text_skip_ws(&s.t);
-		if (s.t.p >= s.t.end)
-			break;
-		n = mesh_text_word(&s.t, &w);
-		if (mesh_text_word_is(w, n, "facet")) {
-			if (ended)
-				return syntax(&s, "solid or the end of the file");
-			s.t.p += n;
-			if ((rc = read_facet(&s)))
-				return rc;
-			s.facet++;
-		} else if (mesh_text_word_is(w, n, "endsolid") && !ended) {
-			char end_name[sizeof info->name];
-			s.t.p += n;
-			line_rest(&s.t, &name, &nn);
-			copy_name(end_name, sizeof end_name, name, nn);
-			if (end_name[0] && strcmp(end_name, info->name) != 0)
-				mesh_warn(info, "endsolid name '%s' differs from solid name '%s'",
-					  end_name, info->name);
-			ended = 1;
-		} else if (mesh_text_word_is(w, n, "solid") && ended) {
-			/* Several solids in one file: merged into one mesh. */
-			s.t.p += n;
-			line_rest(&s.t, &name, &nn);
-			ended = 0;
-		} else if (ended) {
-			mesh_warn(info, "line %ld: %zu bytes of trailing data after endsolid ignored",
-				  s.t.line, (size_t)(s.t.end - s.t.p));
-			break;
-		} else {
-			return syntax(&s, "facet or endsolid");
-		}
-	}
-	if (!ended)
-		mesh_warn(info, "missing endsolid at the end of the file");
-	return 0;
+	mesh_dedup_init(&s.dd);
+	rc = parse_ascii(&s);
+	mesh_dedup_fini(&s.dd);
+	return rc;
 }
 
 int mesh_read_stl(const unsigned char *d, size_t len, struct mesh *m,

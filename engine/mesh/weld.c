@@ -92,8 +92,19 @@ static int exact_reps(const struct mesh *m, uint32_t *rep, struct err *e)
 	for (a = 0; a < m->nv; a = b) {
 		uint32_t first = (uint32_t)key[a];
 		int all_same = 1;
-		for (b = a + 1; b < m->nv && key[b] >> 32 == key[a] >> 32; b++)
+		/* Vertices are visited in hash order: fetch ahead to hide the
+		 * cache misses of these random accesses. */
+		if (a + 32 < m->nv) {
+			__builtin_prefetch(&m->v[(uint32_t)key[a + 32]]);
+			__builtin_prefetch(&rep[(uint32_t)key[a + 32]], 1);
+		}
+		for (b = a + 1; b < m->nv && key[b] >> 32 == key[a] >> 32; b++) {
+			if (b + 32 < m->nv) {
+				__builtin_prefetch(&m->v[(uint32_t)key[b + 32]]);
+				__builtin_prefetch(&rep[(uint32_t)key[b + 32]], 1);
+			}
 			all_same &= same_vertex(m->v[(uint32_t)key[b]], m->v[first]);
+		}
 		if (all_same) {
 			for (i = a; i < b; i++)
 				rep[(uint32_t)key[i]] = first;
