@@ -16,39 +16,10 @@
 #include "engine/core/err.h"
 #include "engine/core/mem.h"
 
-static uint64_t bits(double x)
-{
-	uint64_t u;
-
-	x += 0.0; /* -0 -> +0 */
-	memcpy(&u, &x, sizeof u);
-	return u;
-}
-
-static uint64_t mix(uint64_t k)
-{
-	k ^= k >> 33;
-	k *= UINT64_C(0xff51afd7ed558ccd);
-	k ^= k >> 33;
-	k *= UINT64_C(0xc4ceb9fe1a85ec53);
-	k ^= k >> 33;
-	return k;
-}
-
-static uint64_t hash(const struct mesh_dedup *d, struct vec3 p)
-{
-	return mix(mix(mix(bits(p.x) ^ d->seed) ^ bits(p.y)) ^ bits(p.z));
-}
-
-static int same(struct vec3 a, struct vec3 b)
-{
-	return bits(a.x) == bits(b.x) && bits(a.y) == bits(b.y) && bits(a.z) == bits(b.z);
-}
-
 void mesh_dedup_init(struct mesh_dedup *d)
 {
 	memset(d, 0, sizeof *d);
-	d->seed = mix((uint64_t)(uintptr_t)d ^ UINT64_C(0x9e3779b97f4a7c15));
+	d->seed = mesh_mix64((uint64_t)(uintptr_t)d ^ UINT64_C(0x9e3779b97f4a7c15));
 }
 
 void mesh_dedup_fini(struct mesh_dedup *d)
@@ -67,7 +38,7 @@ static int grow(struct mesh_dedup *d, const struct mesh *m)
 		return ERR_NOMEM;
 	memset(s, 0xff, n * sizeof *s);
 	for (i = 0; i < m->nv; i++) {
-		size_t h = (size_t)hash(d, m->v[i]) & (n - 1);
+		size_t h = (size_t)mesh_hash_coords(m->v[i], d->seed) & (n - 1);
 		while (s[h] != UINT32_MAX)
 			h = (h + 1) & (n - 1);
 		s[h] = (uint32_t)i;
@@ -81,7 +52,7 @@ static int grow(struct mesh_dedup *d, const struct mesh *m)
 void mesh_dedup_prefetch(const struct mesh_dedup *d, struct vec3 p)
 {
 	if (d->slot && !d->off)
-		__builtin_prefetch(&d->slot[(size_t)hash(d, p) & d->mask]);
+		__builtin_prefetch(&d->slot[(size_t)mesh_hash_coords(p, d->seed) & d->mask]);
 }
 
 int mesh_dedup_add(struct mesh_dedup *d, struct mesh *m, struct vec3 p, uint32_t *idx)
@@ -92,9 +63,9 @@ int mesh_dedup_add(struct mesh_dedup *d, struct mesh *m, struct vec3 p, uint32_t
 		if (2 * (m->nv + 1) > d->mask && grow(d, m))
 			return ERR_NOMEM;
 		d->lookups++;
-		for (h = (size_t)hash(d, p) & d->mask; d->slot[h] != UINT32_MAX;
+		for (h = (size_t)mesh_hash_coords(p, d->seed) & d->mask; d->slot[h] != UINT32_MAX;
 		     h = (h + 1) & d->mask) {
-			if (same(m->v[d->slot[h]], p)) {
+			if (mesh_same_coords(m->v[d->slot[h]], p)) {
 				*idx = d->slot[h];
 				return 0;
 			}

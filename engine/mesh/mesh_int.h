@@ -59,6 +59,45 @@ void mesh_faces_fini(struct mesh_faces *f);
 int mesh_faces_add(struct mesh_faces *f, const uint32_t *idx, size_t k, struct err *e);
 int mesh_faces_finish(struct mesh_faces *f, struct err *e);
 
+/* Coordinate bits for exact comparison and hashing: -0 counts as +0. */
+static inline uint64_t mesh_coord_bits(double x)
+{
+	union {
+		double d;
+		uint64_t u;
+	} c;
+	c.d = x + 0.0; /* -0 -> +0 */
+	return c.u;
+}
+
+static inline int mesh_same_coords(struct vec3 a, struct vec3 b)
+{
+	return mesh_coord_bits(a.x) == mesh_coord_bits(b.x) &&
+	       mesh_coord_bits(a.y) == mesh_coord_bits(b.y) &&
+	       mesh_coord_bits(a.z) == mesh_coord_bits(b.z);
+}
+
+/* 64-bit finaliser (MurmurHash3's fmix64): every input bit affects every
+ * output bit. */
+static inline uint64_t mesh_mix64(uint64_t k)
+{
+	k ^= k >> 33;
+	k *= UINT64_C(0xff51afd7ed558ccd);
+	k ^= k >> 33;
+	k *= UINT64_C(0xc4ceb9fe1a85ec53);
+	k ^= k >> 33;
+	return k;
+}
+
+/* Hash of a point's coordinate bits under a seed. */
+static inline uint64_t mesh_hash_coords(struct vec3 p, uint64_t seed)
+{
+	uint64_t h = mesh_mix64(mesh_coord_bits(p.x) ^ seed);
+
+	h = mesh_mix64(h ^ mesh_coord_bits(p.y));
+	return mesh_mix64(h ^ mesh_coord_bits(p.z));
+}
+
 /* Corner sharing for soup readers (dedup.c): identical coordinates get
  * one vertex.  mesh_dedup_add appends p to m or finds its twin; 0 or
  * ERR_NOMEM. */

@@ -22,39 +22,6 @@
 #include "engine/core/err.h"
 #include "engine/core/mem.h"
 
-static uint64_t canon_bits(double x)
-{
-	uint64_t u;
-
-	x += 0.0; /* -0 -> +0 */
-	memcpy(&u, &x, sizeof u);
-	return u;
-}
-
-static uint64_t fmix64(uint64_t k)
-{
-	k ^= k >> 33;
-	k *= UINT64_C(0xff51afd7ed558ccd);
-	k ^= k >> 33;
-	k *= UINT64_C(0xc4ceb9fe1a85ec53);
-	k ^= k >> 33;
-	return k;
-}
-
-static uint32_t hash_vertex(struct vec3 p)
-{
-	uint64_t h = fmix64(canon_bits(p.x) ^ UINT64_C(0x9e3779b97f4a7c15));
-	h = fmix64(h ^ canon_bits(p.y));
-	h = fmix64(h ^ canon_bits(p.z));
-	return (uint32_t)(h >> 32);
-}
-
-static int same_vertex(struct vec3 a, struct vec3 b)
-{
-	return canon_bits(a.x) == canon_bits(b.x) && canon_bits(a.y) == canon_bits(b.y) &&
-	       canon_bits(a.z) == canon_bits(b.z);
-}
-
 /* qsort context for collision runs: indices compared by coordinate bits. */
 struct vkey {
 	uint64_t x, y, z;
@@ -84,7 +51,7 @@ static int exact_reps(const struct mesh *m, uint32_t *rep, struct err *e)
 	if (!key)
 		return ERR_SET(e, ERR_NOMEM, "out of memory welding %zu vertices", m->nv);
 	for (i = 0; i < m->nv; i++)
-		key[i] = (uint64_t)hash_vertex(m->v[i]) << 32 | i;
+		key[i] = (mesh_hash_coords(m->v[i], 0) & ~UINT64_C(0xffffffff)) | i; /* hash:32 idx:32 */
 	if (mesh_sort_u64(key, m->nv, 4, 7)) {
 		rc = ERR_SET(e, ERR_NOMEM, "out of memory welding %zu vertices", m->nv);
 		goto out;
@@ -103,7 +70,7 @@ static int exact_reps(const struct mesh *m, uint32_t *rep, struct err *e)
 				__builtin_prefetch(&m->v[(uint32_t)key[b + 32]]);
 				__builtin_prefetch(&rep[(uint32_t)key[b + 32]], 1);
 			}
-			all_same &= same_vertex(m->v[(uint32_t)key[b]], m->v[first]);
+			all_same &= mesh_same_coords(m->v[(uint32_t)key[b]], m->v[first]);
 		}
 		if (all_same) {
 			for (i = a; i < b; i++)
@@ -122,9 +89,9 @@ static int exact_reps(const struct mesh *m, uint32_t *rep, struct err *e)
 		}
 		for (i = a; i < b; i++) {
 			struct vec3 p = m->v[(uint32_t)key[i]];
-			vk[i - a].x = canon_bits(p.x);
-			vk[i - a].y = canon_bits(p.y);
-			vk[i - a].z = canon_bits(p.z);
+			vk[i - a].x = mesh_coord_bits(p.x);
+			vk[i - a].y = mesh_coord_bits(p.y);
+			vk[i - a].z = mesh_coord_bits(p.z);
 			vk[i - a].i = (uint32_t)key[i];
 		}
 		qsort(vk, b - a, sizeof *vk, cmp_vkey);

@@ -29,6 +29,22 @@ struct wbuf {
 	char buf[16384];
 };
 
+/* A staging buffer bound to s (heap: 16 KiB is too much for some stacks). */
+static struct wbuf *wbuf_new(struct sink *s, struct err *e, const char *what)
+{
+	struct wbuf *w = mem_alloc(sizeof *w);
+
+	if (!w) {
+		ERR_SET(e, ERR_NOMEM, "out of memory writing %s", what);
+		return NULL;
+	}
+	w->s = s;
+	w->e = e;
+	w->rc = 0;
+	w->n = 0;
+	return w;
+}
+
 static void w_flush(struct wbuf *w)
 {
 	if (w->rc == 0 && w->n)
@@ -149,13 +165,9 @@ int mesh_write_stl(const struct mesh *m, int binary, struct sink *s, struct err 
 		    fabs(m->v[t].z) > FLT_MAX)
 			return ERR_SET(e, ERR_LIMIT, "vertex %zu does not fit binary STL's float32",
 				       t);
-	w = mem_alloc(sizeof *w);
+	w = wbuf_new(s, e, "STL");
 	if (!w)
-		return ERR_SET(e, ERR_NOMEM, "out of memory writing STL");
-	w->s = s;
-	w->e = e;
-	w->rc = 0;
-	w->n = 0;
+		return ERR_NOMEM;
 	if (binary) {
 		unsigned char head[84] = "binary STL written by infilld";
 		memset(head + 29, ' ', 80 - 29);
@@ -201,13 +213,9 @@ static int write_text(const struct mesh *m, struct sink *s, struct err *e, int o
 
 	if ((rc = check_mesh(m, e)))
 		return rc;
-	w = mem_alloc(sizeof *w);
+	w = wbuf_new(s, e, obj ? "OBJ" : "OFF");
 	if (!w)
-		return ERR_SET(e, ERR_NOMEM, "out of memory writing %s", obj ? "OBJ" : "OFF");
-	w->s = s;
-	w->e = e;
-	w->rc = 0;
-	w->n = 0;
+		return ERR_NOMEM;
 	if (obj)
 		w_printf(w, "# written by infilld: %zu vertices, %zu triangles\n", m->nv, m->nt);
 	else
@@ -255,13 +263,9 @@ int mesh_write_ply(const struct mesh *m, int binary, struct sink *s, struct err 
 
 	if ((rc = check_mesh(m, e)))
 		return rc;
-	w = mem_alloc(sizeof *w);
+	w = wbuf_new(s, e, "PLY");
 	if (!w)
-		return ERR_SET(e, ERR_NOMEM, "out of memory writing PLY");
-	w->s = s;
-	w->e = e;
-	w->rc = 0;
-	w->n = 0;
+		return ERR_NOMEM;
 	w_printf(w,
 		 "ply\nformat %s 1.0\ncomment written by infilld\nelement vertex %zu\n"
 		 "property double x\nproperty double y\nproperty double z\nelement face %zu\n"

@@ -106,13 +106,17 @@ static void test_closest(void)
 	mesh_free(m);
 }
 
-/* Brute-force ray/triangle (Cramer's rule on o + t d = a + u (b-a) + v (c-a)). */
-static double brute_ray(const struct mesh *m, struct vec3 o, struct vec3 d, int *grazing)
+/* Brute-force ray against every triangle (Cramer's rule on
+ * o + t d = a + u (b-a) + v (c-a)): nearest t > 0 and the number of hits;
+ * *grazing when a hit is within eps (barycentric) of an edge. */
+static double brute_ray(const struct mesh *m, struct vec3 o, struct vec3 d, double eps, int *hits,
+			int *grazing)
 {
 	double best = INFINITY;
 	size_t t;
 
 	*grazing = 0;
+	*hits = 0;
 	for (t = 0; t < m->nt; t++) {
 		struct vec3 a = m->v[m->tri[3 * t]], e1 = v3_sub(m->v[m->tri[3 * t + 1]], a),
 			    e2 = v3_sub(m->v[m->tri[3 * t + 2]], a), rhs = v3_sub(o, a);
@@ -123,39 +127,15 @@ static double brute_ray(const struct mesh *m, struct vec3 o, struct vec3 d, int 
 		u = v3_dot(rhs, v3_cross(e2, nd)) / det;
 		v = v3_dot(e1, v3_cross(rhs, nd)) / det;
 		s = v3_dot(e1, v3_cross(e2, rhs)) / det;
-		if (u < -1e-9 || v < -1e-9 || u + v > 1 + 1e-9 || s <= 0)
+		if (u < -eps || v < -eps || u + v > 1 + eps || s <= 0)
 			continue;
-		if (u < 1e-9 || v < 1e-9 || u + v > 1 - 1e-9)
+		if (u < eps || v < eps || u + v > 1 - eps)
 			*grazing = 1;
+		(*hits)++;
 		if (s < best)
 			best = s;
 	}
 	return best;
-}
-
-static int brute_parity(const struct mesh *m, struct vec3 o, struct vec3 d, int *grazing)
-{
-	int n = 0;
-	size_t t;
-
-	*grazing = 0;
-	for (t = 0; t < m->nt; t++) {
-		struct vec3 a = m->v[m->tri[3 * t]], e1 = v3_sub(m->v[m->tri[3 * t + 1]], a),
-			    e2 = v3_sub(m->v[m->tri[3 * t + 2]], a), rhs = v3_sub(o, a);
-		struct vec3 nd = v3_scale(d, -1);
-		double det = v3_dot(e1, v3_cross(e2, nd)), u, v, s;
-		if (det == 0)
-			continue;
-		u = v3_dot(rhs, v3_cross(e2, nd)) / det;
-		v = v3_dot(e1, v3_cross(rhs, nd)) / det;
-		s = v3_dot(e1, v3_cross(e2, rhs)) / det;
-		if (u < -1e-7 || v < -1e-7 || u + v > 1 + 1e-7 || s <= 0)
-			continue;
-		if (u < 1e-7 || v < 1e-7 || u + v > 1 - 1e-7)
-			*grazing = 1;
-		n++;
-	}
-	return n & 1;
 }
 
 static void test_ray(void)
@@ -174,8 +154,9 @@ static void test_ray(void)
 		struct vec3 o = sample_box(r.bbox, 0.2);
 		struct vec3 d = v3_normalize(v3(frand() - 0.5, frand() - 0.5, frand() - 0.5));
 		size_t tri = 0;
-		int grazing;
-		double t = mesh_bvh_ray(b, o, d, &tri), tb = brute_ray(m, o, d, &grazing);
+		int grazing, crossings;
+		double t = mesh_bvh_ray(b, o, d, &tri);
+		double tb = brute_ray(m, o, d, 1e-9, &crossings, &grazing);
 		if (grazing)
 			continue;
 		if (isinf(tb)) {
@@ -224,7 +205,9 @@ static void test_inside_closed(void)
 		for (i = 0; i < n; i++) {
 			struct vec3 p = sample_box(r.bbox, 0.05);
 			struct vec3 d = v3_normalize(v3(frand() - 0.5, frand() - 0.5, frand() - 0.5));
-			int grazing, par = brute_parity(m, p, d, &grazing);
+			int grazing, hits, par;
+			(void)brute_ray(m, p, d, 1e-7, &hits, &grazing);
+			par = hits & 1;
 			double w = mesh_bvh_winding(b, p);
 			if (grazing)
 				continue;
