@@ -138,11 +138,13 @@ void mesh_bvh_free(struct mesh_bvh *b);
 double mesh_bvh_closest(const struct mesh_bvh *b, struct vec3 p, struct vec3 *q, size_t *tri);
 /* Generalised winding number of the surface at p: ~1 inside a closed
  * outward mesh, ~0 outside, smooth across small holes.  Exact (sum of
- * triangle solid angles) near p, hierarchical dipole expansion far away
- * (relative error well below 1e-3 of a full turn; docs/mesh.md). */
+ * triangle solid angles) near p, hierarchical dipole expansion far away:
+ * absolute error ~1e-3 typical, below 0.05 (docs/mesh.md). */
 double mesh_bvh_winding(const struct mesh_bvh *b, struct vec3 p);
 /* Inside test by generalised winding number (robust for small holes):
- * winding > 0.5 counts as inside. */
+ * winding > 0.5 counts as inside.  Closed meshes use one exact ray
+ * crossing count instead (falling back to the winding number when the
+ * ray grazes an edge). */
 int mesh_bvh_inside(const struct mesh_bvh *b, struct vec3 p);
 /* First hit of the ray o + t*d (t > 0); returns t or INFINITY. */
 double mesh_bvh_ray(const struct mesh_bvh *b, struct vec3 o, struct vec3 d, size_t *tri);
