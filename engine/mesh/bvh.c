@@ -348,11 +348,11 @@ void mesh_bvh_free(struct mesh_bvh *b)
 	mem_free(b);
 }
 
-static double box_dist2(struct box3 b, struct vec3 p)
+static inline double box_dist2(const struct box3 *b, struct vec3 p)
 {
-	double dx = dmax(dmax(b.lo.x - p.x, 0), p.x - b.hi.x);
-	double dy = dmax(dmax(b.lo.y - p.y, 0), p.y - b.hi.y);
-	double dz = dmax(dmax(b.lo.z - p.z, 0), p.z - b.hi.z);
+	double dx = dmax(dmax(b->lo.x - p.x, 0), p.x - b->hi.x);
+	double dy = dmax(dmax(b->lo.y - p.y, 0), p.y - b->hi.y);
+	double dz = dmax(dmax(b->lo.z - p.z, 0), p.z - b->hi.z);
 
 	return dx * dx + dy * dy + dz * dz;
 }
@@ -408,7 +408,11 @@ static struct vec3 closest_on_tri(struct vec3 p, struct vec3 a, struct vec3 b, s
 
 double mesh_bvh_closest(const struct mesh_bvh *b, struct vec3 p, struct vec3 *q, size_t *tri)
 {
-	uint32_t stack[BVH_STACK];
+	/* Stack entries carry their box distance, computed once when pushed. */
+	struct {
+		uint32_t node;
+		double d2;
+	} stack[BVH_STACK];
 	int sp = 0;
 	double best2 = INFINITY;
 	struct vec3 bestq = p;
@@ -416,11 +420,15 @@ double mesh_bvh_closest(const struct mesh_bvh *b, struct vec3 p, struct vec3 *q,
 
 	if (!b->nnodes)
 		return INFINITY;
-	stack[sp++] = 0;
+	stack[0].node = 0;
+	stack[0].d2 = box_dist2(&b->nodes[0].box, p);
+	sp = 1;
 	while (sp > 0) {
-		const struct bvh_node *nd = &b->nodes[stack[--sp]];
-		if (box_dist2(nd->box, p) >= best2)
+		const struct bvh_node *nd;
+		sp--;
+		if (stack[sp].d2 >= best2)
 			continue;
+		nd = &b->nodes[stack[sp].node];
 		if (nd->count) {
 			uint32_t i;
 			for (i = nd->left; i < nd->left + nd->count; i++) {
@@ -434,14 +442,18 @@ double mesh_bvh_closest(const struct mesh_bvh *b, struct vec3 p, struct vec3 *q,
 				}
 			}
 		} else {
-			double dl = box_dist2(b->nodes[nd->left].box, p);
-			double dr = box_dist2(b->nodes[nd->left + 1].box, p);
-			uint32_t near = dl <= dr ? nd->left : nd->left + 1;
-			uint32_t far = dl <= dr ? nd->left + 1 : nd->left;
-			if ((dl <= dr ? dr : dl) < best2)
-				stack[sp++] = far;
-			if ((dl <= dr ? dl : dr) < best2)
-				stack[sp++] = near;
+			double dl = box_dist2(&b->nodes[nd->left].box, p);
+			double dr = box_dist2(&b->nodes[nd->left + 1].box, p);
+			int near_right = dr < dl;
+			double dn = near_right ? dr : dl, df = near_right ? dl : dr;
+			if (df < best2) { /* farther child first: popped last */
+				stack[sp].node = nd->left + (uint32_t)!near_right;
+				stack[sp++].d2 = df;
+			}
+			if (dn < best2) {
+				stack[sp].node = nd->left + (uint32_t)near_right;
+				stack[sp++].d2 = dn;
+			}
 		}
 	}
 	if (q)

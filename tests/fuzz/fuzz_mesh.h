@@ -1,8 +1,9 @@
 /* fuzz_mesh.h - the body shared by the mesh fuzz targets.
  *
  * Reads the input with a fixed format; on success runs analysis (which
- * must not fail), repair and one BVH closest/inside query, so every stage
- * sees hostile-but-accepted geometry.  Any crash, sanitizer report,
+ * must not fail), a tolerance weld and a placement on a copy, repair and
+ * BVH closest/inside/ray queries, so every stage sees hostile-but-accepted
+ * geometry.  Any crash, sanitizer report,
  * leak or abort is a finding.
  */
 #ifndef INFILLD_FUZZ_MESH_H
@@ -33,6 +34,15 @@ static inline int fuzz_mesh_one(const uint8_t *data, size_t size, enum mesh_form
 	}
 	if (m->nt == 0 || mesh_analyze(m, &r, &e) != 0)
 		abort();
+	{ /* tolerance weld and placement on a copy (errors allowed, crashes not) */
+		struct mesh *c = mesh_clone(m);
+		struct mesh_placement pl = {MESH_UNITS_MM, 1.0, 50.0, (int)(size % 6), 60, 30};
+		if (!c)
+			abort();
+		(void)mesh_weld(c, 1e-3 * (1 + (double)(size % 7)), NULL, NULL, &e);
+		(void)mesh_place(c, &pl, &e);
+		mesh_free(c);
+	}
 	if (mesh_repair(m, &r, &e) != 0)
 		abort();
 	if (m->nt > 0 && mesh_bvh_new(m, &b, &e) == 0) {
