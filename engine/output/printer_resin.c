@@ -10,12 +10,15 @@
 
 #include <math.h>
 #include <stddef.h>
+#include <string.h>
 
-/* Exposure limits of both printers (PrusaResearch.ini min/max_exposure_time,
- * min/max_initial_exposure_time). */
+/* Exposure limits the SL1/SL1S firmware accepts (slafw defines.py:
+ * exposure_time_min/max_ms, exposure_time_first_min/max_ms); PrusaSlicer's
+ * own limits (1..120 s, 1..300 s) are wider. */
 #define RESIN_EXPOSURE_MIN_S 1.0
-#define RESIN_EXPOSURE_MAX_S 120.0
-#define RESIN_EXPOSURE_FIRST_MAX_S 300.0
+#define RESIN_EXPOSURE_MAX_S 60.0
+#define RESIN_EXPOSURE_FIRST_MIN_S 10.0
+#define RESIN_EXPOSURE_FIRST_MAX_S 120.0
 
 const struct printer printer_resin_profiles[] = {
 	{
@@ -88,7 +91,7 @@ static const struct param_desc resin_desc[] = {
 	 .min = RESIN_EXPOSURE_MIN_S, .max = RESIN_EXPOSURE_MAX_S, .def = 7.5, .unit = "s",
 	 .help = "UV exposure of each layer after the first ones (config.ini expTime)"},
 	{.name = "exposure_first_s", .type = PARAM_NUM, .offset = RF(exposure_first_s),
-	 .min = RESIN_EXPOSURE_MIN_S, .max = RESIN_EXPOSURE_FIRST_MAX_S, .def = 35, .unit = "s",
+	 .min = RESIN_EXPOSURE_FIRST_MIN_S, .max = RESIN_EXPOSURE_FIRST_MAX_S, .def = 35, .unit = "s",
 	 .help = "UV exposure of the first layers, which bond to the platform (expTimeFirst)"},
 	{.name = "fade_layers", .type = PARAM_INT, .offset = RF(fade_layers), .min = 3, .max = 20,
 	 .def = 10, .unit = "",
@@ -139,6 +142,11 @@ int printer_resin_check(const struct resin_printer *r, struct err *e)
 				 "exposure_first_s = %g s is shorter than exposure_s = %g s: the "
 				 "first layers must cure at least as long to hold on the platform",
 				 r->exposure_first_s, r->exposure_s);
+	if (strpbrk(r->material, "#\"\\=[]"))
+		return ERR_FIELD(e, "material",
+				 "material '%s' contains one of # \" \\ = [ ], which config.ini "
+				 "cannot hold unquoted",
+				 r->material);
 	if (r->model[0] == '\0')
 		return ERR_FIELD(e, "printer", "resin profile without a printerModel");
 	return 0;
