@@ -14,6 +14,7 @@ struct solid_params {
 };
 
 struct solid_state {
+	const struct mesh *mesh; /* the placed part, borrowed from the driver */
 	struct slicer *slicer;
 	struct slice_stats stats;
 	double area_sum_mm2; /* sum of region areas (for the metrics) */
@@ -38,6 +39,7 @@ static int solid_prepare(const struct engine_ctx *ctx, const void *params, void 
 	if (!s)
 		return ERR_SET(e, ERR_NOMEM, "out of memory");
 	s->layer_mm = ctx->layer_mm;
+	s->mesh = ctx->mesh;
 	rc = slice_new(ctx->mesh, &s->slicer, e);
 	if (rc) {
 		mem_free(s);
@@ -73,6 +75,18 @@ static int solid_metrics(void *state, struct metrics *m, struct err *e)
 	return 0;
 }
 
+/* Without a shell the designed part is the placed input itself, so
+ * `--format stl|obj` writes it placed and scaled (a converter; the
+ * benchmarks use it to give PrusaSlicer exactly the same part). */
+static int solid_result_mesh(void *state, const struct mesh **out, struct err *e)
+{
+	struct solid_state *s = state;
+
+	(void)e;
+	*out = s->mesh;
+	return 0;
+}
+
 static void solid_release(void *state)
 {
 	struct solid_state *s = state;
@@ -89,10 +103,11 @@ const struct engine_ops solid_engine = {
 	.paper = NULL,
 	.params = {"solid", NULL, 0},
 	.params_size = sizeof(struct solid_params),
-	.flags = 0,
+	.flags = ENGINE_F_MESH_OUTPUT,
 	.prepare_share = 0.01,
 	.prepare = solid_prepare,
 	.layer = solid_layer,
 	.metrics = solid_metrics,
+	.result_mesh = solid_result_mesh,
 	.release = solid_release,
 };
