@@ -579,6 +579,10 @@ static int png_write(struct buf *out, int w, int h, int color_type, const struct
 		png_write_chunk(p, (png_const_bytep) "IDAT", idat->data, idat->len);
 		png_write_chunk(p, (png_const_bytep) "IEND", NULL, 0);
 	} else {
+		/* no row filters: rendered previews are mostly flat colour and
+		 * alpha runs, and every reader (and tests/support/sl1check.py's
+		 * decoder) takes them fastest */
+		png_set_filter(p, PNG_FILTER_TYPE_BASE, PNG_FILTER_NONE);
 		png_write_info(p, info);
 		for (int y = 0; y < h; y++)
 			png_write_row(p, rgba + (size_t)y * (size_t)w * 4);

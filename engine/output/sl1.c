@@ -59,12 +59,13 @@ struct sl1_writer {
 	struct pipeline *pipe;
 	int threads;
 
-	/* image pool: every image of this writer is in `owned`; `nfree` of
-	 * them are zeroed and idle; `in_pipe` are held by queued layers */
+	/* image pool, at most `cap` images: `idle` are zeroed and free,
+	 * `lent` belong to the caller (out_raster_get .. out_layer),
+	 * `in_pipe` are held by queued layers */
 	pthread_mutex_t mu;
 	pthread_cond_t cv;
-	struct raster **owned, **idle;
-	int nowned, nfree, in_pipe, cap;
+	struct raster **idle, **lent;
+	int nfree, nlent, in_pipe, cap;
 
 	struct thumb_acc *thumbs; /* no mesh: thumbnails from the layers */
 	int next_index;           /* next layer expected */
@@ -103,28 +104,19 @@ static const char *metrics_prefix(enum out_format f)
 
 /* ---- image pool ---- */
 
-static int pool_owns(const struct sl1_writer *w, const struct raster *r)
-{
-	for (int i = 0; i < w->nowned; i++)
-		if (w->owned[i] == r)
-			return 1;
-	return 0;
-}
-
-/* A zeroed image: an idle one, a new one while under the cap, or wait
- * for a queued layer to give one back. */
+/* A zeroed image lent to the caller: an idle one, a new one while under
+ * the cap, or wait for a queued layer to give one back. */
 static int pool_get(struct sl1_writer *w, struct raster **out, struct err *e)
 {
-	struct raster *r;
+	struct raster *r = NULL;
 
 	pthread_mutex_lock(&w->mu);
 	for (;;) {
 		if (w->nfree > 0) {
-			*out = w->idle[--w->nfree];
-			pthread_mutex_unlock(&w->mu);
-			return 0;
+			r = w->idle[--w->nfree];
+			break;
 		}
-		if (w->nowned < w->cap)
+		if (w->nfree + w->nlent + w->in_pipe < w->cap)
 			break;
 		if (w->in_pipe == 0) {
 			pthread_mutex_unlock(&w->mu);
@@ -133,9 +125,10 @@ static int pool_get(struct sl1_writer *w, struct raster **out, struct err *e)
 		}
 		pthread_cond_wait(&w->cv, &w->mu);
 	}
-	r = raster_new(w->w, w->h);
+	if (!r)
+		r = raster_new(w->w, w->h);
 	if (r)
-		w->owned[w->nowned++] = r;
+		w->lent[w->nlent++] = r;
 	pthread_mutex_unlock(&w->mu);
 	if (!r)
 		return ERR_SET(e, ERR_NOMEM, "out of memory for a %d x %d layer image", w->w,
@@ -144,7 +137,23 @@ static int pool_get(struct sl1_writer *w, struct raster **out, struct err *e)
 	return 0;
 }
 
-/* Give back a zeroed image; from_pipe: it was held by a queued layer. */
+/* Take back an image lent by pool_get(); 0 if r was not lent by us. */
+static int pool_take_back(struct sl1_writer *w, struct raster *r)
+{
+	int found = 0;
+
+	pthread_mutex_lock(&w->mu);
+	for (int i = 0; i < w->nlent; i++)
+		if (w->lent[i] == r) {
+			w->lent[i] = w->lent[--w->nlent];
+			found = 1;
+			break;
+		}
+	pthread_mutex_unlock(&w->mu);
+	return found;
+}
+
+/* Make r (zeroed) idle; from_pipe: it was held by a queued layer. */
 static void pool_put(struct sl1_writer *w, struct raster *r, int from_pipe)
 {
 	pthread_mutex_lock(&w->mu);
@@ -302,10 +311,11 @@ static void sl1_free_state(void *state)
 	pipeline_free(w->pipe); /* joins the workers, drops queued layers */
 	out_zip_free(w->zip);   /* abandons an unclosed archive */
 	thumb_acc_free(w->thumbs);
-	for (int i = 0; i < w->nowned; i++)
-		raster_free(w->owned[i]);
-	mem_free(w->owned);
+	/* lent images belong to the caller; queued ones came back above */
+	for (int i = 0; i < w->nfree; i++)
+		raster_free(w->idle[i]);
 	mem_free(w->idle);
+	mem_free(w->lent);
 	pthread_mutex_destroy(&w->mu);
 	pthread_cond_destroy(&w->cv);
 	mem_free(w);
@@ -431,9 +441,9 @@ static int open_common(const struct out_info *info, struct sink *s, enum sl1_kin
 	 * waits for the oldest; two more images for the engine's hands */
 	in_flight = 2 * w->threads;
 	w->cap = in_flight + 2;
-	w->owned = mem_calloc((size_t)w->cap, sizeof *w->owned);
 	w->idle = mem_calloc((size_t)w->cap, sizeof *w->idle);
-	if (!w->owned || !w->idle) {
+	w->lent = mem_calloc((size_t)w->cap, sizeof *w->lent);
+	if (!w->idle || !w->lent) {
 		rc = ERR_SET(e, ERR_NOMEM, "out of memory opening the archive writer");
 		goto fail;
 	}
@@ -500,7 +510,7 @@ static int sl1_layer(void *state, struct layer *ly, struct err *e)
 	paths_init(&ly->region);
 	ly->raster = NULL;
 	ly->raster_ready = 0;
-	if (r && !pool_owns(w, r)) {
+	if (r && !pool_take_back(w, r)) {
 		raster_free(r);
 		r = NULL;
 		rc = ERR_SET(e, ERR_INTERNAL, "layer %d carries an image not from out_raster_get",
@@ -516,8 +526,11 @@ static int sl1_layer(void *state, struct layer *ly, struct err *e)
 		if (!it)
 			rc = ERR_SET(e, ERR_NOMEM, "out of memory queueing layer %d", ly->index);
 	}
-	if (!rc && !r)
+	if (!rc && !r) {
 		rc = pool_get(w, &r, e);
+		if (!rc)
+			pool_take_back(w, r);
+	}
 	if (!rc && w->thumbs && thumb_acc_wants(w->thumbs, z_lo, ly->z_top_mm)) {
 		it->mask = mem_alloc(thumb_acc_mask_bytes(w->thumbs));
 		if (!it->mask)

@@ -300,15 +300,27 @@ size_t thumb_acc_mask_bytes(const struct thumb_acc *t)
 	return (size_t)t->nx * (size_t)t->ny;
 }
 
-/* Cell rows k whose centre height lies in [z_lo, z_hi): k0..k1-1. */
+/* Sample height of cell row k: the middle of its part inside the box
+ * (the top row may stick out above the part). */
+static double z_sample(const struct thumb_acc *t, int k)
+{
+	double lo = t->box.lo.z + k * t->cell, hi = fmin(lo + t->cell, t->box.hi.z);
+	return 0.5 * (lo + fmin(hi, lo + t->cell));
+}
+
+/* Cell rows k0..k1-1 whose sample height lies in [z_lo, z_hi). */
 static void z_cells(const struct thumb_acc *t, double z_lo, double z_hi, int *k0, int *k1)
 {
-	double a = (z_lo - t->box.lo.z) / t->cell - 0.5, b = (z_hi - t->box.lo.z) / t->cell - 0.5;
+	int k = (int)floor((z_lo - t->box.lo.z) / t->cell) - 1;
 
-	*k0 = (int)ceil(a);
-	*k1 = (int)ceil(b);
-	*k0 = *k0 < 0 ? 0 : *k0;
-	*k1 = *k1 > t->nz ? t->nz : *k1;
+	if (k < 0)
+		k = 0;
+	while (k < t->nz && z_sample(t, k) < z_lo)
+		k++;
+	*k0 = k;
+	while (k < t->nz && z_sample(t, k) < z_hi)
+		k++;
+	*k1 = k;
 }
 
 int thumb_acc_wants(const struct thumb_acc *t, double z_lo_mm, double z_hi_mm)
