@@ -533,8 +533,12 @@ static void png_warning_cb(png_structp p, png_const_charp msg)
 
 static png_voidp png_alloc_cb(png_structp p, png_alloc_size_t n)
 {
-	(void)p;
-	return mem_alloc(n);
+	struct png_job *job = png_get_mem_ptr(p);
+	png_voidp r = mem_alloc(n);
+
+	if (!r && job)
+		job->oom = 1; /* libpng then reports it in its own words */
+	return r;
 }
 
 static void png_free_cb(png_structp p, png_voidp ptr)
@@ -556,7 +560,7 @@ static int png_write(struct buf *out, int w, int h, int color_type, const struct
 	memset(&job, 0, sizeof job);
 	job.out = out;
 	p = png_create_write_struct_2(PNG_LIBPNG_VER_STRING, &job, png_error_cb, png_warning_cb,
-				      NULL, png_alloc_cb, png_free_cb);
+				      &job, png_alloc_cb, png_free_cb);
 	if (!p)
 		return ERR_SET(e, ERR_NOMEM, "out of memory starting libpng");
 	info = png_create_info_struct(p);

@@ -61,8 +61,9 @@ static void project(const struct view *v, struct vec3 p, double *u, double *w, d
 	*d = v3_dot(p, v->fwd);
 }
 
-/* Scale and offsets so the projected box of the points lo..hi (camera
- * frame extents) fills the canvas inside the margin, centred. */
+/* Scale and offsets so the projected extents u_lo..u_hi (along right)
+ * and w_lo..w_hi (along up), in mm, fill the canvas inside the margin,
+ * centred. */
 static void view_fit(struct view *v, double u_lo, double u_hi, double w_lo, double w_hi, int cw,
 		     int ch)
 {
@@ -78,21 +79,34 @@ static void view_fit(struct view *v, double u_lo, double u_hi, double w_lo, doub
 	v->off_v = ch * 0.5 + 0.5 * (w_lo + w_hi) * v->scale;
 }
 
-/* Fit to the axis-aligned box b (its 8 corners bound any content). */
-static void view_fit_box(struct view *v, struct box3 b, int cw, int ch)
-{
-	double u_lo = DBL_MAX, u_hi = -DBL_MAX, w_lo = DBL_MAX, w_hi = -DBL_MAX;
+/* Projected extents (camera right/up, mm) accumulated point by point. */
+struct extent2 {
+	double u_lo, u_hi, w_lo, w_hi;
+};
 
-	for (int k = 0; k < 8; k++) {
-		struct vec3 p = v3(k & 1 ? b.hi.x : b.lo.x, k & 2 ? b.hi.y : b.lo.y,
-				   k & 4 ? b.hi.z : b.lo.z);
-		double pu = v3_dot(p, v->right), pw = v3_dot(p, v->up);
-		u_lo = fmin(u_lo, pu);
-		u_hi = fmax(u_hi, pu);
-		w_lo = fmin(w_lo, pw);
-		w_hi = fmax(w_hi, pw);
-	}
-	view_fit(v, u_lo, u_hi, w_lo, w_hi, cw, ch);
+static void extent_init(struct extent2 *x)
+{
+	x->u_lo = x->w_lo = DBL_MAX;
+	x->u_hi = x->w_hi = -DBL_MAX;
+}
+
+static void extent_add(struct extent2 *x, const struct view *v, struct vec3 p)
+{
+	double pu = v3_dot(p, v->right), pw = v3_dot(p, v->up);
+
+	x->u_lo = fmin(x->u_lo, pu);
+	x->u_hi = fmax(x->u_hi, pu);
+	x->w_lo = fmin(x->w_lo, pw);
+	x->w_hi = fmax(x->w_hi, pw);
+}
+
+/* Add the 8 corners of box b. */
+static void extent_add_box(struct extent2 *x, const struct view *v, struct box3 b)
+{
+	for (int k = 0; k < 8; k++)
+		extent_add(x, v,
+			   v3(k & 1 ? b.hi.x : b.lo.x, k & 2 ? b.hi.y : b.lo.y,
+			      k & 4 ? b.hi.z : b.lo.z));
 }
 
 static int canvas_init(struct canvas *c, int w, int h, struct err *e)
@@ -219,6 +233,7 @@ int thumbnail_png_from_mesh(const struct mesh *m, int w, int h, struct buf *png,
 {
 	struct canvas c;
 	struct view v;
+	struct extent2 ext;
 	struct box3 b = box3_empty();
 	int rc = check_size(w, h, e);
 
@@ -228,12 +243,16 @@ int thumbnail_png_from_mesh(const struct mesh *m, int w, int h, struct buf *png,
 	if (rc)
 		return rc;
 	view_init(&v);
+	extent_init(&ext);
+	/* fit the projected vertices, not their box: a tighter frame */
 	for (size_t i = 0; i < m->nt; i++)
 		for (int k = 0; k < 3; k++)
-			if (m->tri[3 * i + (size_t)k] < m->nv)
+			if (m->tri[3 * i + (size_t)k] < m->nv) {
 				box3_add(&b, m->v[m->tri[3 * i + (size_t)k]]);
+				extent_add(&ext, &v, m->v[m->tri[3 * i + (size_t)k]]);
+			}
 	if (!box3_is_empty(b)) {
-		view_fit_box(&v, b, c.w, c.h);
+		view_fit(&v, ext.u_lo, ext.u_hi, ext.w_lo, ext.w_hi, c.w, c.h);
 		for (size_t i = 0; i < m->nt; i++) {
 			const uint32_t *t = m->tri + 3 * i;
 			struct vec3 a, bb, cc;
@@ -472,6 +491,7 @@ int thumb_acc_png(const struct thumb_acc *t, int w, int h, struct buf *png, stru
 {
 	struct canvas c;
 	struct view v;
+	struct extent2 ext;
 	int rc = check_size(w, h, e), dir[3];
 
 	if (rc)
@@ -480,7 +500,20 @@ int thumb_acc_png(const struct thumb_acc *t, int w, int h, struct buf *png, stru
 	if (rc)
 		return rc;
 	view_init(&v);
-	view_fit_box(&v, t->box, c.w, c.h);
+	extent_init(&ext);
+	for (int k = 0; k < t->nz; k++)
+		for (int j = 0; j < t->ny; j++)
+			for (int i = 0; i < t->nx; i++)
+				if (filled(t, i, j, k)) {
+					struct box3 cb;
+					cb.lo = v3(t->box.lo.x + i * t->cell, t->box.lo.y + j * t->cell,
+						   t->box.lo.z + k * t->cell);
+					cb.hi = v3_add(cb.lo, v3(t->cell, t->cell, t->cell));
+					extent_add_box(&ext, &v, cb);
+				}
+	if (ext.u_lo > ext.u_hi)
+		extent_add_box(&ext, &v, t->box); /* nothing filled */
+	view_fit(&v, ext.u_lo, ext.u_hi, ext.w_lo, ext.w_hi, c.w, c.h);
 	/* only faces turned towards the camera can be seen */
 	dir[0] = v.fwd.x < 0 ? 1 : 0;
 	dir[1] = v.fwd.y < 0 ? 1 : 0;

@@ -25,7 +25,8 @@ int slice_rasterize(const struct paths *region, const struct raster_map *map, in
 
 #include <malloc.h>
 #if defined(__SANITIZE_ADDRESS__)
-#include <sanitizer/allocator_interface.h>
+/* ASan's allocator statistics (libasan; gcc ships no header for it) */
+size_t __sanitizer_get_current_allocated_bytes(void);
 #endif
 
 /* SL1 display as REFERENCE.md states it (independent of the profile code). */
