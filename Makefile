@@ -54,11 +54,13 @@ DB_OBJ := $(call obj,$(DB_SRC))
 SERVICE_OBJ := $(call obj,$(SERVICE_SRC))
 TEST_SUPPORT_OBJ := $(call obj,$(TEST_SUPPORT_SRC))
 UNIT_BIN := $(patsubst tests/unit/%.c,$(BUILD)/tests/unit/%,$(UNIT_SRC))
+BENCH_SRC := $(sort $(wildcard tests/bench/*.c))
+BENCH_BIN := $(patsubst tests/bench/%.c,$(BUILD)/tests/bench/%,$(BENCH_SRC))
 
 LIBS := $(BUILD)/libapi.a $(BUILD)/libdb.a $(BUILD)/libengine.a
 BIN := $(BUILD)/infilld
 
-.PHONY: all deps build units run test check test-unit bench bench-large fuzz check-style clean
+.PHONY: all deps build units benches run test check test-unit bench bench-large fuzz check-style clean
 all: build
 
 deps:
@@ -98,6 +100,14 @@ $(BUILD)/tests/unit/%: tests/unit/%.c $(TEST_SUPPORT_OBJ) $(LIBS)
 	$(Q)$(CC) $(CFLAGS) -Itests -c $< -o $@.o
 	$(Q)$(CXX) $(LDFLAGS) -o $@ $@.o $(TEST_SUPPORT_OBJ) $(LIBS) $(LDLIBS)
 
+# Benchmark programs (tests/bench/*.c), run by their tests/bench/*.sh.
+$(BUILD)/tests/bench/%: tests/bench/%.c $(TEST_SUPPORT_OBJ) $(LIBS)
+	@mkdir -p $(@D)
+	@$(if $(Q),echo "  BENCH   $<")
+	$(Q)$(CC) $(CFLAGS) -Itests -c $< -o $@.o
+	$(Q)$(CXX) $(LDFLAGS) -o $@ $@.o $(TEST_SUPPORT_OBJ) $(LIBS) $(LDLIBS)
+benches: $(BENCH_BIN)
+
 # The README's two commands.
 run: deps
 	@$(MAKE) --no-print-directory build
@@ -129,11 +139,11 @@ fuzz: deps
 	@tests/fuzz/run.sh $(FUZZ_SECONDS)
 
 bench: deps
-	@$(MAKE) --no-print-directory -j$(NPROC) build
+	@$(MAKE) --no-print-directory -j$(NPROC) build benches
 	@tests/bench/run.sh $(BUILD)
 
 bench-large: deps
-	@$(MAKE) --no-print-directory -j$(NPROC) build
+	@$(MAKE) --no-print-directory -j$(NPROC) build benches
 	@tests/bench/run.sh $(BUILD) large
 
 check-style:

@@ -390,6 +390,17 @@ static inline int run_end(const uint8_t *row, int i, int end, uint8_t c)
 {
 	const uint64_t pat = 0x0101010101010101ull * c;
 
+	/* long runs (black margins, solid interiors): 32 bytes a step */
+	while (i + 32 <= end) {
+		uint64_t a, b, d, f;
+		memcpy(&a, row + i, 8);
+		memcpy(&b, row + i + 8, 8);
+		memcpy(&d, row + i + 16, 8);
+		memcpy(&f, row + i + 24, 8);
+		if ((a ^ pat) | (b ^ pat) | (d ^ pat) | (f ^ pat))
+			break;
+		i += 32;
+	}
 	while (i + 8 <= end) {
 		uint64_t v;
 		memcpy(&v, row + i, 8);

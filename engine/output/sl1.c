@@ -235,8 +235,22 @@ static int sl1_work(void *ctx, void *item, struct err *e)
 	}
 	if (!rc)
 		rc = out_png_gray(it->r, it->ready ? NULL : &hint, &it->png, &it->st, e);
-	if (!rc && it->mask)
-		rc = thumb_acc_reduce(w->thumbs, NULL, it->r, &w->map, it->mask, e);
+	if (!rc && it->mask) {
+		/* only the nonzero box: a view into r with the map shifted */
+		struct raster view = *it->r;
+		struct raster_map m = w->map;
+		const struct out_px_rect *nz = &it->st.nz;
+		if (nz->x0 <= nz->x1) {
+			view.px += (size_t)nz->y0 * view.stride + (size_t)nz->x0;
+			view.w = nz->x1 - nz->x0 + 1;
+			view.h = nz->y1 - nz->y0 + 1;
+			m.b[0] -= nz->x0;
+			m.b[1] -= nz->y0;
+		} else {
+			view.w = view.h = 0;
+		}
+		rc = thumb_acc_reduce(w->thumbs, NULL, &view, &m, it->mask, e);
+	}
 	if (rc) {
 		raster_clear(it->r);
 	} else {

@@ -17,6 +17,7 @@
 #include "engine/slice/slice.h"
 
 #include <float.h>
+#include <limits.h>
 #include <math.h>
 #include <string.h>
 
@@ -94,10 +95,10 @@ static void extent_add(struct extent2 *x, const struct view *v, struct vec3 p)
 {
 	double pu = v3_dot(p, v->right), pw = v3_dot(p, v->up);
 
-	x->u_lo = fmin(x->u_lo, pu);
-	x->u_hi = fmax(x->u_hi, pu);
-	x->w_lo = fmin(x->w_lo, pw);
-	x->w_hi = fmax(x->w_hi, pw);
+	x->u_lo = pu < x->u_lo ? pu : x->u_lo;
+	x->u_hi = pu > x->u_hi ? pu : x->u_hi;
+	x->w_lo = pw < x->w_lo ? pw : x->w_lo;
+	x->w_hi = pw > x->w_hi ? pw : x->w_hi;
 }
 
 /* Add the 8 corners of box b. */
@@ -137,6 +138,18 @@ static void canvas_fini(struct canvas *c)
 	mem_free(c->hit);
 }
 
+static inline double min3(double a, double b, double c)
+{
+	double m = a < b ? a : b;
+	return m < c ? m : c;
+}
+
+static inline double max3(double a, double b, double c)
+{
+	double m = a > b ? a : b;
+	return m > c ? m : c;
+}
+
 /* Fill triangle abc (mm) with flat Lambert shading from its normal n
  * (any length; flipped towards the camera: two-sided). */
 static void draw_triangle(struct canvas *c, const struct view *v, struct vec3 a, struct vec3 b,
@@ -158,10 +171,10 @@ static void draw_triangle(struct canvas *c, const struct view *v, struct vec3 a,
 	shade = 0.25 + 0.75 * fmax(0.0, v3_dot(n, v->light));
 	for (int k = 0; k < 3; k++)
 		rgb[k] = (uint8_t)lround(fmin(255.0, resin_rgb[k] * shade));
-	x0 = (int)floor(fmin(ua, fmin(ub, uc)));
-	x1 = (int)ceil(fmax(ua, fmax(ub, uc)));
-	y0 = (int)floor(fmin(va, fmin(vb, vc)));
-	y1 = (int)ceil(fmax(va, fmax(vb, vc)));
+	x0 = (int)floor(min3(ua, ub, uc));
+	x1 = (int)ceil(max3(ua, ub, uc));
+	y0 = (int)floor(min3(va, vb, vc));
+	y1 = (int)ceil(max3(va, vb, vc));
 	x0 = x0 < 0 ? 0 : x0;
 	y0 = y0 < 0 ? 0 : y0;
 	x1 = x1 > c->w - 1 ? c->w - 1 : x1;
@@ -324,7 +337,7 @@ size_t thumb_acc_mask_bytes(const struct thumb_acc *t)
 static double z_sample(const struct thumb_acc *t, int k)
 {
 	double lo = t->box.lo.z + k * t->cell, hi = fmin(lo + t->cell, t->box.hi.z);
-	return 0.5 * (lo + fmin(hi, lo + t->cell));
+	return 0.5 * (lo + hi);
 }
 
 /* Cell rows k0..k1-1 whose sample height lies in [z_lo, z_hi). */
@@ -493,6 +506,7 @@ int thumb_acc_png(const struct thumb_acc *t, int w, int h, struct buf *png, stru
 	struct view v;
 	struct extent2 ext;
 	int rc = check_size(w, h, e), dir[3];
+	int lo[3] = {INT_MAX, INT_MAX, INT_MAX}, hi[3] = {-1, -1, -1};
 
 	if (rc)
 		return rc;
@@ -501,18 +515,28 @@ int thumb_acc_png(const struct thumb_acc *t, int w, int h, struct buf *png, stru
 		return rc;
 	view_init(&v);
 	extent_init(&ext);
+	/* fit the box of the filled cells (one pass, then 8 corners) */
 	for (int k = 0; k < t->nz; k++)
 		for (int j = 0; j < t->ny; j++)
 			for (int i = 0; i < t->nx; i++)
 				if (filled(t, i, j, k)) {
-					struct box3 cb;
-					cb.lo = v3(t->box.lo.x + i * t->cell, t->box.lo.y + j * t->cell,
-						   t->box.lo.z + k * t->cell);
-					cb.hi = v3_add(cb.lo, v3(t->cell, t->cell, t->cell));
-					extent_add_box(&ext, &v, cb);
+					lo[0] = i < lo[0] ? i : lo[0];
+					lo[1] = j < lo[1] ? j : lo[1];
+					lo[2] = k < lo[2] ? k : lo[2];
+					hi[0] = i > hi[0] ? i : hi[0];
+					hi[1] = j > hi[1] ? j : hi[1];
+					hi[2] = k > hi[2] ? k : hi[2];
 				}
-	if (ext.u_lo > ext.u_hi)
+	if (hi[0] >= 0) {
+		struct box3 fb;
+		fb.lo = v3(t->box.lo.x + lo[0] * t->cell, t->box.lo.y + lo[1] * t->cell,
+			   t->box.lo.z + lo[2] * t->cell);
+		fb.hi = v3(t->box.lo.x + (hi[0] + 1) * t->cell, t->box.lo.y + (hi[1] + 1) * t->cell,
+			   t->box.lo.z + (hi[2] + 1) * t->cell);
+		extent_add_box(&ext, &v, fb);
+	} else {
 		extent_add_box(&ext, &v, t->box); /* nothing filled */
+	}
 	view_fit(&v, ext.u_lo, ext.u_hi, ext.w_lo, ext.w_hi, c.w, c.h);
 	/* only faces turned towards the camera can be seen */
 	dir[0] = v.fwd.x < 0 ? 1 : 0;
