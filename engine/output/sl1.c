@@ -335,7 +335,9 @@ static void sl1_free_state(void *state)
 	mem_free(w);
 }
 
-static int add_thumbnails_from_mesh(struct sl1_writer *w, struct err *e)
+/* The thumbnails of the SL1 presets: from the mesh, or (no mesh) from
+ * the layers collected so far. */
+static int add_thumbnails(struct sl1_writer *w, struct err *e)
 {
 	struct buf png;
 	char name[64];
@@ -343,30 +345,11 @@ static int add_thumbnails_from_mesh(struct sl1_writer *w, struct err *e)
 
 	buf_init(&png);
 	for (size_t i = 0; !rc && i < sizeof thumb_sizes / sizeof thumb_sizes[0]; i++) {
+		int tw = thumb_sizes[i][0], th = thumb_sizes[i][1];
 		buf_reset(&png);
-		rc = thumbnail_png_from_mesh(w->info.mesh, thumb_sizes[i][0], thumb_sizes[i][1],
-					     &png, e);
-		snprintf(name, sizeof name, "thumbnail/thumbnail%dx%d.png", thumb_sizes[i][0],
-			 thumb_sizes[i][1]);
-		if (!rc)
-			rc = out_zip_add(w->zip, name, png.data, png.len, e);
-	}
-	buf_fini(&png);
-	return rc;
-}
-
-static int add_thumbnails_from_layers(struct sl1_writer *w, struct err *e)
-{
-	struct buf png;
-	char name[64];
-	int rc = 0;
-
-	buf_init(&png);
-	for (size_t i = 0; !rc && i < sizeof thumb_sizes / sizeof thumb_sizes[0]; i++) {
-		buf_reset(&png);
-		rc = thumb_acc_png(w->thumbs, thumb_sizes[i][0], thumb_sizes[i][1], &png, e);
-		snprintf(name, sizeof name, "thumbnail/thumbnail%dx%d.png", thumb_sizes[i][0],
-			 thumb_sizes[i][1]);
+		rc = w->info.mesh ? thumbnail_png_from_mesh(w->info.mesh, tw, th, &png, e)
+				  : thumb_acc_png(w->thumbs, tw, th, &png, e);
+		snprintf(name, sizeof name, "thumbnail/thumbnail%dx%d.png", tw, th);
 		if (!rc)
 			rc = out_zip_add(w->zip, name, png.data, png.len, e);
 	}
@@ -475,7 +458,7 @@ static int open_common(const struct out_info *info, struct sink *s, enum sl1_kin
 	if (kind == KIND_SL1) {
 		rc = add_text(w, "prusaslicer.ini", fmt_prusaslicer_ini, e);
 		if (!rc && info->mesh)
-			rc = add_thumbnails_from_mesh(w, e);
+			rc = add_thumbnails(w, e);
 		if (rc)
 			goto fail;
 	}
@@ -614,7 +597,7 @@ static int sl1_close(void *state, struct metrics *m, struct err *e)
 		rc = ERR_SET(e, ERR_INTERNAL, "%d of %d layers were written", w->sum.layers,
 			     w->info.layer_count);
 	if (!rc && w->kind == KIND_SL1 && w->thumbs)
-		rc = add_thumbnails_from_layers(w, e);
+		rc = add_thumbnails(w, e);
 	if (!rc && w->kind == KIND_SL1)
 		rc = add_text(w, "config.ini", fmt_config_ini, e);
 	if (!rc && w->kind == KIND_ZIP)

@@ -242,20 +242,39 @@ static int check_size(int w, int h, struct err *e)
 	return 0;
 }
 
+/* Start a w x h rendering: size check, supersampled canvas, camera. */
+static int render_begin(struct canvas *c, struct view *v, int w, int h, struct err *e)
+{
+	int rc = check_size(w, h, e);
+
+	if (rc)
+		return rc;
+	rc = canvas_init(c, w * THUMB_SS, h * THUMB_SS, e);
+	if (rc)
+		return rc;
+	view_init(v);
+	return 0;
+}
+
+/* Finish it: downsample, encode into png, release the canvas. */
+static int render_end(struct canvas *c, int w, int h, struct buf *png, struct err *e)
+{
+	int rc = canvas_png(c, w, h, png, e);
+
+	canvas_fini(c);
+	return rc;
+}
+
 int thumbnail_png_from_mesh(const struct mesh *m, int w, int h, struct buf *png, struct err *e)
 {
 	struct canvas c;
 	struct view v;
 	struct extent2 ext;
 	struct box3 b = box3_empty();
-	int rc = check_size(w, h, e);
+	int rc = render_begin(&c, &v, w, h, e);
 
 	if (rc)
 		return rc;
-	rc = canvas_init(&c, w * THUMB_SS, h * THUMB_SS, e);
-	if (rc)
-		return rc;
-	view_init(&v);
 	extent_init(&ext);
 	/* fit the projected vertices, not their box: a tighter frame */
 	for (size_t i = 0; i < m->nt; i++)
@@ -277,9 +296,7 @@ int thumbnail_png_from_mesh(const struct mesh *m, int w, int h, struct buf *png,
 			draw_triangle(&c, &v, a, bb, cc, v3_cross(v3_sub(bb, a), v3_sub(cc, a)));
 		}
 	}
-	rc = canvas_png(&c, w, h, png, e);
-	canvas_fini(&c);
-	return rc;
+	return render_end(&c, w, h, png, e);
 }
 
 /* ---- Layer-based fallback: a coarse voxel grid ---- */
@@ -505,15 +522,11 @@ int thumb_acc_png(const struct thumb_acc *t, int w, int h, struct buf *png, stru
 	struct canvas c;
 	struct view v;
 	struct extent2 ext;
-	int rc = check_size(w, h, e), dir[3];
+	int rc = render_begin(&c, &v, w, h, e), dir[3];
 	int lo[3] = {INT_MAX, INT_MAX, INT_MAX}, hi[3] = {-1, -1, -1};
 
 	if (rc)
 		return rc;
-	rc = canvas_init(&c, w * THUMB_SS, h * THUMB_SS, e);
-	if (rc)
-		return rc;
-	view_init(&v);
 	extent_init(&ext);
 	/* fit the box of the filled cells (one pass, then 8 corners) */
 	for (int k = 0; k < t->nz; k++)
@@ -554,7 +567,5 @@ int thumb_acc_png(const struct thumb_acc *t, int w, int h, struct buf *png, stru
 				if (!filled(t, i, j, k + (dir[2] ? 1 : -1)))
 					draw_face(&c, &v, t, i, j, k, 2, dir[2]);
 			}
-	rc = canvas_png(&c, w, h, png, e);
-	canvas_fini(&c);
-	return rc;
+	return render_end(&c, w, h, png, e);
 }

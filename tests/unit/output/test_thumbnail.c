@@ -161,35 +161,40 @@ static void test_cube(void)
 	buf_fini(&png);
 }
 
-/* +x is to the right on screen, +z is up. */
+/* Render m at w x h and measure its silhouette; 0 on success. */
+static int render_silhouette(const struct mesh *m, int w, int h, struct sil *out)
+{
+	struct buf png;
+	struct err e;
+	uint8_t *px = NULL;
+
+	buf_init(&png);
+	if (thumbnail_png_from_mesh(m, w, h, &png, &e) == 0)
+		px = decode(&png, w, h);
+	buf_fini(&png);
+	if (!px)
+		return -1;
+	*out = silhouette(px, w, h);
+	free(px);
+	return 0;
+}
+
+/* +x is to the right on screen, +z is up: two scenes with the same
+ * bounding box (tiny markers), one cube at opposite corners. */
 static void test_view_direction(void)
 {
 	struct soup a, b;
-	struct buf png;
-	struct err e;
-	uint8_t *px;
 	struct sil sa, sb;
 	int w = 300, h = 200;
 
-	/* two scenes with the same bounding box, one cube at opposite corners */
 	soup_init(&a);
 	add_box(&a, v3(0, 0, 0), v3(10, 10, 10));
-	add_box(&a, v3(39.9, 0, 0), v3(40, 0.1, 0.1)); /* bbox marker */
+	add_box(&a, v3(39.9, 0, 0), v3(40, 0.1, 0.1));
 	soup_init(&b);
 	add_box(&b, v3(30, 0, 0), v3(40, 10, 10));
 	add_box(&b, v3(0, 0, 0), v3(0.1, 0.1, 0.1));
-	buf_init(&png);
-	REQUIRE_OK(thumbnail_png_from_mesh(&a.m, w, h, &png, &e), &e);
-	px = decode(&png, w, h);
-	REQUIRE(px);
-	sa = silhouette(px, w, h);
-	free(px);
-	buf_reset(&png);
-	REQUIRE_OK(thumbnail_png_from_mesh(&b.m, w, h, &png, &e), &e);
-	px = decode(&png, w, h);
-	REQUIRE(px);
-	sb = silhouette(px, w, h);
-	free(px);
+	REQUIRE(render_silhouette(&a.m, w, h, &sa) == 0);
+	REQUIRE(render_silhouette(&b.m, w, h, &sb) == 0);
 	CHECK(sb.cx > sa.cx + 0.2 * w);
 
 	soup_init(&a);
@@ -198,20 +203,9 @@ static void test_view_direction(void)
 	soup_init(&b);
 	add_box(&b, v3(0, 0, 30), v3(10, 10, 40));
 	add_box(&b, v3(0, 0, 0), v3(0.1, 0.1, 0.1));
-	buf_reset(&png);
-	REQUIRE_OK(thumbnail_png_from_mesh(&a.m, w, h, &png, &e), &e);
-	px = decode(&png, w, h);
-	REQUIRE(px);
-	sa = silhouette(px, w, h);
-	free(px);
-	buf_reset(&png);
-	REQUIRE_OK(thumbnail_png_from_mesh(&b.m, w, h, &png, &e), &e);
-	px = decode(&png, w, h);
-	REQUIRE(px);
-	sb = silhouette(px, w, h);
-	free(px);
+	REQUIRE(render_silhouette(&a.m, w, h, &sa) == 0);
+	REQUIRE(render_silhouette(&b.m, w, h, &sb) == 0);
 	CHECK(sb.cy < sa.cy - 0.2 * h);
-	buf_fini(&png);
 }
 
 /* The same box from 200 layers through the voxel accumulator: its
