@@ -199,10 +199,26 @@ class Report:
         self.images = {}           # layer index -> Image, for keep_images
 
     def as_dict(self):
+        """Plain figures: layers (count), size, volume_mm3 (from the pixels),
+        used_material_ml and print_time_s (config.ini, or manifest.json of a
+        generic zip), kind, config, prusaslicer, manifest, sums, bboxes,
+        thumbnails."""
+        src = self.config if self.kind == "sl1" else self.manifest
+        if self.kind == "sl1":
+            used = _float_or(src.get("usedMaterial", "nan"))
+            ptime = _float_or(src.get("printTime", "nan"))
+        else:
+            used = src.get("material_volume_mm3", float("nan")) / 1000.0
+            ptime = src.get("print_time_s", float("nan"))
         return {"kind": self.kind, "layers": len(self.layers), "size": self.size,
-                "volume_mm3": self.volume_mm3, "config": self.config,
+                "volume_mm3": self.volume_mm3, "used_material_ml": used,
+                "print_time_s": ptime, "config": self.config,
+                "prusaslicer": self.prusaslicer, "manifest": self.manifest,
                 "sums": self.sums, "bboxes": self.bboxes,
                 "thumbnails": {k: list(v) for k, v in self.thumbnails.items()}}
+
+    def __getitem__(self, key):
+        return self.as_dict()[key]
 
 
 def _num(d, key, problems, kind=float):
