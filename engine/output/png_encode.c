@@ -183,7 +183,8 @@ static void length_symbol(int length, int *sym, int *nbits, int *extra)
 /* ---- The run-length coder ---- */
 
 struct rle {
-	uint16_t *tok; /* < 256: literal; 256 + (length - 3): match at distance 1 */
+	uint32_t *tok; /* symbol (bits 0-8) | extra bit count (9-11) | extra
+			  bits (12-16); matches are at distance 1 */
 	size_t ntok;
 	struct buf *out;
 	uint64_t acc; /* pending output bits, LSB first */
@@ -260,7 +261,7 @@ static void emit_block(struct rle *z, int final)
 	uint32_t freq[LITLEN_N] = {0}, cfreq[CLEN_N] = {0};
 	uint8_t lens[LITLEN_N + 2], clen[CLEN_N], sym[LITLEN_N + 2], extra[LITLEN_N + 2];
 	uint16_t code[LITLEN_N], ccode[CLEN_N];
-	int hlit, hclen, nsym, s, nb, ex;
+	int hlit, hclen, nsym, nb, ex;
 	struct buf *o = z->out;
 	void *data = o->data;
 	uint8_t *p;
@@ -276,14 +277,8 @@ static void emit_block(struct rle *z, int final)
 	p = o->data + o->len;
 
 	freq[256] = 1;
-	for (size_t i = 0; i < z->ntok; i++) {
-		if (z->tok[i] < 256) {
-			freq[z->tok[i]]++;
-		} else {
-			length_symbol(z->tok[i] - 256 + 3, &s, &nb, &ex);
-			freq[s]++;
-		}
-	}
+	for (size_t i = 0; i < z->ntok; i++)
+		freq[z->tok[i] & 0x1ff]++;
 	huffman_lengths(freq, LITLEN_N, 15, lens);
 	canonical_codes(lens, LITLEN_N, code);
 	for (hlit = LITLEN_N; hlit > 257 && !lens[hlit - 1]; hlit--)
@@ -316,15 +311,15 @@ static void emit_block(struct rle *z, int final)
 			put_bits(z, &p, extra[i], 7);
 	}
 	for (size_t i = 0; i < z->ntok; i++) {
-		uint16_t t = z->tok[i];
-		if (t < 256) {
-			put_bits(z, &p, code[t], lens[t]);
+		uint32_t t = z->tok[i], ts = t & 0x1ff;
+		if (ts < 256) {
+			put_bits(z, &p, code[ts], lens[ts]);
 		} else {
-			length_symbol(t - 256 + 3, &s, &nb, &ex);
-			put_bits(z, &p, code[s], lens[s]);
-			if (nb)
-				put_bits(z, &p, (uint32_t)ex, nb);
-			put_bits(z, &p, 0, 1); /* distance symbol 0: distance 1 */
+			/* length code, its extra bits, then the one-bit distance
+			 * code 0 (distance 1): at most 15 + 5 + 1 bits at once */
+			nb = (int)((t >> 9) & 7);
+			ex = (int)(t >> 12);
+			put_bits(z, &p, code[ts] | (uint32_t)ex << lens[ts], lens[ts] + nb + 1);
 		}
 	}
 	put_bits(z, &p, code[256], lens[256]);
@@ -332,7 +327,7 @@ static void emit_block(struct rle *z, int final)
 	z->ntok = 0;
 }
 
-static inline void push_token(struct rle *z, uint16_t t)
+static inline void push_token(struct rle *z, uint32_t t)
 {
 	if (z->ntok == TOK_CAP)
 		emit_block(z, 0);
@@ -350,25 +345,40 @@ static void adler_run(struct rle *z, uint32_t c, uint64_t n)
 	z->s1 = (uint32_t)((z->s1 + nm * c) % ADLER_MOD);
 }
 
+/* The token of a match of `length` at distance 1. */
+static uint32_t match_token(int length)
+{
+	int sym, nb, ex;
+
+	length_symbol(length, &sym, &nb, &ex);
+	return (uint32_t)sym | (uint32_t)nb << 9 | (uint32_t)ex << 12;
+}
+
 /* Emit the pending run: a literal, then matches of distance 1. */
 static void flush_run(struct rle *z)
 {
+	const uint32_t max_tok = 285; /* length 258: no extra bits */
 	uint64_t rem;
 
 	if (z->cur < 0 || z->run == 0)
 		return;
 	adler_run(z, (uint32_t)z->cur, z->run);
-	push_token(z, (uint16_t)z->cur);
+	push_token(z, (uint32_t)z->cur);
 	rem = z->run - 1;
-	while (rem >= 3) {
-		uint64_t m = rem;
-		if (m > MATCH_MAX)
-			m = rem - MATCH_MAX < 3 ? rem - 3 : MATCH_MAX;
-		push_token(z, (uint16_t)(256 + m - 3));
-		rem -= m;
+	/* full-length matches, leaving a tail of 3..258 or 0..2 */
+	while (rem > MATCH_MAX + 2) {
+		push_token(z, max_tok);
+		rem -= MATCH_MAX;
 	}
-	while (rem-- > 0)
-		push_token(z, (uint16_t)z->cur);
+	if (rem > MATCH_MAX) { /* 259 or 260: split so both halves are >= 3 */
+		push_token(z, match_token((int)rem - 3));
+		rem = 3;
+	}
+	if (rem >= 3)
+		push_token(z, match_token((int)rem));
+	else
+		while (rem-- > 0)
+			push_token(z, (uint32_t)z->cur);
 	z->run = 0;
 }
 
@@ -385,10 +395,26 @@ static inline void add_run(struct rle *z, int c, uint64_t n)
 	z->run = n;
 }
 
+/* Blocks of 0 and 255, the values of long runs, for memcmp() (which the
+ * C library vectorises). */
+#define BLOCK_BYTES 256
+static const uint8_t zero_block[BLOCK_BYTES];
+static const uint8_t full_block[BLOCK_BYTES] = {
+#define X16 255, 255, 255, 255, 255, 255, 255, 255, 255, 255, 255, 255, 255, 255, 255, 255
+	X16, X16, X16, X16, X16, X16, X16, X16, X16, X16, X16, X16, X16, X16, X16, X16
+#undef X16
+};
+
 /* First index in [i, end) whose byte differs from c, or end. */
 static inline int run_end(const uint8_t *row, int i, int end, uint8_t c)
 {
 	const uint64_t pat = 0x0101010101010101ull * c;
+
+	if (c == 0 || c == 255) {
+		const uint8_t *blk = c ? full_block : zero_block;
+		while (i + BLOCK_BYTES <= end && memcmp(row + i, blk, BLOCK_BYTES) == 0)
+			i += BLOCK_BYTES;
+	}
 
 	/* long runs (black margins, solid interiors): 32 bytes a step */
 	while (i + 32 <= end) {
@@ -419,8 +445,9 @@ static inline int run_end(const uint8_t *row, int i, int end, uint8_t c)
 	return i;
 }
 
-/* Encode the filtered scanlines of r as a zlib stream appended to out. */
-static int zlib_stream(const struct raster *r, const struct out_px_rect *content,
+/* Encode the filtered scanlines of r as a zlib stream appended to out,
+ * with tok (TOK_CAP entries) for the tokens. */
+static int zlib_stream(const struct raster *r, const struct out_px_rect *content, uint32_t *tok,
 		       struct buf *out, struct out_png_stats *st, struct err *e)
 {
 	struct rle z;
@@ -432,11 +459,9 @@ static int zlib_stream(const struct raster *r, const struct out_px_rect *content
 	z.out = out;
 	z.s1 = 1;
 	z.cur = -1;
-	z.tok = mem_alloc(TOK_CAP * sizeof *z.tok);
-	if (!z.tok || buf_append(out, (const uint8_t[]){0x78, 0x01}, 2)) {
-		mem_free(z.tok);
+	z.tok = tok;
+	if (buf_append(out, (const uint8_t[]){0x78, 0x01}, 2))
 		return ERR_SET(e, ERR_NOMEM, "out of memory encoding a %d x %d PNG", r->w, r->h);
-	}
 	if (content) {
 		cx0 = content->x0 > 0 ? content->x0 : 0;
 		cy0 = content->y0 > 0 ? content->y0 : 0;
@@ -480,7 +505,6 @@ static int zlib_stream(const struct raster *r, const struct out_px_rect *content
 	}
 	flush_run(&z);
 	emit_block(&z, 1);
-	mem_free(z.tok);
 	if (z.failed)
 		return ERR_SET(e, ERR_NOMEM, "out of memory encoding a %d x %d PNG", r->w, r->h);
 	/* pad the last byte, then the Adler-32, big-endian */
@@ -607,18 +631,37 @@ static int png_write(struct buf *out, int w, int h, int color_type, const struct
 	return 0;
 }
 
-int out_png_gray(const struct raster *r, const struct out_px_rect *content, struct buf *png,
-		 struct out_png_stats *stats, struct err *e)
+void out_png_scratch_fini(struct out_png_scratch *s)
 {
-	struct out_png_stats st;
-	struct buf idat;
-	int rc;
+	mem_free(s->tok);
+	buf_fini(&s->idat);
+	s->tok = NULL;
+}
 
-	buf_init(&idat);
-	rc = zlib_stream(r, content, &idat, &st, e);
+int out_png_gray(const struct raster *r, const struct out_px_rect *content,
+		 struct out_png_scratch *scratch, struct buf *png, struct out_png_stats *stats,
+		 struct err *e)
+{
+	struct out_png_scratch own;
+	struct out_png_scratch *sc = scratch ? scratch : &own;
+	struct out_png_stats st;
+	int rc = 0;
+
+	if (!scratch)
+		memset(&own, 0, sizeof own);
+	if (!sc->tok) {
+		sc->tok = mem_alloc(TOK_CAP * sizeof *sc->tok);
+		if (!sc->tok)
+			rc = ERR_SET(e, ERR_NOMEM, "out of memory encoding a %d x %d PNG", r->w,
+				     r->h);
+	}
+	buf_reset(&sc->idat);
 	if (!rc)
-		rc = png_write(png, r->w, r->h, PNG_COLOR_TYPE_GRAY, &idat, NULL, e);
-	buf_fini(&idat);
+		rc = zlib_stream(r, content, sc->tok, &sc->idat, &st, e);
+	if (!rc)
+		rc = png_write(png, r->w, r->h, PNG_COLOR_TYPE_GRAY, &sc->idat, NULL, e);
+	if (!scratch)
+		out_png_scratch_fini(&own);
 	if (!rc && stats)
 		*stats = st;
 	return rc;

@@ -14,9 +14,9 @@
 
 #include <stdint.h>
 
+#include "engine/core/sink.h"
 #include "engine/geom/raster.h"
 
-struct buf;
 struct err;
 
 /* A pixel rectangle, bounds inclusive; empty when x0 > x1 or y0 > y1. */
@@ -30,13 +30,25 @@ struct out_png_stats {
 	struct out_px_rect nz; /* bounding box of the nonzero pixels (empty if none) */
 };
 
+/* Working memory of out_png_gray() kept between calls by a caller that
+ * encodes many images on one thread: zero-initialise; release with
+ * out_png_scratch_fini().  About 128 KiB plus one compressed image. */
+struct out_png_scratch {
+	uint32_t *tok;  /* deflate tokens of one block */
+	struct buf idat; /* the zlib stream before it goes into its chunk */
+};
+
+void out_png_scratch_fini(struct out_png_scratch *s);
+
 /* Append a PNG of r (8-bit gray, no interlace, filter 0 on every row) to
  * png.  content, if not NULL, promises that every pixel outside it is 0
- * (those rows and columns are not read).  stats may be NULL.  O(runs +
- * pixels / 8) time; memory: one 64 KiB token buffer plus the output.
- * 0 or ERR_NOMEM / ERR_INTERNAL; on failure png->len is unchanged. */
-int out_png_gray(const struct raster *r, const struct out_px_rect *content, struct buf *png,
-		 struct out_png_stats *stats, struct err *e);
+ * (those rows and columns are not read).  scratch: reused working memory,
+ * or NULL to allocate and free it here.  stats may be NULL.  O(runs +
+ * pixels / 32) time.  0 or ERR_NOMEM / ERR_INTERNAL; on failure png->len
+ * is unchanged. */
+int out_png_gray(const struct raster *r, const struct out_px_rect *content,
+		 struct out_png_scratch *scratch, struct buf *png, struct out_png_stats *stats,
+		 struct err *e);
 
 /* Append a PNG of an RGBA image (w * h * 4 bytes, rows top first, not
  * premultiplied) to png, through libpng/zlib.  0, ERR_NOMEM or

@@ -34,14 +34,17 @@ static const int thumb_sizes[][2] = {{400, 400}, {800, 480}};
 enum sl1_kind { KIND_SL1, KIND_ZIP };
 
 struct sl1_item {
+	struct sl1_item *next; /* in the writer's spare list */
 	int index;
 	double z_lo_mm, z_hi_mm;
 	struct raster *r; /* pool image, NULL once returned to the pool */
 	int ready;        /* the engine rendered r */
 	struct paths region;
 	struct buf png;
+	struct out_png_scratch scratch; /* kept with the item between layers */
 	struct out_png_stats st;
-	uint8_t *mask; /* thumbnail cells of this layer, NULL if not wanted */
+	uint8_t *mask;  /* thumbnail cells (kept allocated with the item) */
+	int thumb;      /* this layer feeds the thumbnail grid */
 };
 
 struct sl1_writer {
@@ -67,6 +70,7 @@ struct sl1_writer {
 	struct raster **idle, **lent;
 	int nfree, nlent, in_pipe, cap;
 
+	struct sl1_item *spare;   /* finished items, buffers kept (job's thread only) */
 	struct thumb_acc *thumbs; /* no mesh: thumbnails from the layers */
 	int next_index;           /* next layer expected */
 	struct sl1_summary sum;
@@ -215,8 +219,31 @@ static void item_free(struct sl1_item *it)
 {
 	paths_fini(&it->region);
 	buf_fini(&it->png);
+	out_png_scratch_fini(&it->scratch);
 	mem_free(it->mask);
 	mem_free(it);
+}
+
+/* An item for the next layer: a spare one with its buffers, or a new
+ * one.  Spares number at most the layers ever in flight at once. */
+static struct sl1_item *item_get(struct sl1_writer *w)
+{
+	struct sl1_item *it = w->spare;
+
+	if (!it)
+		return mem_calloc(1, sizeof *it);
+	w->spare = it->next;
+	it->next = NULL;
+	return it;
+}
+
+/* Keep a finished item for reuse (its image already returned). */
+static void item_put(struct sl1_writer *w, struct sl1_item *it)
+{
+	paths_fini(&it->region);
+	buf_reset(&it->png);
+	it->next = w->spare;
+	w->spare = it;
 }
 
 /* Worker thread: pixels, PNG, coverage, thumbnail cells; the image goes
@@ -234,8 +261,9 @@ static int sl1_work(void *ctx, void *item, struct err *e)
 			rc = slice_rasterize(&it->region, &w->map, w->rp->antialias, it->r, e);
 	}
 	if (!rc)
-		rc = out_png_gray(it->r, it->ready ? NULL : &hint, &it->png, &it->st, e);
-	if (!rc && it->mask) {
+		rc = out_png_gray(it->r, it->ready ? NULL : &hint, &it->scratch, &it->png, &it->st,
+				  e);
+	if (!rc && it->thumb) {
 		/* only the nonzero box: a view into r with the map shifted */
 		struct raster view = *it->r;
 		struct raster_map m = w->map;
@@ -292,10 +320,10 @@ static int sl1_emit(void *ctx, void *item, struct err *e)
 		w->sum.print_time_s += sl1_layer_time_s(w->rp, it->index, height_mm, slow);
 		w->sum.max_area_mm2 = fmax(w->sum.max_area_mm2, area_mm2);
 		w->png_bytes += it->png.len;
-		if (it->mask)
+		if (it->thumb)
 			thumb_acc_merge(w->thumbs, it->z_lo_mm, it->z_hi_mm, it->mask);
 	}
-	item_free(it);
+	item_put(w, it);
 	return rc;
 }
 
@@ -308,8 +336,9 @@ static void sl1_drop(void *ctx, void *item)
 	if (it->r) {
 		raster_clear(it->r);
 		pool_put(w, it->r, 1);
+		it->r = NULL;
 	}
-	item_free(it);
+	item_put(w, it);
 }
 
 static const struct pipeline_ops sl1_pipeline_ops = {sl1_work, sl1_emit, sl1_drop};
@@ -323,6 +352,11 @@ static void sl1_free_state(void *state)
 	if (!w)
 		return;
 	pipeline_free(w->pipe); /* joins the workers, drops queued layers */
+	while (w->spare) {
+		struct sl1_item *it = w->spare;
+		w->spare = it->next;
+		item_free(it);
+	}
 	out_zip_free(w->zip);   /* abandons an unclosed archive */
 	thumb_acc_free(w->thumbs);
 	/* lent images belong to the caller; queued ones came back above */
@@ -519,7 +553,7 @@ static int sl1_layer(void *state, struct layer *ly, struct err *e)
 			     w->next_index, w->info.layer_count);
 	}
 	if (!rc) {
-		it = mem_calloc(1, sizeof *it);
+		it = item_get(w);
 		if (!it)
 			rc = ERR_SET(e, ERR_NOMEM, "out of memory queueing layer %d", ly->index);
 	}
@@ -528,10 +562,14 @@ static int sl1_layer(void *state, struct layer *ly, struct err *e)
 		if (!rc)
 			pool_take_back(w, r);
 	}
-	if (!rc && w->thumbs && thumb_acc_wants(w->thumbs, z_lo, ly->z_top_mm)) {
-		it->mask = mem_alloc(thumb_acc_mask_bytes(w->thumbs));
-		if (!it->mask)
-			rc = ERR_SET(e, ERR_NOMEM, "out of memory queueing layer %d", ly->index);
+	if (!rc) {
+		it->thumb = w->thumbs && thumb_acc_wants(w->thumbs, z_lo, ly->z_top_mm);
+		if (it->thumb && !it->mask) {
+			it->mask = mem_alloc(thumb_acc_mask_bytes(w->thumbs));
+			if (!it->mask)
+				rc = ERR_SET(e, ERR_NOMEM, "out of memory queueing layer %d",
+					     ly->index);
+		}
 	}
 	if (rc) {
 		paths_fini(&region);
@@ -540,7 +578,7 @@ static int sl1_layer(void *state, struct layer *ly, struct err *e)
 			pool_put(w, r, 0);
 		}
 		if (it)
-			item_free(it);
+			item_put(w, it);
 		return writer_fail(w, rc, e);
 	}
 	it->r = r;
@@ -549,7 +587,6 @@ static int sl1_layer(void *state, struct layer *ly, struct err *e)
 	it->index = ly->index;
 	it->z_lo_mm = z_lo;
 	it->z_hi_mm = ly->z_top_mm;
-	buf_init(&it->png);
 	pthread_mutex_lock(&w->mu);
 	w->in_pipe++;
 	pthread_mutex_unlock(&w->mu);

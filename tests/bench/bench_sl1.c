@@ -3,7 +3,7 @@
  * encoder threads, plus the PNG encoder alone against libpng/zlib
  * (Z_RLE and level 1).  Prints figures; asserts nothing.
  *
- *   bench_sl1 [FRAMES] [OUT_DIR]
+ *   bench_sl1 [FRAMES] [OUT_DIR] [writer]   ("writer": skip the encoder table)
  *
  * Frames are rendered by the "engine" straight into the writer's images
  * (spans with anti-aliased ends), as the lattice engine does, so the
@@ -192,17 +192,19 @@ static void encoders(int reps)
 {
 	struct raster *r = raster_new(1440, 2560);
 	struct mem_out mo = {NULL, 0, 0};
+	struct out_png_scratch scratch;
 	struct buf b;
 	struct err e;
 	double t;
 	size_t n = 0;
 
 	render_disk(r, 720, 1280, DISK_R_MM / 0.04725);
+	memset(&scratch, 0, sizeof scratch);
 	buf_init(&b);
 	t = progress_now_s();
 	for (int i = 0; i < reps; i++) {
 		buf_reset(&b);
-		out_png_gray(r, NULL, &b, NULL, &e);
+		out_png_gray(r, NULL, &scratch, &b, NULL, &e);
 	}
 	t = progress_now_s() - t;
 	printf("encoder infilld run-length deflate: %6.2f ms/frame, %6.0f Mpx/s, %zu bytes\n",
@@ -225,6 +227,7 @@ static void encoders(int reps)
 		}
 	}
 	free(mo.d);
+	out_png_scratch_fini(&scratch);
 	buf_fini(&b);
 	raster_free(r);
 }
@@ -239,7 +242,8 @@ int main(int argc, char **argv)
 	if (frames < 1)
 		frames = 1000;
 	printf("SL1 frames 1440 x 2560, 50 mm disk (20%% size variation), %d frames\n", frames);
-	encoders(200);
+	if (!(argc > 3 && strcmp(argv[3], "writer") == 0))
+		encoders(200);
 	snprintf(path, sizeof path, "%s/bench_sl1.sl1", dir);
 	rc |= run_writer(frames, 1, path);
 	rc |= run_writer(frames, 2, path);

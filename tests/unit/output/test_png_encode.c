@@ -54,7 +54,7 @@ static int roundtrip(const struct raster *r, const struct out_px_rect *hint, siz
 
 	buf_init(&png);
 	err_clear(&e);
-	if (out_png_gray(r, hint, &png, &st, &e) != 0) {
+	if (out_png_gray(r, hint, NULL, &png, &st, &e) != 0) {
 		fprintf(stderr, "encode failed: %s\n", e.msg);
 		buf_fini(&png);
 		return 1;
@@ -189,6 +189,37 @@ static void test_content_hint(void)
 	drop(r);
 }
 
+/* One scratch across images of different sizes and content. */
+static void test_scratch_reuse(void)
+{
+	struct out_png_scratch sc;
+	struct raster *a = make(500, 300, 500), *b = make(37, 11, 40);
+	struct buf pa, pb, ref;
+	struct err e;
+
+	memset(&sc, 0, sizeof sc);
+	for (size_t i = 0; i < (size_t)a->h * a->stride; i++)
+		a->px[i] = (uint8_t)(rnd() & 0x81);
+	memset(b->px + 40 * 3, 7, 30);
+	buf_init(&pa);
+	buf_init(&pb);
+	buf_init(&ref);
+	REQUIRE_OK(out_png_gray(a, NULL, &sc, &pa, NULL, &e), &e);
+	REQUIRE_OK(out_png_gray(b, NULL, &sc, &pb, NULL, &e), &e);
+	REQUIRE_OK(out_png_gray(b, NULL, NULL, &ref, NULL, &e), &e);
+	CHECK_EQ_INT(pb.len, ref.len);
+	CHECK(memcmp(pb.data, ref.data, ref.len) == 0);
+	buf_reset(&pa);
+	REQUIRE_OK(out_png_gray(a, NULL, &sc, &pa, NULL, &e), &e);
+	CHECK_EQ_INT(roundtrip(a, NULL, NULL), 0);
+	out_png_scratch_fini(&sc);
+	buf_fini(&pa);
+	buf_fini(&pb);
+	buf_fini(&ref);
+	drop(a);
+	drop(b);
+}
+
 static void test_rgba(void)
 {
 	int w = 40, h = 30;
@@ -228,7 +259,7 @@ static void test_alloc_failures(void)
 	for (long n = 1; n < 200 && !ok; n++) {
 		int rc;
 		mem_fail_after(n);
-		rc = out_png_gray(r, NULL, &png, NULL, &e);
+		rc = out_png_gray(r, NULL, NULL, &png, NULL, &e);
 		mem_fail_after(-1);
 		if (rc == 0) {
 			ok = 1;
@@ -249,6 +280,7 @@ int main(void)
 	RUN(test_noise_multiblock);
 	RUN(test_run_lengths);
 	RUN(test_content_hint);
+	RUN(test_scratch_reuse);
 	RUN(test_rgba);
 	RUN(test_alloc_failures);
 	return harness_report();
