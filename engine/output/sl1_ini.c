@@ -14,6 +14,7 @@
 #include <math.h>
 #include <stdio.h>
 #include <string.h>
+#include <strings.h>
 #include <time.h>
 
 /* SL1 firmware (slafw defines.py): layers 0..2 always use expTimeFirst. */
@@ -27,13 +28,28 @@
 /* Tower move per layer, seconds per mm of layer (PrusaSlicer 2.5). */
 #define SL1_TOWER_S_PER_MM 5.0
 
+/* Length of name without a trailing mesh-file extension. */
+static size_t stem_length(const char *name)
+{
+	static const char *const ext[] = {".stl", ".obj", ".off", ".ply", ".3mf", ".amf"};
+	size_t n = strlen(name);
+
+	for (size_t i = 0; i < sizeof ext / sizeof ext[0]; i++) {
+		size_t k = strlen(ext[i]);
+		if (n > k && strcasecmp(name + n - k, ext[i]) == 0)
+			return n - k;
+	}
+	return n;
+}
+
 void sl1_job_dir(const char *job_name, char *out)
 {
 	static const char thumb[] = "thumbnail/";
-	size_t n = 0;
+	const char *p = job_name ? job_name : "";
+	size_t n = 0, len = stem_length(p);
 
-	for (const char *p = job_name ? job_name : ""; *p && n < SL1_JOB_DIR_MAX; p++) {
-		unsigned char c = (unsigned char)*p;
+	for (size_t i = 0; i < len && n < SL1_JOB_DIR_MAX; i++) {
+		unsigned char c = (unsigned char)p[i];
 		out[n++] = (isalnum(c) && c < 0x80) || c == '-' || c == '_' ? (char)c : '_';
 	}
 	out[n] = '\0';

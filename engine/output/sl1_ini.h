@@ -30,8 +30,9 @@ struct sl1_summary {
 /* Longest jobDir we write (without the NUL). */
 #define SL1_JOB_DIR_MAX 40
 
-/* jobDir from a job name: letters, digits, '-' and '_' kept, anything
- * else (path separators, spaces, dots) becomes '_'; empty -> "infilld";
+/* jobDir from a job name: a mesh-file extension (.stl .obj .off .ply .3mf
+ * .amf) dropped, letters, digits, '-' and '_' kept, anything else (path
+ * separators, spaces, dots) becomes '_'; empty -> "infilld";
  * and never a prefix of "thumbnail/" (the firmware takes every PNG whose
  * name starts with jobDir as a layer), which gets a "job_" prefix.
  * out: SL1_JOB_DIR_MAX + 1 bytes. */

@@ -68,15 +68,24 @@ class CheckError(Exception):
 class Image:
     """A decoded PNG: width, height, channels (1 gray, 4 RGBA), rows (bytes each)."""
 
-    def __init__(self, width, height, channels, rows, filters):
+    def __init__(self, width, height, channels, rows, filters, raw=None):
         self.width, self.height, self.channels = width, height, channels
         self.rows, self.filters = rows, filters
+        # rows that can hold nonzero pixels: from the inflated stream when
+        # every filter byte is 0 (then a zero byte is a zero pixel)
+        self.row_range = range(height)
+        if raw is not None and filters == {0}:
+            head = len(raw) - len(raw.lstrip(b"\x00"))
+            tail = len(raw.rstrip(b"\x00"))
+            stride = width * channels + 1
+            self.row_range = range(head // stride, (tail + stride - 1) // stride)
 
     def bbox(self):
         """(row0, col0, row1, col1) of nonzero gray pixels, inclusive, or None."""
         r0 = c0 = 1 << 30
         r1 = c1 = -1
-        for y, row in enumerate(self.rows):
+        for y in self.row_range:
+            row = self.rows[y]
             s = row.lstrip(b"\x00")
             if not s:
                 continue
@@ -88,8 +97,8 @@ class Image:
     def pixel_sum(self):
         """Sum of gray values (only rows with content are summed)."""
         total = 0
-        for row in self.rows:
-            s = row.strip(b"\x00")
+        for y in self.row_range:
+            s = self.rows[y].strip(b"\x00")
             if s:
                 total += sum(s)
         return total
@@ -164,7 +173,7 @@ def png_decode(data):
             cur = bytes(cur)
         rows.append(cur)
         prev = cur
-    return Image(width, height, channels, rows, filters)
+    return Image(width, height, channels, rows, filters, raw)
 
 
 def parse_ini(text):

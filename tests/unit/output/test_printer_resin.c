@@ -143,7 +143,10 @@ static void test_job_dir(void)
 	char d[SL1_JOB_DIR_MAX + 1];
 	const char *cases[][2] = {
 		{"bunny", "bunny"},
-		{"my part v2.stl", "my_part_v2_stl"},
+		{"my part v2.stl", "my_part_v2"},
+		{"femur.OFF", "femur"},
+		{"part v2.5", "part_v2_5"},
+		{".stl", "_stl"},
 		{"../../etc/passwd", "______etc_passwd"},
 		{"", "infilld"},
 		{"thumb", "job_thumb"},
