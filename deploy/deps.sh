@@ -8,6 +8,7 @@ PKGS=(
 	gcc g++ make pkg-config clang libclang-rt-14-dev python3
 	libmicrohttpd-dev libjansson-dev libpng-dev zlib1g-dev libsqlite3-dev
 	libarchive-dev libpolyclipping-dev libtet1.5-dev coinor-libipopt-dev
+	nettle-dev wrk
 )
 
 missing=()
