@@ -42,12 +42,9 @@ static double now_s(void)
 	return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
 }
 
-/* Run the sandboxed analysis of path; fills res.  0 when the child ran
- * (whatever it said), negative when it could not be started. */
-int api_analyze_run(const struct api_config *c, const char *path, const char *format,
-		    struct analyze_result *res)
+int api_analyze_run(const struct api_config *c, const char *path, struct analyze_result *res)
 {
-	char as[32], cpu[32], fmt_arg[48];
+	char as[32], cpu[32];
 	char *argv[12];
 	int out_p[2] = {-1, -1}, err_p[2] = {-1, -1}, argc = 0, status = 0, rc = -1;
 	posix_spawn_file_actions_t fa;
@@ -60,12 +57,10 @@ int api_analyze_run(const struct api_config *c, const char *path, const char *fo
 	buf_init(&res->err);
 	snprintf(as, sizeof as, "--as-mb=%d", c->analyze_mem_mb);
 	snprintf(cpu, sizeof cpu, "--cpu-s=%d", c->analyze_timeout_s);
-	snprintf(fmt_arg, sizeof fmt_arg, "--format=%s", format);
 	argv[argc++] = (char *)c->self_exe;
 	argv[argc++] = (char *)"sandbox";
 	argv[argc++] = as;
 	argv[argc++] = cpu;
-	argv[argc++] = fmt_arg;
 	argv[argc++] = (char *)"--";
 	argv[argc++] = (char *)"analyze";
 	argv[argc++] = (char *)path;

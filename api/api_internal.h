@@ -97,6 +97,10 @@ struct api_req {
 	void *stream;               /* SSE / download state, freed with the response */
 };
 
+/* Metrics label of route i (server.c): its pattern, "unmatched" for
+ * i == number of routes, NULL past that. */
+const char *api_route_label(int i);
+
 /* ---- responses (http.c) ---- */
 enum MHD_Result api_queue(struct api_req *r, unsigned status, struct MHD_Response *resp);
 /* JSON body (reference stolen; NULL -> 500). */
@@ -167,6 +171,9 @@ void api_analyze_stop(struct api_server *s);
 struct job_row;
 /* Job JSON (jobs.c), shared with events. */
 json_t *api_job_json(const struct job_row *j);
+/* Load the tenant's job named by r->arg[0] (jobs.c); on failure a
+ * problem is queued, *ret set, and -1 returned. */
+int api_load_job(struct api_req *r, struct job_row *j, enum MHD_Result *ret);
 /* JSON of a mesh record (meshes.c). */
 struct mesh_rec;
 json_t *api_mesh_json(const struct mesh_rec *m);

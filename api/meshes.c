@@ -352,7 +352,7 @@ void api_upload_complete(struct api_req *r)
 		snprintf(detail, sizeof detail, "the upload is empty");
 		goto fail;
 	}
-	if (api_analyze_run(&s->cfg, u->tmp, u->format, &res) != 0) {
+	if (api_analyze_run(&s->cfg, u->tmp, &res) != 0) {
 		p = PROB_UNAVAILABLE;
 		snprintf(detail, sizeof detail, "cannot start the mesh analysis");
 		goto fail;

@@ -49,6 +49,11 @@ static const struct route routes[] = {
 };
 #define NROUTES ((int)(sizeof routes / sizeof routes[0]))
 
+const char *api_route_label(int i)
+{
+	return i < NROUTES ? routes[i].metric : i == NROUTES ? "unmatched" : NULL;
+}
+
 /* Match url against pattern, filling up to 2 {} segments. */
 static int match(const char *pattern, const char *url, char arg[2][128])
 {

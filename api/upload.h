@@ -16,10 +16,10 @@ struct analyze_result {
 
 /* Queue r's finished upload for analysis and park its connection. */
 int api_analyze_submit(struct api_req *r);
-/* Run the sandboxed analysis of path (format "stl"...).  0 when the child
- * ran; res owns buffers: api_analyze_result_fini(). */
-int api_analyze_run(const struct api_config *c, const char *path, const char *format,
-		    struct analyze_result *res);
+/* Run the sandboxed analysis of path (its extension names the format).
+ * 0 when the child ran, whatever it said; negative when it could not be
+ * started.  res owns buffers: api_analyze_result_fini(). */
+int api_analyze_run(const struct api_config *c, const char *path, struct analyze_result *res);
 void api_analyze_result_fini(struct analyze_result *res);
 /* On an analysis thread: analyse, publish, record, set r->pending. */
 void api_upload_complete(struct api_req *r);
