@@ -361,6 +361,7 @@ int api_server_start(const struct api_config *c, struct api_server **out, struct
 		MHD_USE_INTERNAL_POLLING_THREAD | MHD_USE_EPOLL | MHD_ALLOW_SUSPEND_RESUME |
 			MHD_USE_ERROR_LOG | (ss.ss_family == AF_INET6 ? MHD_USE_IPv6 : 0),
 		(uint16_t)c->port, NULL, NULL, on_request, s,
+		MHD_OPTION_EXTERNAL_LOGGER, mhd_log, s,
 		MHD_OPTION_SOCK_ADDR, (struct sockaddr *)&ss,
 		MHD_OPTION_THREAD_POOL_SIZE, (unsigned int)c->threads,
 		MHD_OPTION_CONNECTION_TIMEOUT, (unsigned int)c->conn_timeout_s,
@@ -369,7 +370,6 @@ int api_server_start(const struct api_config *c, struct api_server **out, struct
 		MHD_OPTION_CONNECTION_MEMORY_LIMIT, c->conn_memory_bytes,
 		MHD_OPTION_LISTEN_BACKLOG_SIZE, 1024u,
 		MHD_OPTION_NOTIFY_COMPLETED, on_completed, s,
-		MHD_OPTION_EXTERNAL_LOGGER, mhd_log, s,
 		MHD_OPTION_END);
 	if (!s->mhd) {
 		rc = ERR_SET(e, ERR_IO, "cannot listen on %s:%d: %s", c->host, c->port,
