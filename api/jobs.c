@@ -27,9 +27,10 @@ json_t *api_job_json(const struct job_row *j)
 	snprintf(output, sizeof output, "/v1/jobs/%s/output", j->id);
 	params = j->params ? json_loads(j->params, 0, NULL) : NULL;
 	metrics = j->metrics ? json_loads(j->metrics, 0, NULL) : NULL;
-	err = j->error ? json_pack("{s:s, s:s, s:s?}", "type", j->error_type, "detail", j->error,
-				   "field", j->error_field[0] ? j->error_field : NULL)
+	err = j->error ? json_pack("{s:s, s:s}", "type", j->error_type, "detail", j->error)
 		       : json_null();
+	if (j->error && err && j->error_field[0])
+		json_object_set_new(err, "field", json_string(j->error_field));
 	if (j->state == JOB_SUCCEEDED && j->artifact[0]) {
 		enum out_format f;
 		struct err e;

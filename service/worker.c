@@ -229,7 +229,7 @@ fail:
 static void supervise(struct attempt *a)
 {
 	const struct service_config *c = a->cfg;
-	double start = mono_s(), last_write = start, now;
+	double start = mono_s(), last_write = start - 1.0, now; /* first report at once */
 	double beat_s = c->lease_s / 3.0 > 0.5 ? c->lease_s / 3.0 : 0.5;
 	int64_t lease_ms = (int64_t)c->lease_s * 1000;
 	struct err e;
@@ -248,7 +248,7 @@ static void supervise(struct attempt *a)
 		}
 		now = mono_s();
 		if (!a->lost && !a->timed_out && !a->shutdown &&
-		    ((a->progress_dirty && now - last_write >= 0.5) || now - last_write >= beat_s)) {
+		    ((a->progress_dirty && now - last_write >= 0.25) || now - last_write >= beat_s)) {
 			int rc;
 			if (a->progress_dirty) {
 				struct job_progress p = {a->last.stage, a->last.fraction,
