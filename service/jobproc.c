@@ -114,9 +114,11 @@ static void send_result(int fd, const struct err *e, uint64_t bytes, const char 
 		_exit(3);
 }
 
-static void set_limit(int res, uint64_t v)
+/* Soft limit v; the hard limit leaves room for the soft one's signal
+ * (SIGXCPU) to be seen before the kernel's SIGKILL at the hard limit. */
+static void set_limit(int res, uint64_t v, uint64_t slack)
 {
-	struct rlimit rl = {(rlim_t)v, (rlim_t)v};
+	struct rlimit rl = {(rlim_t)v, (rlim_t)(v + slack)};
 
 	setrlimit(res, &rl);
 }
@@ -131,6 +133,7 @@ static void inject_fault(const char *fault, struct progress_hooks *hooks, int fd
 
 	if (!fault[0])
 		return;
+	err_clear(&e);
 	progress_init(&p, hooks);
 	progress_stage(&p, "fault", 0.0, 0.5);
 	if (!strcmp(fault, "segv")) {
@@ -190,10 +193,10 @@ void jobproc_main(const struct jobproc_args *a)
 	signal(SIGINT, SIG_IGN);
 	signal(SIGXFSZ, SIG_IGN);
 	signal(SIGPIPE, SIG_IGN);
-	set_limit(RLIMIT_AS, (uint64_t)c->job_mem_mb << 20);
-	set_limit(RLIMIT_CPU, (uint64_t)c->job_cpu_s);
-	set_limit(RLIMIT_FSIZE, ((uint64_t)c->output_limit_mb << 20) + (1u << 20));
-	set_limit(RLIMIT_CORE, 0);
+	set_limit(RLIMIT_AS, (uint64_t)c->job_mem_mb << 20, 0);
+	set_limit(RLIMIT_CPU, (uint64_t)c->job_cpu_s, 5);
+	set_limit(RLIMIT_FSIZE, ((uint64_t)c->output_limit_mb << 20) + (1u << 20), 0);
+	set_limit(RLIMIT_CORE, 0, 0);
 	memset(&jp, 0, sizeof jp);
 	jp.fd = a->fd;
 	fcntl(jp.fd, F_SETFL, fcntl(jp.fd, F_GETFL) | O_NONBLOCK);

@@ -73,7 +73,7 @@ class Server:
 
     def log(self):
         try:
-            with open(self.log_path) as f:
+            with open(self.log_path, errors="replace") as f:
                 return f.read()[-4000:]
         except OSError:
             return ""
