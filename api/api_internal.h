@@ -89,13 +89,27 @@ struct api_req {
 	struct tenant tenant;       /* AUTH_TENANT routes */
 	unsigned status;            /* what was queued (metrics) */
 	struct buf body;            /* BODY_JSON */
-	int body_overflow;
 	struct upload *upload;      /* BODY_UPLOAD */
 	struct MHD_Response *pending;   /* prepared while suspended */
 	unsigned pending_status;
 	int suspended;
-	void *stream;               /* SSE / download state, freed with the response */
+	/* A body refused while it streams: libmicrohttpd 0.9.75 cannot queue a
+	 * response mid-body, so the rest is discarded (up to API_DISCARD_MAX,
+	 * then the connection is closed) and the problem sent at its end. */
+	int rejected;
+	enum problem reject_p;
+	char reject_detail[256];
+	size_t discarded;
 };
+
+#define API_DISCARD_MAX (16u << 20)
+
+/* Refuse the request body with problem p once it has ended (see above). */
+void api_reject(struct api_req *r, enum problem p, const char *fmt, ...)
+#if defined(__GNUC__)
+	__attribute__((format(printf, 3, 4)))
+#endif
+	;
 
 /* Metrics label of route i (server.c): its pattern, "unmatched" for
  * i == number of routes, NULL past that. */

@@ -4,6 +4,8 @@
  */
 #include "api/api_internal.h"
 
+#include <stdarg.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <time.h>
@@ -107,4 +109,17 @@ void api_wake(struct api_server *s, struct MHD_Connection *conn)
 {
 	(void)s;
 	MHD_resume_connection(conn);
+}
+
+void api_reject(struct api_req *r, enum problem p, const char *fmt, ...)
+{
+	va_list ap;
+
+	if (r->rejected)
+		return;
+	r->rejected = 1;
+	r->reject_p = p;
+	va_start(ap, fmt);
+	vsnprintf(r->reject_detail, sizeof r->reject_detail, fmt, ap);
+	va_end(ap);
 }

@@ -256,20 +256,19 @@ int api_upload_feed(struct api_req *r, const char *data, size_t len)
 	u->bytes += (int64_t)len;
 	if (u->bytes > u->limit) {
 		/* Chunked or lying Content-Length: stop at the limit. */
-		api_problem(r, PROB_TOO_LARGE, NULL, "the upload exceeds this tenant's limit of %lld bytes",
-			    (long long)u->limit);
+		api_reject(r, PROB_TOO_LARGE, "the upload exceeds this tenant's limit of %lld bytes",
+			   (long long)u->limit);
 		return -1;
 	}
 	if (u->multipart) {
 		if (multipart_feed(&u->mp, data, len)) {
-			api_problem(r, PROB_BAD_REQUEST, NULL, "malformed multipart body: %s",
-				    u->mp.error);
+			api_reject(r, PROB_BAD_REQUEST, "malformed multipart body: %s", u->mp.error);
 			return -1;
 		}
 		return 0;
 	}
 	if (write_all(u, data, len)) {
-		api_problem(r, PROB_UNAVAILABLE, NULL, "cannot store the upload");
+		api_reject(r, PROB_UNAVAILABLE, "cannot store the upload");
 		return -1;
 	}
 	return 0;

@@ -210,25 +210,32 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn, const 
 			return r->route->fn(r);
 		return MHD_YES;
 	}
-	if (r->status)
-		return MHD_YES; /* already answered (early 413...): drain */
+	if (r->status) {
+		*upload_size = 0; /* already answered at the headers (early 413...) */
+		return MHD_YES;
+	}
 	if (*upload_size) {
 		size_t n = *upload_size;
 		*upload_size = 0;
+		if (r->rejected) {
+			r->discarded += n;
+			return r->discarded > API_DISCARD_MAX ? MHD_NO : MHD_YES;
+		}
 		if (r->route->body == BODY_UPLOAD) {
-			if (api_upload_feed(r, upload_data, n) != 0 && !r->status)
-				return MHD_NO;
+			api_upload_feed(r, upload_data, n); /* rejects on failure */
 			return MHD_YES;
 		}
-		if (r->body_overflow || r->body.len + n > s->cfg.json_max_bytes) {
-			r->body_overflow = 1;
-			return api_problem(r, PROB_TOO_LARGE, NULL,
-					   "JSON bodies are limited to %zu bytes", s->cfg.json_max_bytes);
+		if (r->body.len + n > s->cfg.json_max_bytes) {
+			api_reject(r, PROB_TOO_LARGE, "JSON bodies are limited to %zu bytes",
+				   s->cfg.json_max_bytes);
+			return MHD_YES;
 		}
 		if (buf_append(&r->body, upload_data, n) != 0)
 			return MHD_NO;
 		return MHD_YES;
 	}
+	if (r->rejected)
+		return api_problem(r, r->reject_p, NULL, "%s", r->reject_detail);
 	if (r->pending) {
 		struct MHD_Response *resp = r->pending;
 		r->pending = NULL;
