@@ -75,9 +75,15 @@ def test_json_errors():
     big = b'{"mesh_id": "' + b"x" * (2 << 20) + b'"}'
     check(raw_post("/v1/jobs", "application/json", big).startswith(b"HTTP/1.1 413"),
           "2 MB JSON body refused early")
-    r = srv.request("POST", "/v1/jobs", iter([big]), {"Content-Type": "application/json",
-                                                      "Transfer-Encoding": "chunked"}, S["key"])
-    r.problem(413, "payload-too-large")
+    # Without a length: read, discarded past the limit, refused at the end.
+    s = socket.create_connection(("127.0.0.1", srv.port), timeout=10)
+    s.sendall(("POST /v1/jobs HTTP/1.1\r\nHost: x\r\nAuthorization: Bearer %s\r\n"
+               "Content-Type: application/json\r\nTransfer-Encoding: chunked\r\n\r\n" %
+               S["key"]).encode() + b"%x\r\n%s\r\n0\r\n\r\n" % (len(big), big))
+    got = s.recv(65536)
+    s.close()
+    check(got.startswith(b"HTTP/1.1 413") and b"/problems/payload-too-large" in got,
+          "chunked JSON refused: %r" % got[:200])
 
 
 def test_oversize_upload_early():
