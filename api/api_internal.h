@@ -86,6 +86,7 @@ struct api_req {
 	const char *url;
 	char arg[2][128];           /* path parameters ({} segments) */
 	int head;                   /* HEAD request */
+	int started;                /* routed and authenticated */
 	struct tenant tenant;       /* AUTH_TENANT routes */
 	unsigned status;            /* what was queued (metrics) */
 	struct buf body;            /* BODY_JSON */

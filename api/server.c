@@ -119,10 +119,22 @@ static enum MHD_Result authenticate(struct api_req *r)
 	return MHD_YES;
 }
 
-/* First call of a request: route, authenticate, check body headers.
- * Returns with r->status set when a response was queued. */
+static int has_body(struct MHD_Connection *conn)
+{
+	const char *cl = MHD_lookup_connection_value(conn, MHD_HEADER_KIND,
+						     MHD_HTTP_HEADER_CONTENT_LENGTH);
+	const char *te = MHD_lookup_connection_value(conn, MHD_HEADER_KIND,
+						     MHD_HTTP_HEADER_TRANSFER_ENCODING);
+
+	return te != NULL || (cl && strtoull(cl, NULL, 10) > 0);
+}
+
+/* Route, authenticate, check body headers.  Returns with r->status set
+ * when a response was queued. */
 static enum MHD_Result start_request(struct api_req *r)
 {
+	if (atomic_load(&r->srv->stopping) && strcmp(r->url, "/livez") != 0)
+		return api_problem(r, PROB_UNAVAILABLE, NULL, "the service is shutting down");
 	const struct route *path_hit = NULL;
 	char allow[64] = "";
 	enum MHD_Result ret;
@@ -201,14 +213,21 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn, const 
 		r->head = !strcmp(method, "HEAD");
 		buf_init(&r->body);
 		*req_cls = r;
-		if (atomic_load(&s->stopping) && strcmp(url, "/livez") != 0)
-			return api_problem(r, PROB_UNAVAILABLE, NULL, "the service is shutting down");
+		/* Answering on this first call makes libmicrohttpd close the
+		 * connection afterwards (it stops reading the request), so only
+		 * requests with a body are checked now, where refusing early
+		 * (401, 413, 415) is worth a new connection; the rest are
+		 * routed on the next call and keep their connection alive. */
+		if (!has_body(conn))
+			return MHD_YES;
+		r->started = 1;
+		return start_request(r);
+	}
+	if (!r->started) {
+		r->started = 1;
 		ret = start_request(r);
 		if (r->status || ret != MHD_YES || !r->route)
 			return ret;
-		if (r->route->body == BODY_NONE)
-			return r->route->fn(r);
-		return MHD_YES;
 	}
 	if (r->status) {
 		*upload_size = 0; /* already answered at the headers (early 413...) */
@@ -241,7 +260,7 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn, const 
 		r->pending = NULL;
 		return api_queue(r, r->pending_status, resp);
 	}
-	if (r->suspended)
+	if (r->suspended || !r->route)
 		return MHD_YES;
 	return r->route->fn(r);
 }
