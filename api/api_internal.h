@@ -52,6 +52,9 @@ struct api_waiter {
 };
 
 struct analyze_task;
+struct submit_task;
+struct job_new;
+struct job_row;
 
 struct api_server {
 	struct api_config cfg;
@@ -75,6 +78,13 @@ struct api_server {
 	struct analyze_task *an_head, *an_tail;
 	pthread_t an_threads[2];
 	int an_started;
+
+	/* Group commit of submissions (committer.c). */
+	pthread_mutex_t cm_mu;
+	pthread_cond_t cm_cv;
+	struct submit_task *cm_head, *cm_tail;
+	pthread_t cm_thread;
+	int cm_started, cm_stop;
 };
 
 struct api_req {
@@ -178,6 +188,14 @@ enum MHD_Result api_tenant_rotate(struct api_req *r);
 enum MHD_Result api_upload_begin(struct api_req *r);
 int api_upload_feed(struct api_req *r, const char *data, size_t len);
 void api_upload_free(struct upload *u);
+
+/* Group commit (committer.c): queue jn (copied) and park r; the
+ * committer answers it once the batch is on disk. */
+int api_submit_enqueue(struct api_req *r, const struct job_new *jn);
+int api_committer_start(struct api_server *s, struct err *e);
+void api_committer_stop(struct api_server *s);
+/* 202 response for a queued (or replayed) job (jobs.c). */
+struct MHD_Response *api_submit_response(const struct job_row *j, int replayed);
 
 /* Mesh analysis pool (analyze.c). */
 int api_analyze_start(struct api_server *s, struct err *e);

@@ -90,15 +90,13 @@ enum MHD_Result api_job_submit(struct api_req *r)
 	json_t *body, *v, *params = NULL;
 	json_error_t jerr;
 	struct job_spec js;
-	struct job_row job;
 	struct err e;
 	const char *key;
 	char *canon = NULL, *params_text = NULL, hash_hex[65];
 	unsigned char digest[SHA256_DIGEST_SIZE];
 	struct sha256_ctx sha;
 	enum MHD_Result ret;
-	int rc, replayed = 0;
-	struct db *db;
+	int rc;
 
 	if (idem && !idem_key_valid(idem))
 		return api_problem(r, PROB_BAD_REQUEST, "Idempotency-Key",
@@ -202,35 +200,30 @@ enum MHD_Result api_job_submit(struct api_req *r)
 		struct job_new jn = {r->tenant.id, mesh_id, js.engine->name,
 				     out_format_name(js.format), js.printer.name, params_text,
 				     idem, hash_hex, fault, r->srv->cfg.max_attempts};
-		db = db_pool_get(r->srv->pool);
-		rc = queue_submit(db, &jn, &job, &replayed, &e);
-		db_pool_put(r->srv->pool, db);
+		rc = api_submit_enqueue(r, &jn);
 	}
 	job_spec_fini(&js);
-	if (rc == ERR_PARAM) {
-		ret = api_problem(r, PROB_IDEMPOTENCY, "Idempotency-Key", "%s", e.msg);
-	} else if (rc == ERR_NOTFOUND) {
-		ret = api_problem(r, PROB_INVALID_PARAM, "mesh_id", "no mesh '%s'", mesh_id);
-	} else if (rc) {
-		ret = api_problem(r, PROB_UNAVAILABLE, NULL, "cannot queue the job: %s", e.msg);
-	} else {
-		struct MHD_Response *resp = api_json_response(api_job_json(&job));
-		char loc[64];
-		snprintf(loc, sizeof loc, "/v1/jobs/%s", job.id);
-		if (resp) {
-			MHD_add_response_header(resp, MHD_HTTP_HEADER_LOCATION, loc);
-			MHD_add_response_header(resp, MHD_HTTP_HEADER_RETRY_AFTER, "1");
-			if (replayed)
-				MHD_add_response_header(resp, "Idempotent-Replayed", "true");
-		}
-		job_row_fini(&job);
-		ret = api_queue(r, MHD_HTTP_ACCEPTED, resp);
-	}
+	ret = rc ? MHD_NO : MHD_YES; /* answered by the committer */
 out:
 	free(canon);
 	free(params_text);
 	json_decref(body);
 	return ret;
+}
+
+struct MHD_Response *api_submit_response(const struct job_row *j, int replayed)
+{
+	struct MHD_Response *resp = api_json_response(api_job_json(j));
+	char loc[64];
+
+	snprintf(loc, sizeof loc, "/v1/jobs/%s", j->id);
+	if (resp) {
+		MHD_add_response_header(resp, MHD_HTTP_HEADER_LOCATION, loc);
+		MHD_add_response_header(resp, MHD_HTTP_HEADER_RETRY_AFTER, "1");
+		if (replayed)
+			MHD_add_response_header(resp, "Idempotent-Replayed", "true");
+	}
+	return resp;
 }
 
 /* Load the tenant's job named in the path; on failure a response is

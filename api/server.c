@@ -354,6 +354,8 @@ int api_server_start(const struct api_config *c, struct api_server **out, struct
 	pthread_mutex_init(&s->wait_mu, NULL);
 	pthread_mutex_init(&s->an_mu, NULL);
 	pthread_cond_init(&s->an_cv, NULL);
+	pthread_mutex_init(&s->cm_mu, NULL);
+	pthread_cond_init(&s->cm_cv, NULL);
 	memset(&ss, 0, sizeof ss);
 	if (strchr(c->host, ':')) {
 		struct sockaddr_in6 *a6 = (struct sockaddr_in6 *)&ss;
@@ -373,10 +375,10 @@ int api_server_start(const struct api_config *c, struct api_server **out, struct
 		}
 	}
 	store_db_path(c->data_dir, db_path, sizeof db_path);
-	/* One connection per MHD thread, plus the analysis pool and ticker. */
+	/* One connection per MHD thread, the analysis pool and the committer. */
 	if ((rc = db_pool_new(db_path, c->threads + 3, &s->pool, e)))
 		goto fail;
-	if ((rc = api_analyze_start(s, e)))
+	if ((rc = api_analyze_start(s, e)) || (rc = api_committer_start(s, e)))
 		goto fail;
 	if (pthread_create(&s->ticker, NULL, ticker_main, s) != 0) {
 		rc = ERR_SET(e, ERR_IO, "cannot start the ticker thread");
@@ -410,6 +412,7 @@ fail_ticker:
 	atomic_store(&s->stopping, 1);
 	pthread_join(s->ticker, NULL);
 fail:
+	api_committer_stop(s);
 	api_analyze_stop(s);
 	db_pool_free(s->pool);
 	free(s);
@@ -451,10 +454,13 @@ void api_server_stop(struct api_server *s)
 	}
 	pthread_mutex_unlock(&s->wait_mu);
 	api_analyze_stop(s);
+	api_committer_stop(s);
 	MHD_stop_daemon(s->mhd);
 	db_pool_free(s->pool);
 	pthread_mutex_destroy(&s->wait_mu);
 	pthread_mutex_destroy(&s->an_mu);
 	pthread_cond_destroy(&s->an_cv);
+	pthread_mutex_destroy(&s->cm_mu);
+	pthread_cond_destroy(&s->cm_cv);
 	free(s);
 }

@@ -10,6 +10,7 @@
 #include "db/tenants.h"
 #include "engine/core/err.h"
 
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -201,8 +202,10 @@ int queue_get_seq(struct db *db, int64_t seq, struct job_row *out, struct err *e
 	return get_by(db, "SELECT " JOB_COLS " FROM jobs WHERE seq = ?1", 0, NULL, seq, out, e);
 }
 
-int queue_submit(struct db *db, const struct job_new *jn, struct job_row *out, int *replayed,
-		 struct err *e)
+/* One submission inside the caller's transaction: *seq of the new or
+ * replayed job. */
+static int submit_one(struct db *db, const struct job_new *jn, int64_t *seq, int *replayed,
+		      struct err *e)
 {
 	static const char idem_sql[] =
 		"SELECT seq, request_hash FROM jobs WHERE tenant_id = ?1 AND idem_key = ?2";
@@ -213,51 +216,43 @@ int queue_submit(struct db *db, const struct job_new *jn, struct job_row *out, i
 		" VALUES (?1, ?2, ?3, ?4, ?5, ?6, ?7, ?8, ?9, ?10, ?11, ?12, 1) RETURNING seq";
 	char id[DB_ID_MAX];
 	sqlite3_stmt *st;
-	int64_t seq = 0;
 	int rc;
 
 	*replayed = 0;
-	if ((rc = db_make_id("j_", id, e)) || (rc = db_begin(db, e)))
+	if ((rc = db_make_id("j_", id, e)))
 		return rc;
 	if (jn->idem_key) {
-		if (!(st = db_stmt(db, idem_sql, e))) {
-			rc = ERR_IO;
-			goto out;
-		}
+		if (!(st = db_stmt(db, idem_sql, e)))
+			return ERR_IO;
 		sqlite3_bind_int64(st, 1, jn->tenant_id);
 		sqlite3_bind_text(st, 2, jn->idem_key, -1, SQLITE_STATIC);
 		if (sqlite3_step(st) == SQLITE_ROW) {
 			int same = !strcmp(db_col_text(st, 1), jn->request_hash ? jn->request_hash : "");
-			seq = sqlite3_column_int64(st, 0);
+			*seq = sqlite3_column_int64(st, 0);
 			sqlite3_reset(st);
-			db_rollback(db);
 			if (!same)
 				return ERR_FIELD(e, "Idempotency-Key",
 						 "this Idempotency-Key was used with a different request");
 			*replayed = 1;
-			return queue_get_seq(db, seq, out, e);
+			return 0;
 		}
 		sqlite3_reset(st);
 	}
-	if (!(st = db_stmt(db, mesh_sql, e))) {
-		rc = ERR_IO;
-		goto out;
-	}
+	if (!(st = db_stmt(db, mesh_sql, e)))
+		return ERR_IO;
 	sqlite3_bind_int64(st, 1, jn->tenant_id);
 	sqlite3_bind_text(st, 2, jn->mesh_id, -1, SQLITE_STATIC);
 	rc = sqlite3_step(st);
 	sqlite3_reset(st);
-	if (rc != SQLITE_ROW) {
-		rc = rc == SQLITE_DONE ? ERR_FIELD(e, "mesh_id", "no mesh '%s'", jn->mesh_id)
-				       : db_fail(db, e, "checking mesh");
-		if (rc == ERR_PARAM)
-			e->code = rc = ERR_NOTFOUND;
-		goto out;
+	if (rc == SQLITE_DONE) {
+		ERR_SET(e, ERR_NOTFOUND, "no mesh '%s'", jn->mesh_id);
+		snprintf(e->field, sizeof e->field, "mesh_id");
+		return ERR_NOTFOUND;
 	}
-	if (!(st = db_stmt(db, ins_sql, e))) {
-		rc = ERR_IO;
-		goto out;
-	}
+	if (rc != SQLITE_ROW)
+		return db_fail(db, e, "checking mesh");
+	if (!(st = db_stmt(db, ins_sql, e)))
+		return ERR_IO;
 	sqlite3_bind_text(st, 1, id, -1, SQLITE_STATIC);
 	sqlite3_bind_int64(st, 2, jn->tenant_id);
 	sqlite3_bind_text(st, 3, jn->mesh_id, -1, SQLITE_STATIC);
@@ -275,20 +270,64 @@ int queue_submit(struct db *db, const struct job_new *jn, struct job_row *out, i
 	sqlite3_bind_int64(st, 12, db_now_ms());
 	rc = sqlite3_step(st);
 	if (rc == SQLITE_ROW)
-		seq = sqlite3_column_int64(st, 0);
+		*seq = sqlite3_column_int64(st, 0);
 	sqlite3_reset(st);
-	if (rc != SQLITE_ROW) {
-		rc = db_fail(db, e, "queueing job");
-		goto out;
+	if (rc != SQLITE_ROW)
+		return db_fail(db, e, "queueing job");
+	return add_event(db, *seq, "state", e);
+}
+
+int queue_submit_batch(struct db *db, const struct job_new *v, int n, struct job_submit *res,
+		       struct err *e)
+{
+	int rc;
+
+	for (int i = 0; i < n; i++) {
+		res[i].rc = ERR_IO;
+		res[i].replayed = 0;
+		res[i].seq = 0;
+		err_clear(&res[i].err);
 	}
-	if ((rc = add_event(db, seq, "state", e)))
-		goto out;
-	if ((rc = db_commit(db, e)))
+	if ((rc = db_begin(db, e)))
 		return rc;
-	return queue_get_seq(db, seq, out, e);
+	for (int i = 0; i < n; i++) {
+		/* A savepoint per submission: one bad request never undoes the
+		 * others of its batch. */
+		if ((rc = db_exec(db, "SAVEPOINT one", e)))
+			goto out;
+		res[i].rc = submit_one(db, &v[i], &res[i].seq, &res[i].replayed, &res[i].err);
+		if ((rc = db_exec(db, res[i].rc ? "ROLLBACK TO one; RELEASE one" : "RELEASE one", e)))
+			goto out;
+	}
+	/* One commit, one fsync for the whole batch (group commit). */
+	if ((rc = db_commit(db, e)))
+		goto fail;
+	return 0;
 out:
 	db_rollback(db);
+fail:
+	for (int i = 0; i < n; i++)
+		if (!res[i].rc) {
+			res[i].rc = rc;
+			res[i].err = *e;
+		}
 	return rc;
+}
+
+int queue_submit(struct db *db, const struct job_new *jn, struct job_row *out, int *replayed,
+		 struct err *e)
+{
+	struct job_submit res;
+	int rc = queue_submit_batch(db, jn, 1, &res, e);
+
+	if (!rc && res.rc) {
+		*e = res.err;
+		return res.rc;
+	}
+	if (rc)
+		return rc;
+	*replayed = res.replayed;
+	return queue_get_seq(db, res.seq, out, e);
 }
 
 int queue_list(struct db *db, int64_t tenant_id, int state, int64_t before_seq, int limit,

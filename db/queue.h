@@ -15,8 +15,7 @@
 #include <stdint.h>
 
 #include "db/db.h"
-
-struct err;
+#include "engine/core/err.h"
 
 enum job_state { JOB_QUEUED, JOB_RUNNING, JOB_SUCCEEDED, JOB_FAILED, JOB_CANCELLED,
 		 JOB_STATE_COUNT };
@@ -70,6 +69,19 @@ struct job_new {
  * hash -> ERR_PARAM with field "Idempotency-Key". */
 int queue_submit(struct db *db, const struct job_new *jn, struct job_row *out, int *replayed,
 		 struct err *e);
+
+/* Group commit: n submissions in one transaction (one fsync), each in
+ * its own savepoint.  res[i] gets each one's outcome (rc 0 and the job's
+ * seq, or rc/err as queue_submit() would report).  Returns nonzero only
+ * when the transaction itself failed (then every res[i].rc is set). */
+struct job_submit {
+	int rc;
+	int64_t seq;
+	int replayed;
+	struct err err;
+};
+int queue_submit_batch(struct db *db, const struct job_new *v, int n, struct job_submit *res,
+		       struct err *e);
 
 /* The tenant's job by public id; ERR_NOTFOUND for any other tenant's. */
 int queue_get(struct db *db, int64_t tenant_id, const char *id, struct job_row *out,
