@@ -6,6 +6,7 @@ import http.client
 import os
 import re
 import shlex
+import shutil
 import signal
 import subprocess
 import sys
@@ -47,8 +48,11 @@ def test_systemd_execstart():
     argv = [a.replace("/usr/local/bin/infilld", BIN).replace("/var/lib/infilld", d)
             .replace("127.0.0.1:8080", "127.0.0.1:0") for a in shlex.split(line)]
     check(argv[0] == BIN and argv[1] == "serve", "ExecStart runs serve: %s" % line)
-    start_and_probe(argv + ["--workers", "1"])
-    check(os.path.exists(os.path.join(d, "infilld.db")), "state in StateDirectory")
+    try:
+        start_and_probe(argv + ["--workers", "1"])
+        check(os.path.exists(os.path.join(d, "infilld.db")), "state in StateDirectory")
+    finally:
+        shutil.rmtree(d, ignore_errors=True)
     for key in ("NoNewPrivileges=yes", "ProtectSystem=strict", "DynamicUser=yes",
                 "StateDirectory=infilld"):
         check(key in unit, "unit has %s" % key)
@@ -62,19 +66,25 @@ def test_container_entrypoint():
     d = tempfile.mkdtemp(prefix="infilld-ctr-")
     argv = [a.replace("/usr/local/bin/infilld", BIN).replace("/var/lib/infilld", d)
             .replace("0.0.0.0:8080", "127.0.0.1:0") for a in argv]
-    start_and_probe(argv + ["--workers", "1"])
+    try:
+        start_and_probe(argv + ["--workers", "1"])
+    finally:
+        shutil.rmtree(d, ignore_errors=True)
 
 
 def test_run_dev():
     d = tempfile.mkdtemp(prefix="infilld-dev-")
     env = dict(os.environ, INFILLD_DATA=d, INFILLD_LISTEN="127.0.0.1:0")
-    lines = start_and_probe([os.path.join(ROOT, "deploy", "run-dev.sh"), BIN], env)
-    text = "".join(lines)
-    check("admin key" in text and "http://127.0.0.1:0" in text, "hint printed: %s" % text)
-    with open(os.path.join(d, "admin.key")) as f:
-        key = f.read().strip()
-    check(re.fullmatch(r"ifa_[a-z2-7]{12}_[a-z2-7]{32}", key), "admin key saved: %r" % key)
-    check(oct(os.stat(os.path.join(d, "admin.key")).st_mode & 0o777) == "0o600", "key mode 600")
+    try:
+        lines = start_and_probe([os.path.join(ROOT, "deploy", "run-dev.sh"), BIN], env)
+        text = "".join(lines)
+        check("admin key" in text and "http://127.0.0.1:0" in text, "hint printed: %s" % text)
+        with open(os.path.join(d, "admin.key")) as f:
+            key = f.read().strip()
+        check(re.fullmatch(r"ifa_[a-z2-7]{12}_[a-z2-7]{32}", key), "admin key saved: %r" % key)
+        check(oct(os.stat(os.path.join(d, "admin.key")).st_mode & 0o777) == "0o600", "mode 600")
+    finally:
+        shutil.rmtree(d, ignore_errors=True)
 
 
 if __name__ == "__main__":
