@@ -23,6 +23,7 @@
 
 struct upload {
 	int fd;
+	struct sink out;           /* writes to fd */
 	char tmp[STORE_PATH_MAX];
 	char format[8];
 	char name[128];
@@ -111,20 +112,10 @@ static int parse_expected(struct upload *u, const char *hex, const char *digest)
 
 static int write_all(struct upload *u, const void *p, size_t len)
 {
-	const char *c = p;
+	struct err e;
 
 	sha256_update(&u->sha, len, (const uint8_t *)p);
-	while (len > 0) {
-		ssize_t w = write(u->fd, c, len);
-		if (w < 0) {
-			if (errno == EINTR)
-				continue;
-			return -1;
-		}
-		c += w;
-		len -= (size_t)w;
-	}
-	return 0;
+	return sink_write(&u->out, p, len, &e) ? -1 : 0;
 }
 
 static int mp_begin(void *ctx, const char *name, const char *filename)
@@ -245,6 +236,7 @@ enum MHD_Result api_upload_begin(struct api_req *r)
 		free(u);
 		return api_problem(r, PROB_UNAVAILABLE, NULL, "cannot store the upload");
 	}
+	sink_init_fd(&u->out, u->fd);
 	r->upload = u;
 	return MHD_YES;
 }

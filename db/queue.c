@@ -410,14 +410,13 @@ out:
 	return rc;
 }
 
-int queue_claim(struct db *db, const char *worker, int64_t lease_ms, struct job_row *out,
-		int *got, struct err *e)
+const char *queue_claim_sql(void)
 {
 	/* Round-robin: among tenants with a runnable queued job and a free
 	 * slot, the one served longest ago; its oldest runnable job.  The
 	 * inner lookups walk jobs_tenant_state, the outer tenants_served
 	 * (test_db.c checks the plan). */
-	static const char claim_sql[] =
+	static const char sql[] =
 		"UPDATE jobs SET state = 'running', attempt = attempt + 1, lease_expires = ?1 + ?2,"
 		" worker = ?3, started_at = coalesce(started_at, ?1), stage = 'starting',"
 		" event_seq = event_seq + 1"
@@ -430,6 +429,13 @@ int queue_claim(struct db *db, const char *worker, int64_t lease_ms, struct job_
 		"        AND r.state = 'running') < t.max_jobs"
 		"  ORDER BY t.served_seq, t.id LIMIT 1)"
 		" RETURNING seq, tenant_id";
+	return sql;
+}
+
+int queue_claim(struct db *db, const char *worker, int64_t lease_ms, struct job_row *out,
+		int *got, struct err *e)
+{
+	const char *claim_sql = queue_claim_sql();
 	static const char seq_sql[] =
 		"UPDATE meta SET value = value + 1 WHERE key = 'serve_seq' RETURNING value";
 	static const char served_sql[] = "UPDATE tenants SET served_seq = ?2 WHERE id = ?1";

@@ -33,21 +33,14 @@ struct jp {
 	struct sha256_ctx sha;
 };
 
+/* Write everything to fd (the report pipe): 0 or -1. */
 static int write_full(int fd, const void *p, size_t len)
 {
-	const char *c = p;
+	struct sink s;
+	struct err e;
 
-	while (len > 0) {
-		ssize_t w = write(fd, c, len);
-		if (w < 0) {
-			if (errno == EINTR)
-				continue;
-			return -1;
-		}
-		c += w;
-		len -= (size_t)w;
-	}
-	return 0;
+	sink_init_fd(&s, fd);
+	return sink_write(&s, p, len, &e) ? -1 : 0;
 }
 
 static void on_report(void *ctx, const struct progress_info *info)
@@ -82,10 +75,12 @@ static int out_write(void *ctx, const void *buf, size_t len, struct err *e)
 {
 	struct jp *jp = ctx;
 
+	struct sink fd_sink;
+
 	sha256_update(&jp->sha, len, buf);
-	if (write_full(jp->out_fd, buf, len))
-		return ERR_SET(e, errno == EFBIG ? ERR_LIMIT : ERR_IO, "writing the output: %s",
-			       errno == EFBIG ? "output size limit reached" : strerror(errno));
+	sink_init_fd(&fd_sink, jp->out_fd);
+	if (sink_write(&fd_sink, buf, len, e))
+		return errno == EFBIG ? ERR_SET(e, ERR_LIMIT, "output size limit reached") : e->code;
 	return 0;
 }
 

@@ -462,28 +462,15 @@ static void test_claim_plan(void)
 	struct db *db = fresh();
 	sqlite3 *sq;
 	sqlite3_stmt *st;
-	char plan[4096] = "";
+	char plan[4096] = "", sqltext[2048];
 	size_t len = 0;
 
 	REQUIRE(db);
 	db_close(db);
 	REQUIRE(sqlite3_open(path, &sq) == SQLITE_OK);
 	sqlite3_exec(sq, "ANALYZE", NULL, NULL, NULL);
-	REQUIRE(sqlite3_prepare_v2(sq,
-				   "EXPLAIN QUERY PLAN "
-				   "UPDATE jobs SET state = 'running', attempt = attempt + 1, lease_expires = ?1 + ?2,"
-				   " worker = ?3, started_at = coalesce(started_at, ?1), stage = 'starting',"
-				   " event_seq = event_seq + 1"
-				   " WHERE seq = ("
-				   "  SELECT (SELECT q.seq FROM jobs q WHERE q.tenant_id = t.id AND q.state = 'queued'"
-				   "          AND q.run_after <= ?1 ORDER BY q.seq LIMIT 1) AS next_seq"
-				   "  FROM tenants t"
-				   "  WHERE next_seq IS NOT NULL"
-				   "   AND (SELECT count(*) FROM jobs r WHERE r.tenant_id = t.id"
-				   "        AND r.state = 'running') < t.max_jobs"
-				   "  ORDER BY t.served_seq, t.id LIMIT 1)"
-				   " RETURNING seq, tenant_id",
-				   -1, &st, NULL) == SQLITE_OK);
+	snprintf(sqltext, sizeof sqltext, "EXPLAIN QUERY PLAN %s", queue_claim_sql());
+	REQUIRE(sqlite3_prepare_v2(sq, sqltext, -1, &st, NULL) == SQLITE_OK);
 	while (sqlite3_step(st) == SQLITE_ROW)
 		len += (size_t)snprintf(plan + len, sizeof plan - len, "%s\n",
 					(const char *)sqlite3_column_text(st, 3));
