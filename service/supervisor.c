@@ -85,30 +85,32 @@ void supervisor_start_due(struct supervisor *s)
 int supervisor_reap(struct supervisor *s, void (*dead)(void *ctx, const char *name), void *ctx)
 {
 	int status, n = 0;
-	pid_t pid;
 
-	while ((pid = waitpid(-1, &status, WNOHANG)) > 0) {
-		for (int i = 0; i < s->n; i++) {
-			double now = mono_s(), backoff;
-			if (s->w[i].pid != pid)
-				continue;
-			s->w[i].pid = 0;
-			n++;
-			if (WIFSIGNALED(status))
-				log_msg(LOG_WARN, "supervisor", "worker %s (pid %d) killed by signal %d",
-					s->w[i].name, (int)pid, WTERMSIG(status));
-			else
-				log_msg(LOG_WARN, "supervisor", "worker %s (pid %d) exited with %d",
-					s->w[i].name, (int)pid, WEXITSTATUS(status));
-			dead(ctx, s->w[i].name);
-			/* Fresh name: a late write of the dead one stays fenced by
-			 * the attempt number anyway; the name keeps logs clear. */
-			snprintf(s->w[i].name, sizeof s->w[i].name, "w%d-%d-%ld", i, (int)getpid(),
-				 (long)(now * 1000) % 100000);
-			s->w[i].quick_deaths = now - s->w[i].started_s < 5 ? s->w[i].quick_deaths + 1 : 0;
-			backoff = s->w[i].quick_deaths ? 0.5 * (1 << (s->w[i].quick_deaths < 6 ? s->w[i].quick_deaths : 6)) : 0;
-			s->w[i].restart_at_s = now + backoff;
-		}
+	/* Only our workers: waitpid(-1) would also reap the analysis
+	 * children that api/analyze.c threads wait for. */
+	for (int i = 0; i < s->n; i++) {
+		double now = mono_s(), backoff;
+		pid_t pid = s->w[i].pid;
+		if (!pid || waitpid(pid, &status, WNOHANG) != pid)
+			continue;
+		s->w[i].pid = 0;
+		n++;
+		if (WIFSIGNALED(status))
+			log_msg(LOG_WARN, "supervisor", "worker %s (pid %d) killed by signal %d",
+				s->w[i].name, (int)pid, WTERMSIG(status));
+		else
+			log_msg(LOG_WARN, "supervisor", "worker %s (pid %d) exited with %d", s->w[i].name,
+				(int)pid, WEXITSTATUS(status));
+		dead(ctx, s->w[i].name);
+		/* Fresh name: a late write of the dead one stays fenced by the
+		 * attempt number anyway; the name keeps logs clear. */
+		snprintf(s->w[i].name, sizeof s->w[i].name, "w%d-%d-%ld", i, (int)getpid(),
+			 (long)(now * 1000) % 100000);
+		s->w[i].quick_deaths = now - s->w[i].started_s < 5 ? s->w[i].quick_deaths + 1 : 0;
+		backoff = s->w[i].quick_deaths
+				  ? 0.5 * (1 << (s->w[i].quick_deaths < 6 ? s->w[i].quick_deaths : 6))
+				  : 0;
+		s->w[i].restart_at_s = now + backoff;
 	}
 	return n;
 }
@@ -131,15 +133,10 @@ void supervisor_stop(struct supervisor *s, double wait_s)
 		if (s->w[i].pid)
 			kill(s->w[i].pid, SIGTERM);
 	while (supervisor_alive(s) && mono_s() < deadline) {
-		int status;
-		pid_t pid = waitpid(-1, &status, WNOHANG);
-		if (pid > 0) {
-			for (int i = 0; i < s->n; i++)
-				if (s->w[i].pid == pid)
-					s->w[i].pid = 0;
-		} else {
-			nanosleep(&ts, NULL);
-		}
+		for (int i = 0; i < s->n; i++)
+			if (s->w[i].pid && waitpid(s->w[i].pid, NULL, WNOHANG) == s->w[i].pid)
+				s->w[i].pid = 0;
+		nanosleep(&ts, NULL);
 	}
 	for (int i = 0; i < s->n; i++)
 		if (s->w[i].pid) {
