@@ -17,7 +17,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-#define TOK_CAP 32768   /* tokens per deflate block */
+#define TOK_CAP OUT_PNG_TOKENS
 #define LITLEN_N 286    /* literal/length alphabet: 0..255, EOB 256, lengths 257..285 */
 #define CLEN_N 19       /* code-length alphabet */
 #define ADLER_MOD 65521u

@@ -33,8 +33,10 @@ struct out_png_stats {
 /* Working memory of out_png_gray() kept between calls by a caller that
  * encodes many images on one thread: zero-initialise; release with
  * out_png_scratch_fini().  About 128 KiB plus one compressed image. */
+#define OUT_PNG_TOKENS 32768 /* deflate tokens per block */
+
 struct out_png_scratch {
-	uint32_t *tok;  /* deflate tokens of one block */
+	uint32_t *tok;  /* OUT_PNG_TOKENS deflate tokens, NULL = allocated on use */
 	struct buf idat; /* the zlib stream before it goes into its chunk */
 };
 

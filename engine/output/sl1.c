@@ -486,6 +486,19 @@ static int open_common(const struct out_info *info, struct sink *s, enum sl1_kin
 	rc = out_zip_new(s, info->created, &w->zip, e);
 	if (rc)
 		goto fail;
+	/* every item that can be alive at once (in flight, plus the one being
+	 * queued) with its encoder memory, so memory is flat from layer 0 */
+	for (int i = 0; i < in_flight + 1; i++) {
+		struct sl1_item *it = mem_calloc(1, sizeof *it);
+		if (it)
+			it->scratch.tok = mem_alloc(OUT_PNG_TOKENS * sizeof *it->scratch.tok);
+		if (!it || !it->scratch.tok) {
+			mem_free(it);
+			rc = ERR_SET(e, ERR_NOMEM, "out of memory opening the archive writer");
+			goto fail;
+		}
+		item_put(w, it);
+	}
 	rc = pipeline_new(&sl1_pipeline_ops, w, w->threads, in_flight, &w->pipe, e);
 	if (rc)
 		goto fail;

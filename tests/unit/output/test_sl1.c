@@ -400,12 +400,14 @@ static void test_memory_independent_of_layers(void)
 	REQUIRE_OK(rc, &e);
 	small = peak_heap(200, &e, &rc);
 	REQUIRE_OK(rc, &e);
-	large = peak_heap(2000, &e, &rc);
+	large = peak_heap(4000, &e, &rc);
 	REQUIRE_OK(rc, &e);
-	fprintf(stderr, "peak heap: %zu bytes for 200 layers, %zu for 2000\n", small, large);
+	fprintf(stderr, "peak heap: %zu bytes for 200 layers, %zu for 4000\n", small, large);
 	/* What may grow is the zip central directory, about 90 bytes an
-	 * entry; any retained image (64 KB) or PNG (~2 KB) per layer fails. */
-	CHECK((double)large - (double)small < 1800 * 200.0);
+	 * entry: 300 bytes a layer allow for it and for how many images the
+	 * pool happened to need (at most 6 x 64 KB), while any image or PNG
+	 * (~2 KB) kept per layer fails. */
+	CHECK((double)large - (double)small < 3800 * 300.0);
 	CHECK(small < 4u * 1024 * 1024);
 }
 
