@@ -57,6 +57,14 @@ int slice_at(struct slicer *s, double z_mm, struct paths *region, struct slice_s
 int slice_rasterize(const struct paths *region, const struct raster_map *map, int antialias,
 		    struct raster *r, struct err *e);
 
+/* The exact area coverage (0..1, before 8-bit quantisation) of region in
+ * each pixel of a w x h float image with row stride `stride` floats,
+ * through map; max-ed into cov like slice_rasterize.  For callers that
+ * need unquantised coverage (tests of exactness, thumbnails, volume
+ * estimates).  0, ERR_PARAM (singular map, bad size) or ERR_NOMEM. */
+int slice_coverage(const struct paths *region, const struct raster_map *map, float *cov, int w,
+		   int h, size_t stride, struct err *e);
+
 /* Contours of a scalar field sampled at pixel centres (marching squares
  * with linear interpolation, saddles resolved by the cell centre value):
  * the region where field > iso, mapped to printer nm through map's
