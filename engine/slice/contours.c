@@ -47,12 +47,13 @@ static int32_t xing_new(struct xings *x, double u, double v)
 
 /* Position of the iso crossing between samples a (value fa, real iff
  * ra) and b, as a fraction of the way from a to b.  Against a virtual
- * sample the crossing is half way: on the image border. */
+ * sample the crossing is half way: on the image border; likewise
+ * against a NaN sample (counted as below iso, value unknown). */
 static double xing_t(float fa, int ra, float fb, int rb, float iso)
 {
 	double t;
 
-	if (!ra || !rb)
+	if (!ra || !rb || isnan(fa) || isnan(fb))
 		return 0.5;
 	t = ((double)iso - fa) / ((double)fb - fa);
 	return t < 0 ? 0 : t > 1 ? 1 : t;
