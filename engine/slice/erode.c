@@ -46,6 +46,8 @@ struct slice_eroder {
 	int32_t *run;          /* where inside at cur: first layer of the inside run */
 	int32_t *hi;           /* where inside at cur: first outside layer above, or HI_NONE */
 	float *F, *E, *field, *sub;
+	uint64_t *T;           /* layer k's bits, column-major (i * h + j) */
+	struct ebox cav_box;   /* pixels with D >= r, grown by one */
 	struct raster *scratch;
 	struct paths reg;
 	int cur, loaded, field_k;
@@ -75,12 +77,6 @@ static const uint64_t *plane(const struct slice_eroder *er, int j)
 	return er->planes + (size_t)(j % er->P) * er->words;
 }
 
-static int inside_at(const struct slice_eroder *er, int j, size_t q)
-{
-	const uint64_t *pl = plane(er, j);
-	return pl ? bit_get(pl, q) : 0;
-}
-
 static struct ebox layer_box(const struct slice_eroder *er, int j)
 {
 	struct ebox none = {0, 0, 0, 0};
@@ -102,6 +98,7 @@ void slice_erode_free(struct slice_eroder *er)
 	mem_free(er->E);
 	mem_free(er->field);
 	mem_free(er->sub);
+	mem_free(er->T);
 	mem_free(er->ev);
 	mem_free(er->ez);
 	mem_free(er->env);
@@ -197,6 +194,7 @@ int slice_erode_new(const struct slice_erode_params *p, const struct slice_erode
 	er->E = mem_alloc(er->npx * sizeof *er->E);
 	er->field = mem_alloc(er->npx * sizeof *er->field);
 	er->sub = mem_alloc(er->npx * sizeof *er->sub);
+	er->T = mem_alloc(er->words * sizeof *er->T);
 	er->ev = mem_alloc(side * sizeof *er->ev);
 	er->ez = mem_alloc(side * sizeof *er->ez);
 	er->env = mem_alloc(side * sizeof *er->env);
@@ -204,7 +202,7 @@ int slice_erode_new(const struct slice_erode_params *p, const struct slice_erode
 	er->lout = mem_alloc(side * sizeof *er->lout);
 	er->scratch = raster_new(er->w, er->h);
 	if (!er->planes || !er->slot_layer || !er->slot_box || !er->run || !er->hi || !er->F ||
-	    !er->E || !er->field || !er->sub || !er->ev || !er->ez || !er->env || !er->lin ||
+	    !er->E || !er->field || !er->sub || !er->T || !er->ev || !er->ez || !er->env || !er->lin ||
 	    !er->lout || !er->scratch) {
 		slice_erode_free(er);
 		return ERR_SET(e, ERR_NOMEM, "out of memory for a %d x %d erosion grid", (int)wd,
@@ -224,23 +222,53 @@ void slice_erode_info(const struct slice_eroder *er, struct slice_erode_info *in
 	info->h = er->h;
 	info->map = er->map;
 	info->window_layers = er->R;
-	info->bytes = sizeof *er + (size_t)er->P * er->words * 8 + er->npx * (4 * 6 + 1) +
+	info->bytes = sizeof *er + (size_t)(er->P + 1) * er->words * 8 + er->npx * (4 * 6 + 1) +
 		      ((size_t)(er->w > er->h ? er->w : er->h) + 2) * 28;
 	info->pixels = er->pixels;
 }
 
+/* ---- bit planes ---- */
+
+/* Next run of set bits of pl within [from, end): 1 and [*a, *b), or 0. */
+static int bits_run(const uint64_t *pl, size_t from, size_t end, size_t *a, size_t *b)
+{
+	size_t q = from;
+
+	while (q < end) {
+		uint64_t wd = pl[q >> 6] >> (q & 63);
+		if (wd) {
+			q += (size_t)__builtin_ctzll(wd);
+			break;
+		}
+		q = (q | 63) + 1;
+	}
+	if (q >= end)
+		return 0;
+	*a = q;
+	while (q < end) {
+		uint64_t wd = ~pl[q >> 6] >> (q & 63);
+		if (wd) {
+			q += (size_t)__builtin_ctzll(wd);
+			break;
+		}
+		q = (q | 63) + 1;
+	}
+	*b = q < end ? q : end;
+	return 1;
+}
+
 /* ---- streaming the layers in ---- */
 
-/* Pull layer m from the source into its bit plane.  Pixels inside at
- * the current layer whose first outside layer above is not known yet
- * learn it here. */
+/* Pull layer m from the source into its bit plane (the grid's outer
+ * ring stays outside).  Pixels inside at the current layer whose first
+ * outside layer above is not known yet learn it here. */
 static int load(struct slice_eroder *er, int m, struct err *e)
 {
 	int slot = m % er->P, rc;
 	uint64_t *pl = er->planes + (size_t)slot * er->words;
+	const uint64_t *pc = plane(er, er->cur);
 	struct ebox lit = {er->w, er->h, 0, 0}, cb;
 	struct pt2 lo, hi;
-	int i0, i1, j0, j1;
 
 	paths_clear(&er->reg);
 	rc = er->src.layer(er->src.ctx, m, &er->reg, e);
@@ -249,6 +277,7 @@ static int load(struct slice_eroder *er, int m, struct err *e)
 	memset(pl, 0, er->words * sizeof *pl);
 	if (paths_bbox(&er->reg, &lo, &hi)) {
 		double u0, v0, u1, v1;
+		int i0, i1, j0, j1;
 		rc = slice_rasterize(&er->reg, &er->map, 0, er->scratch, e);
 		if (rc)
 			return rc;
@@ -260,11 +289,22 @@ static int load(struct slice_eroder *er, int m, struct err *e)
 		j1 = v1 < 0 ? 0 : v1 >= er->h ? er->h : (int)ceil(v1);
 		for (int j = j0; j < j1; j++) {
 			uint8_t *row = er->scratch->px + (size_t)j * er->scratch->stride;
+			int ring = j == 0 || j == er->h - 1;
 			for (int i = i0; i < i1; i++) {
 				size_t q;
+				uint64_t eight;
+				if (i + 8 <= i1) { /* skip empty stretches 8 pixels at a time */
+					memcpy(&eight, row + i, 8);
+					if (!eight) {
+						i += 7;
+						continue;
+					}
+				}
 				if (!row[i])
 					continue;
 				row[i] = 0;
+				if (ring || i == 0 || i == er->w - 1)
+					continue;
 				q = (size_t)j * (size_t)er->w + (size_t)i;
 				pl[q >> 6] |= 1ull << (q & 63);
 				lit.i0 = i < lit.i0 ? i : lit.i0;
@@ -280,11 +320,17 @@ static int load(struct slice_eroder *er, int m, struct err *e)
 	er->slot_box[slot] = lit;
 	er->loaded = m;
 	cb = layer_box(er, er->cur);
-	for (int j = cb.j0; j < cb.j1; j++) {
-		for (int i = cb.i0; i < cb.i1; i++) {
-			size_t q = (size_t)j * (size_t)er->w + (size_t)i;
-			if (er->hi[q] == HI_NONE && inside_at(er, er->cur, q) && !bit_get(pl, q))
-				er->hi[q] = m;
+	if (pc && !box_empty(cb)) {
+		size_t w0 = ((size_t)cb.j0 * (size_t)er->w) >> 6;
+		size_t w1 = (((size_t)cb.j1 * (size_t)er->w) + 63) >> 6;
+		for (size_t wd = w0; wd < w1; wd++) {
+			uint64_t c = pc[wd] & ~pl[wd]; /* inside now, outside at m */
+			while (c) {
+				size_t q = (wd << 6) + (size_t)__builtin_ctzll(c);
+				c &= c - 1;
+				if (er->hi[q] == HI_NONE)
+					er->hi[q] = m;
+			}
 		}
 	}
 	return 0;
@@ -296,18 +342,23 @@ static int load(struct slice_eroder *er, int m, struct err *e)
 static void advance(struct slice_eroder *er, int k)
 {
 	struct ebox b = layer_box(er, k);
+	const uint64_t *pk = plane(er, k), *pp = plane(er, k - 1);
 
-	for (int j = b.j0; j < b.j1; j++) {
-		for (int i = b.i0; i < b.i1; i++) {
-			size_t q = (size_t)j * (size_t)er->w + (size_t)i;
-			if (!inside_at(er, k, q) || inside_at(er, k - 1, q))
-				continue;
-			er->run[q] = k;
-			er->hi[q] = HI_NONE;
-			for (int m = k + 1; m <= er->loaded; m++) {
-				if (!inside_at(er, m, q)) {
-					er->hi[q] = m;
-					break;
+	if (pk && !box_empty(b)) {
+		size_t w0 = ((size_t)b.j0 * (size_t)er->w) >> 6;
+		size_t w1 = (((size_t)b.j1 * (size_t)er->w) + 63) >> 6;
+		for (size_t wd = w0; wd < w1; wd++) {
+			uint64_t c = pk[wd] & ~(pp ? pp[wd] : 0);
+			while (c) {
+				size_t q = (wd << 6) + (size_t)__builtin_ctzll(c);
+				c &= c - 1;
+				er->run[q] = k;
+				er->hi[q] = HI_NONE;
+				for (int m = k + 1; m <= er->loaded; m++) {
+					if (!bit_get(plane(er, m), q)) {
+						er->hi[q] = m;
+						break;
+					}
 				}
 			}
 		}
@@ -317,105 +368,81 @@ static void advance(struct slice_eroder *er, int k)
 
 /* ---- distance passes ---- */
 
-/* g(d): squared distance along one axis from a pixel centre to the
- * pixel box d pixels away. */
-static float gbox(int d)
-{
-	float a = (float)(d < 0 ? -d : d) - 0.5f;
-	return d == 0 ? 0.0f : a * a;
-}
+/* gbox(d) below: the squared distance along one axis from a pixel
+ * centre to the pixel box d pixels away, (|d| - 1/2)^2 for d != 0 and 0
+ * for d = 0 (the voxel-box metric; docs/slicing.md "Erosion"). */
 
-/* o[x] = min over y of gbox(x - y) + f[y] for x in [0, n), f >= 0, with
- * f[y] == 0 exactly at outside pixels.  An outside pixel hides every
- * pixel beyond it, so each inside run is solved with its two outside
- * neighbours only.  Per run: a constant run (all at the cap) has a
- * closed form; otherwise min(f[x], Env(x - 1/2), Env(x + 1/2)) where Env
- * is the lower envelope of the parabolas (t - y)^2 + f[y]
- * (Felzenszwalb-Huttenlocher), which equals the box metric exactly:
- * for y < x, (x - 1/2 - y)^2 = gbox(x - y), and the other evaluations
- * only overestimate.  O(n). */
-static void edt_1d(struct slice_eroder *er, const float *f, float *o, int n)
+/* One inside run of n pixels: f[1..n] (> 0, <= cap^2) between the
+ * outside pixels f[0] = f[n+1] = 0.  o[y] = min(cap^2, min over x of
+ * gbox(|y - x|) + f[x]) (gbox(0) = 0), y in 1..n.  Outside pixels hide
+ * everything beyond them, so a run is an independent problem.
+ * o[y] = min(f[y], Env(y - 1/2), Env(y + 1/2)) with Env the lower
+ * envelope of the parabolas (t - x)^2 + f[x] (Felzenszwalb-Huttenlocher):
+ * for x < y, (y - 1/2 - x)^2 is exactly gbox(y - x), symmetrically for
+ * x > y, and every other evaluation only overestimates a term.  Samples
+ * at the cap cannot bring anything below it and stay out of the
+ * envelope.  O(n). */
+static void edt_run(struct slice_eroder *er, const float *f, float *o, int n)
 {
-	int x = 0;
+	int k = 0;
+	const float cap2 = er->cap2;
 
-	while (x < n) {
-		int a, b, s, t, cst = 1, k;
-		if (f[x] == 0) {
-			o[x++] = 0;
+	er->ev[0] = 0;
+	er->ez[0] = -HUGE_VAL;
+	er->ez[1] = HUGE_VAL;
+	for (int q = 1; q <= n + 1; q++) {
+		double fq = f[q], sx;
+		if (fq >= cap2)
 			continue;
+		for (;;) {
+			int vk = er->ev[k];
+			sx = ((fq - f[vk]) + (double)(q - vk) * (double)(q + vk)) / (2.0 * (q - vk));
+			if (sx > er->ez[k])
+				break;
+			k--;
 		}
-		a = x;
-		while (x < n && f[x] > 0) {
-			cst &= f[x] == er->cap2;
-			x++;
-		}
-		b = x;
-		if (cst) {
-			for (int y = a; y < b; y++) {
-				float d = er->cap2;
-				if (a > 0 && gbox(y - a + 1) < d)
-					d = gbox(y - a + 1);
-				if (b < n && gbox(b - y) < d)
-					d = gbox(b - y);
-				o[y] = d;
-			}
-			continue;
-		}
-		s = a > 0 ? a - 1 : a;
-		t = b < n ? b + 1 : b;
-		/* envelope over f[s..t), local index y - s */
-		k = 0;
-		er->ev[0] = 0;
-		er->ez[0] = -HUGE_VAL;
-		er->ez[1] = HUGE_VAL;
-		for (int q = 1; q < t - s; q++) {
-			double fq = f[s + q], sx;
-			for (;;) {
-				int vk = er->ev[k];
-				sx = ((fq - f[s + vk]) + (double)(q - vk) * (double)(q + vk)) /
-				     (2.0 * (q - vk));
-				if (sx > er->ez[k])
-					break;
-				k--;
-			}
+		k++;
+		er->ev[k] = q;
+		er->ez[k] = sx;
+		er->ez[k + 1] = HUGE_VAL;
+	}
+	k = 0;
+	for (int m = 1; m <= n + 1; m++) {
+		double y = m - 0.5, d;
+		while (er->ez[k + 1] < y)
 			k++;
-			er->ev[k] = q;
-			er->ez[k] = sx;
-			er->ez[k + 1] = HUGE_VAL;
-		}
-		k = 0;
-		for (int m = 0; m <= t - s; m++) {
-			double y = m - 0.5, d;
-			while (er->ez[k + 1] < y)
-				k++;
-			d = y - er->ev[k];
-			er->env[m] = (float)(d * d + f[s + er->ev[k]]);
-		}
-		for (int y = a; y < b; y++) {
-			float d = f[y];
-			if (er->env[y - s] < d)
-				d = er->env[y - s];
-			if (er->env[y - s + 1] < d)
-				d = er->env[y - s + 1];
-			o[y] = d;
-		}
+		d = y - er->ev[k];
+		er->env[m] = (float)(d * d + f[er->ev[k]]);
+	}
+	for (int y = 1; y <= n; y++) {
+		float d = f[y];
+		if (er->env[y] < d)
+			d = er->env[y];
+		if (er->env[y + 1] < d)
+			d = er->env[y + 1];
+		o[y] = d < cap2 ? d : cap2;
 	}
 }
 
-/* Fill field for layer k (cur == k). */
+/* Fill field for layer k (cur == k).  Work is proportional to the
+ * layer's inside pixels (plus a word scan of its bounding box rows). */
 static void compute_field(struct slice_eroder *er, int k)
 {
-	struct ebox b = layer_box(er, k), wb;
+	struct ebox b = layer_box(er, k), cav = {er->w, er->h, 0, 0};
+	const uint64_t *pk = plane(er, k);
 	const double dz_px = er->p.layer_mm / er->p.pixel_mm;
 	const float neg = (float)-er->p.r_mm;
-	int grow = (int)ceil(er->cap_px) + 1, last = er->p.layer_count - 1;
+	const size_t w = (size_t)er->w, h = (size_t)er->h;
+	int last = er->p.layer_count - 1;
 	float maxF = 0;
+	size_t a, c;
 
 	for (int j = er->field_box.j0; j < er->field_box.j1; j++)
 		for (int i = er->field_box.i0; i < er->field_box.i1; i++)
-			er->field[(size_t)j * (size_t)er->w + (size_t)i] = neg;
+			er->field[(size_t)j * w + (size_t)i] = neg;
 	er->field_box = b;
-	if (box_empty(b))
+	er->cav_box.i0 = er->cav_box.j0 = er->cav_box.i1 = er->cav_box.j1 = 0;
+	if (box_empty(b) || !pk)
 		return;
 	/* Early exit: an inside pixel is at most half the box's width or
 	 * height (in voxel-box distance) from the outside ring.  Exits leave
@@ -426,56 +453,76 @@ static void compute_field(struct slice_eroder *er, int k)
 		if (lat * lat < er->lo2)
 			return;
 	}
-	wb.i0 = b.i0 - grow < 0 ? 0 : b.i0 - grow;
-	wb.j0 = b.j0 - grow < 0 ? 0 : b.j0 - grow;
-	wb.i1 = b.i1 + grow > er->w ? er->w : b.i1 + grow;
-	wb.j1 = b.j1 + grow > er->h ? er->h : b.j1 + grow;
 	/* (1) z: squared distance (px^2) to the nearest outside slab in the
-	 * pixel's own column, (n - 1/2) layers for the n-th layer away. */
-	for (int j = wb.j0; j < wb.j1; j++) {
-		float *row = er->F + (size_t)j * (size_t)er->w;
-		for (int i = wb.i0; i < wb.i1; i++) {
-			size_t q = (size_t)j * (size_t)er->w + (size_t)i;
-			double below, above, n, tz;
-			float f;
-			if (i < b.i0 || i >= b.i1 || j < b.j0 || j >= b.j1 || !inside_at(er, k, q)) {
-				row[i] = 0;
-				continue;
+	 * pixel's own column, (n - 1/2) layers for the n-th layer away;
+	 * also the column-major copy of the layer's bits for pass (2). */
+	memset(er->T, 0, er->words * sizeof *er->T);
+	for (int j = b.j0; j < b.j1; j++) {
+		size_t from = (size_t)j * w + (size_t)b.i0, end = (size_t)j * w + (size_t)b.i1;
+		while (bits_run(pk, from, end, &a, &c)) {
+			for (size_t q = a; q < c; q++) {
+				double below = (double)k - er->run[q] + 1, above, n, tz;
+				size_t t = (q - (size_t)j * w) * h + (size_t)j;
+				float f;
+				if (er->hi[q] != HI_NONE)
+					above = (double)er->hi[q] - k;
+				else
+					above = er->loaded == last ? (double)(last + 1 - k) : HUGE_VAL;
+				n = below < above ? below : above;
+				tz = (n - 0.5) * dz_px;
+				f = tz * tz < er->cap2 ? (float)(tz * tz) : er->cap2;
+				er->F[q] = f;
+				maxF = f > maxF ? f : maxF;
+				er->T[t >> 6] |= 1ull << (t & 63);
 			}
-			below = (double)k - er->run[q] + 1;
-			if (er->hi[q] != HI_NONE)
-				above = (double)er->hi[q] - k;
-			else
-				above = er->loaded == last ? (double)(last + 1 - k) : HUGE_VAL;
-			n = below < above ? below : above;
-			tz = (n - 0.5) * dz_px;
-			f = tz * tz < er->cap2 ? (float)(tz * tz) : er->cap2;
-			row[i] = f;
-			maxF = f > maxF ? f : maxF;
+			from = c;
 		}
 	}
 	if (maxF < er->lo2)
 		return; /* within r - 2 pixels of a floor or ceiling everywhere */
-	/* (2) columns */
-	for (int i = wb.i0; i < wb.i1; i++) {
-		int n = wb.j1 - wb.j0;
-		for (int j = 0; j < n; j++)
-			er->lin[j] = er->F[(size_t)(wb.j0 + j) * (size_t)er->w + (size_t)i];
-		edt_1d(er, er->lin, er->lout, n);
-		for (int j = 0; j < n; j++)
-			er->E[(size_t)(wb.j0 + j) * (size_t)er->w + (size_t)i] = er->lout[j];
-	}
-	/* (3) rows, written as D - r for the layer's own box */
-	for (int j = b.j0; j < b.j1; j++) {
-		const float *erow = er->E + (size_t)j * (size_t)er->w + wb.i0;
-		float *frow = er->field + (size_t)j * (size_t)er->w;
-		edt_1d(er, erow, er->lout, wb.i1 - wb.i0);
-		for (int i = b.i0; i < b.i1; i++) {
-			float d2 = er->lout[i - wb.i0];
-			frow[i] = (float)(sqrt((double)d2) * er->p.pixel_mm - er->p.r_mm);
+	/* (2) columns, over their inside runs */
+	for (int i = b.i0; i < b.i1; i++) {
+		size_t from = (size_t)i * h + (size_t)b.j0, end = (size_t)i * h + (size_t)b.j1;
+		while (bits_run(er->T, from, end, &a, &c)) {
+			int n = (int)(c - a);
+			size_t j0 = a - (size_t)i * h;
+			er->lin[0] = er->lin[n + 1] = 0;
+			for (int y = 0; y < n; y++)
+				er->lin[y + 1] = er->F[(j0 + (size_t)y) * w + (size_t)i];
+			edt_run(er, er->lin, er->lout, n);
+			for (int y = 0; y < n; y++)
+				er->E[(j0 + (size_t)y) * w + (size_t)i] = er->lout[y + 1];
+			from = c;
 		}
 	}
-	er->pixels += (double)(wb.i1 - wb.i0) * (wb.j1 - wb.j0);
+	/* (3) rows, over their inside runs, written as D - r */
+	for (int j = b.j0; j < b.j1; j++) {
+		size_t from = (size_t)j * w + (size_t)b.i0, end = (size_t)j * w + (size_t)b.i1;
+		while (bits_run(pk, from, end, &a, &c)) {
+			int n = (int)(c - a);
+			er->lin[0] = er->lin[n + 1] = 0;
+			memcpy(er->lin + 1, er->E + a, (size_t)n * sizeof *er->lin);
+			edt_run(er, er->lin, er->lout, n);
+			for (int y = 0; y < n; y++) {
+				float d2 = er->lout[y + 1];
+				er->field[a + (size_t)y] =
+					(float)(sqrt((double)d2) * er->p.pixel_mm - er->p.r_mm);
+				if (d2 >= er->r2) {
+					int i = (int)(a - (size_t)j * w) + y;
+					cav.i0 = i < cav.i0 ? i : cav.i0;
+					cav.i1 = i + 1 > cav.i1 ? i + 1 : cav.i1;
+					cav.j0 = j < cav.j0 ? j : cav.j0;
+					cav.j1 = j + 1 > cav.j1 ? j + 1 : cav.j1;
+				}
+			}
+			er->pixels += n;
+			from = c;
+		}
+	}
+	if (!box_empty(cav)) { /* grown by one so crossings interpolate real samples */
+		cav.i0--, cav.j0--, cav.i1++, cav.j1++;
+		er->cav_box = cav;
+	}
 }
 
 static int ensure(struct slice_eroder *er, int k, struct err *e)
@@ -523,12 +570,13 @@ int slice_erode_layer(struct slice_eroder *er, int k, struct paths *region, stru
 
 	if (rc)
 		return rc;
-	b = er->field_box;
+	b = er->cav_box;
 	if (box_empty(b)) {
 		paths_clear(region);
 		return 0;
 	}
-	/* contour the layer's box only: everything outside it is -r */
+	/* Contour the cavity's box grown by one pixel only: every sample
+	 * outside it is below 0, and the ring keeps crossings interpolated. */
 	bw = b.i1 - b.i0;
 	bh = b.j1 - b.j0;
 	for (int j = 0; j < bh; j++)
