@@ -1,7 +1,8 @@
 /* chains.c - closing the open contour chains an open mesh leaves in a
- * plane (see chains.h).  Greedy nearest-end joining over heads sorted by
- * x, with union-find "next alive" links so consumed heads cost O(1)
- * amortised to skip.  Rationale: docs/slicing.md "Open meshes".
+ * plane (see chains.h).  Greedy joining, same hole first, then nearest
+ * end over heads sorted by x with union-find "next alive" links so
+ * consumed heads cost O(1) amortised to skip.  Rationale:
+ * docs/slicing.md "Open meshes".
  */
 #include "engine/slice/chains.h"
 #include "engine/core/err.h"
@@ -21,6 +22,10 @@ struct heads {
 	size_t *right;  /* right[i] == i: alive (i == m: sentinel) */
 	size_t *left;   /* shifted by one: left[i+1] is element i; left[0] sentinel */
 	size_t m;
+	const uint32_t *key; /* 2 per chain (chains.h), NULL = none */
+	size_t *byhole;      /* chains with a head on a hole, by that hole */
+	size_t nbyhole;
+	unsigned char *dead; /* per chain: head consumed */
 };
 
 static int head_cmp(const void *a, const void *b)
@@ -61,6 +66,55 @@ static void head_remove(struct heads *hs, size_t chain)
 
 	hs->right[i] = i + 1;
 	hs->left[i + 1] = i;
+	hs->dead[chain] = 1;
+}
+
+static const uint32_t *sort_key; /* qsort has no context argument */
+
+static int byhole_cmp(const void *a, const void *b)
+{
+	size_t p = *(const size_t *)a, q = *(const size_t *)b;
+	uint32_t kp = sort_key[2 * p], kq = sort_key[2 * q];
+
+	if (kp != kq)
+		return kp < kq ? -1 : 1;
+	return p < q ? -1 : p > q;
+}
+
+static double dist2(struct pt2 a, struct pt2 b)
+{
+	double dx = (double)(a.x - b.x), dy = (double)(a.y - b.y);
+	return dx * dx + dy * dy;
+}
+
+/* Nearest alive chain whose head lies on hole `hole`, or SIZE_MAX. */
+static size_t head_nearest_on_hole(const struct heads *hs, const struct paths *open,
+				   uint32_t hole, struct pt2 q)
+{
+	size_t lo = 0, hi = hs->nbyhole, best_chain = SIZE_MAX;
+	double best = INFINITY;
+
+	if (hole == UINT32_MAX)
+		return SIZE_MAX;
+	while (lo < hi) {
+		size_t mid = lo + (hi - lo) / 2;
+		if (hs->key[2 * hs->byhole[mid]] < hole)
+			lo = mid + 1;
+		else
+			hi = mid;
+	}
+	for (; lo < hs->nbyhole && hs->key[2 * hs->byhole[lo]] == hole; lo++) {
+		size_t c = hs->byhole[lo];
+		double d;
+		if (hs->dead[c])
+			continue;
+		d = dist2(open->v[c].pts[0], q);
+		if (d < best) {
+			best = d;
+			best_chain = c;
+		}
+	}
+	return best_chain;
 }
 
 /* Chain whose alive head is nearest to q (ties: lowest x, y, chain). */
@@ -112,7 +166,8 @@ static int path_append(struct path *dst, const struct path *src)
 	return 0;
 }
 
-int slice_chains_close(struct paths *open, struct paths *loops, struct err *e)
+int slice_chains_close(struct paths *open, const uint32_t *key, struct paths *loops,
+		       struct err *e)
 {
 	struct heads hs;
 	unsigned char *used = NULL;
@@ -128,7 +183,10 @@ int slice_chains_close(struct paths *open, struct paths *loops, struct err *e)
 	hs.right = mem_alloc((m + 1) * sizeof *hs.right);
 	hs.left = mem_alloc((m + 1) * sizeof *hs.left);
 	used = mem_calloc(m, 1);
-	if (!hs.h || !hs.slot || !hs.right || !hs.left || !used) {
+	hs.dead = mem_calloc(m, 1);
+	hs.byhole = mem_alloc(m * sizeof *hs.byhole);
+	hs.key = key;
+	if (!hs.h || !hs.slot || !hs.right || !hs.left || !used || !hs.dead || !hs.byhole) {
 		rc = ERR_SET(e, ERR_NOMEM, "out of memory closing %zu open contour chains", m);
 		goto out;
 	}
@@ -138,6 +196,11 @@ int slice_chains_close(struct paths *open, struct paths *loops, struct err *e)
 		hs.h[c].chain = c;
 	}
 	qsort(hs.h, m, sizeof *hs.h, head_cmp);
+	for (size_t c = 0; key && c < m; c++)
+		if (key[2 * c] != UINT32_MAX)
+			hs.byhole[hs.nbyhole++] = c;
+	sort_key = key;
+	qsort(hs.byhole, hs.nbyhole, sizeof *hs.byhole, byhole_cmp);
 	for (size_t i = 0; i <= m; i++) {
 		hs.right[i] = i;
 		hs.left[i] = i;
@@ -154,21 +217,31 @@ int slice_chains_close(struct paths *open, struct paths *loops, struct err *e)
 		used[c] = 1;
 		g = open->v[c]; /* take ownership; c's head stays alive to close onto */
 		path_init(&open->v[c]);
-		for (;;) {
-			size_t n = head_nearest(&hs, g.pts[g.n - 1]);
+		open->v[c].pts = &g.pts[0]; /* its head point, for the hole search */
+		open->v[c].n = 1;
+		for (size_t tail = c;;) {
+			size_t n = key ? head_nearest_on_hole(&hs, open, key[2 * tail + 1],
+							      g.pts[g.n - 1])
+				       : SIZE_MAX;
+			if (n == SIZE_MAX)
+				n = head_nearest(&hs, g.pts[g.n - 1]);
 			if (n == c || n == SIZE_MAX) {
 				head_remove(&hs, c);
 				break;
 			}
 			if (path_append(&g, &open->v[n])) {
+				path_init(&open->v[c]);
 				path_fini(&g);
 				rc = ERR_SET(e, ERR_NOMEM, "out of memory joining contour chains");
 				goto out;
 			}
+			open->v[c].pts = &g.pts[0]; /* g may have moved */
 			used[n] = 1;
 			head_remove(&hs, n);
 			path_fini(&open->v[n]);
+			tail = n;
 		}
+		path_init(&open->v[c]);
 		dst = paths_add(loops);
 		if (!dst) {
 			path_fini(&g);
@@ -184,5 +257,7 @@ out:
 	mem_free(hs.right);
 	mem_free(hs.left);
 	mem_free(used);
+	mem_free(hs.dead);
+	mem_free(hs.byhole);
 	return rc;
 }

@@ -33,6 +33,8 @@ struct slicer {
 	double *zmax;        /* per triangle id */
 	uint32_t *tri_edge;  /* per triangle id, 3: edge of corner i -> i+1 */
 	uint32_t *edge_v;    /* per edge, 2: vertex ids, lower id first */
+	uint32_t *edge_hole; /* per edge: the hole (border loop) a border edge
+				belongs to, SLICE_NO_HOLE for other edges */
 	size_t ne;
 
 	/* sweep state */
@@ -50,7 +52,11 @@ struct slicer {
 	uint32_t stamp;
 	struct paths raw;    /* closed loops before normalisation */
 	struct paths open;   /* open chains (open mesh) */
+	uint32_t *open_key;  /* per open chain, 2: hole of its head and tail edge */
+	size_t open_key_cap;
 };
+
+#define SLICE_NO_HOLE UINT32_MAX
 
 /* ---- sorting: LSD radix sort of (key, value) pairs, 11 bits a pass ---- */
 
@@ -137,6 +143,8 @@ void slice_free(struct slicer *s)
 	mem_free(s->zmax);
 	mem_free(s->tri_edge);
 	mem_free(s->edge_v);
+	mem_free(s->edge_hole);
+	mem_free(s->open_key);
 	mem_free(s->active);
 	mem_free(s->seg);
 	mem_free(s->edge_head);
@@ -145,6 +153,12 @@ void slice_free(struct slicer *s)
 	paths_fini(&s->raw);
 	paths_fini(&s->open);
 	mem_free(s);
+}
+
+/* A triangle with a repeated corner: skipped by the sweep. */
+static int degenerate(const uint32_t *c)
+{
+	return c[0] == c[1] || c[1] == c[2] || c[2] == c[0];
 }
 
 /* Check indices and coordinates; count usable (non-degenerate) triangles. */
@@ -168,13 +182,58 @@ static int check_mesh(const struct mesh *m, size_t *usable, struct err *e)
 			return ERR_PLACE(e, ERR_GEOMETRY, -1, 0, (long long)t,
 					 "triangle %zu refers to a vertex beyond the %zu vertices", t,
 					 m->nv);
-		n += c[0] != c[1] && c[1] != c[2] && c[2] != c[0];
+		n += !degenerate(c);
 	}
 	*usable = n;
 	return 0;
 }
 
-/* Number the undirected edges of the usable triangles (tri_edge, edge_v). */
+static uint32_t uf_find(uint32_t *parent, uint32_t v)
+{
+	while (parent[v] != v) {
+		parent[v] = parent[parent[v]];
+		v = parent[v];
+	}
+	return v;
+}
+
+/* Border edges (used by exactly one usable triangle) grouped into holes,
+ * the connected components of the border: the open chains of a plane are
+ * closed through the hole they end on (chains.c). */
+static int build_holes(struct slicer *s, struct err *e)
+{
+	const struct mesh *m = s->m;
+	uint32_t *count = mem_calloc(s->ne ? s->ne : 1, sizeof *count);
+	uint32_t *parent = mem_alloc((m->nv ? m->nv : 1) * sizeof *parent);
+	int rc = 0;
+
+	s->edge_hole = mem_alloc((s->ne ? s->ne : 1) * sizeof *s->edge_hole);
+	if (!count || !parent || !s->edge_hole) {
+		rc = ERR_SET(e, ERR_NOMEM, "out of memory finding the mesh's holes");
+		goto out;
+	}
+	for (size_t t = 0; t < m->nt; t++)
+		if (!degenerate(m->tri + 3 * t))
+			for (int k = 0; k < 3; k++)
+				count[s->tri_edge[3 * t + (size_t)k]]++;
+	for (size_t v = 0; v < m->nv; v++)
+		parent[v] = (uint32_t)v;
+	for (size_t id = 0; id < s->ne; id++) {
+		if (count[id] == 1) {
+			uint32_t a = uf_find(parent, s->edge_v[2 * id]);
+			uint32_t b = uf_find(parent, s->edge_v[2 * id + 1]);
+			parent[a > b ? a : b] = a < b ? a : b;
+		}
+	}
+	for (size_t id = 0; id < s->ne; id++)
+		s->edge_hole[id] = count[id] == 1 ? uf_find(parent, s->edge_v[2 * id]) : SLICE_NO_HOLE;
+out:
+	mem_free(count);
+	mem_free(parent);
+	return rc;
+}
+
+/* Number the undirected edges of the triangles (tri_edge, edge_v). */
 static int build_edges(struct slicer *s, struct err *e)
 {
 	const struct mesh *m = s->m;
@@ -215,6 +274,7 @@ static int build_edges(struct slicer *s, struct err *e)
 		s->edge_v[2 * id] = (uint32_t)(key[i] >> 32);
 		s->edge_v[2 * id + 1] = (uint32_t)(key[i] & 0xffffffffu);
 	}
+	rc = build_holes(s, e);
 out:
 	mem_free(key);
 	mem_free(val);
@@ -240,7 +300,7 @@ static int build_order(struct slicer *s, struct err *e)
 		const uint32_t *c = m->tri + 3 * t;
 		double z0 = m->v[c[0]].z, z1 = m->v[c[1]].z, z2 = m->v[c[2]].z;
 		s->zmax[t] = fmax(z0, fmax(z1, z2));
-		if (c[0] == c[1] || c[1] == c[2] || c[2] == c[0])
+		if (degenerate(c))
 			continue;
 		key[i] = double_key(fmin(z0, fmin(z1, z2)));
 		s->order[i++] = (uint32_t)t;
@@ -416,8 +476,15 @@ static int walk(struct slicer *s, int32_t first, double z, struct slice_stats *s
 	}
 	if (path_push(p, edge_crossing(s, end, z)))
 		return ERR_SET(e, ERR_NOMEM, "out of memory chaining contours");
-	{ /* move the open chain from raw to open */
-		struct path *q = paths_add(&s->open);
+	{ /* move the open chain from raw to open, noting its holes */
+		struct path *q;
+		void *arr = s->open_key;
+		if (mem_grow(&arr, &s->open_key_cap, 2 * (s->open.n + 1), sizeof *s->open_key))
+			return ERR_SET(e, ERR_NOMEM, "out of memory chaining contours");
+		s->open_key = arr;
+		s->open_key[2 * s->open.n] = s->edge_hole[s->seg[first].e0];
+		s->open_key[2 * s->open.n + 1] = s->edge_hole[end];
+		q = paths_add(&s->open);
 		if (!q)
 			return ERR_SET(e, ERR_NOMEM, "out of memory chaining contours");
 		*q = s->raw.v[--s->raw.n];
@@ -458,7 +525,7 @@ static int chain_plane(struct slicer *s, double z, struct slice_stats *st, struc
 				return rc;
 		}
 	}
-	return slice_chains_close(&s->open, &s->raw, e);
+	return slice_chains_close(&s->open, s->open_key, &s->raw, e);
 }
 
 int slice_at(struct slicer *s, double z_mm, struct paths *region, struct slice_stats *stats,
