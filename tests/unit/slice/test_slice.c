@@ -302,6 +302,60 @@ static void test_open_mesh(void)
 	tm_free(m);
 }
 
+/* A tube (radii 9 and 10, 10 tall) whose outer and inner walls both
+ * have a 3.5 mm wide window at the same angles.  Nearest-end joining
+ * would cross the 1 mm wall from the outer chain to the inner one; the
+ * chains are closed across their own windows instead. */
+static void test_windows(void)
+{
+	const int n = 64;
+	struct mesh *m = tm_new();
+	struct slicer *s = NULL;
+	struct paths reg;
+	struct slice_stats st = {0, 0, 0};
+	struct err e;
+	double chord_loss = 0;
+
+	paths_init(&reg);
+	err_clear(&e);
+	for (int i = 0; i < n; i++) { /* ring vertices: outer/inner x bottom/top */
+		double a = 2 * M_PI * i / n;
+		tm_vert(m, 10 * cos(a), 10 * sin(a), 0);
+		tm_vert(m, 10 * cos(a), 10 * sin(a), 10);
+		tm_vert(m, 9 * cos(a), 9 * sin(a), 0);
+		tm_vert(m, 9 * cos(a), 9 * sin(a), 10);
+	}
+	for (int i = 0; i < n; i++) {
+		uint32_t a = (uint32_t)(4 * i), b = (uint32_t)(4 * ((i + 1) % n));
+		int window = i < 4; /* angles 0..22.5 deg */
+		if (!window) {
+			tm_tri(m, a, b, b + 1); /* outer wall, facing out */
+			tm_tri(m, a, b + 1, a + 1);
+			tm_tri(m, a + 2, b + 3, b + 2); /* inner wall, facing the axis */
+			tm_tri(m, a + 2, a + 3, b + 3);
+		}
+		tm_tri(m, a + 1, b + 1, b + 3); /* top */
+		tm_tri(m, a + 1, b + 3, a + 3);
+		tm_tri(m, a, b + 2, b); /* bottom */
+		tm_tri(m, a, a + 2, b + 2);
+	}
+	REQUIRE_OK(slice_new(m, &s, &e), &e);
+	REQUIRE_OK(slice_at(s, 5, &reg, &st, &e), &e);
+	CHECK_EQ_INT(st.chains_closed, 2);
+	CHECK_EQ_INT(reg.n, 2); /* still an annulus: outer CCW, hole CW */
+	/* the polygonal annulus, less nothing: the window chords are the
+	 * polygon's own edges across 4 segments */
+	for (int r = 9; r <= 10; r++) {
+		double seg = 0.5 * r * r * sin(2 * M_PI / n), big = 0.5 * r * r * sin(8 * M_PI / n);
+		chord_loss += (r == 10 ? 1 : -1) * (4 * seg - big);
+	}
+	CHECK_NEAR(paths_area_mm2(&reg),
+		   0.5 * n * sin(2 * M_PI / n) * (100 - 81) - chord_loss, 1e-4);
+	paths_fini(&reg);
+	slice_free(s);
+	tm_free(m);
+}
+
 /* Two cubes sharing one vertical edge: after welding that edge has four
  * faces.  Sections are two unit squares touching at a corner. */
 static void test_nonmanifold(void)
@@ -453,6 +507,7 @@ int main(void)
 	RUN(test_torus);
 	RUN(test_inside_out);
 	RUN(test_open_mesh);
+	RUN(test_windows);
 	RUN(test_nonmanifold);
 	RUN(test_restart);
 	RUN(test_bad_input);
