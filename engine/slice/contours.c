@@ -6,44 +6,50 @@
  * grid edges, numbered once per edge, and each cell links its crossings
  * pairwise (material on the left), so loops are chained topologically
  * like the mesh slicer's.  Saddles are decided by the cell-centre value
- * (mean of the corners).  Design: docs/slicing.md "Marching squares".
+ * (mean of the corners).  The loops come out simple, pairwise disjoint
+ * and oriented (material left), i.e. already a normalised region, so no
+ * polygon union is run.  Design: docs/slicing.md "Marching squares".
  */
 #include "engine/slice/slice.h"
 #include "engine/core/err.h"
 #include "engine/core/mem.h"
-#include "engine/geom/clip.h"
 
 #include <math.h>
 #include <stdint.h>
 #include <string.h>
 
+struct xing {
+	double u, v;  /* pixel coordinates */
+	int32_t next; /* crossing that follows along the contour */
+};
+
 struct xings {
-	double *uv;    /* 2 per crossing: pixel coordinates */
-	int32_t *next; /* crossing that follows along the contour */
-	size_t n, cap_uv, cap_next;
+	struct xing *v;
+	size_t n, cap;
 	int nomem;
 };
 
 /* Id of a new crossing at (u, v). */
 static int32_t xing_new(struct xings *x, double u, double v)
 {
-	void *a = x->uv, *b = x->next;
-
-	if (x->n >= (size_t)INT32_MAX || mem_grow(&a, &x->cap_uv, 2 * (x->n + 1), sizeof(double))) {
-		x->nomem = 1;
-		return 0;
+	if (x->n == x->cap) {
+		void *a = x->v;
+		if (x->n >= (size_t)INT32_MAX || mem_grow(&a, &x->cap, x->n + 1, sizeof *x->v)) {
+			x->nomem = 1;
+			return 0;
+		}
+		x->v = a;
 	}
-	x->uv = a;
-	if (mem_grow(&b, &x->cap_next, x->n + 1, sizeof(int32_t))) {
-		x->nomem = 1;
-		return 0;
-	}
-	x->next = b;
-	x->uv[2 * x->n] = u;
-	x->uv[2 * x->n + 1] = v;
-	x->next[x->n] = -1;
+	x->v[x->n].u = u;
+	x->v[x->n].v = v;
+	x->v[x->n].next = -1;
 	return (int32_t)x->n++;
 }
+
+/* Crossings stay this far (in pixels) from the samples, so crossings of
+ * different edges never coincide (a sample exactly at iso would put
+ * all its edges' crossings on it) and loops never touch. */
+#define XING_MARGIN 1e-3
 
 /* Position of the iso crossing between samples a (value fa, real iff
  * ra) and b, as a fraction of the way from a to b.  Against a virtual
@@ -56,7 +62,7 @@ static double xing_t(float fa, int ra, float fb, int rb, float iso)
 	if (!ra || !rb || isnan(fa) || isnan(fb))
 		return 0.5;
 	t = ((double)iso - fa) / ((double)fb - fa);
-	return t < 0 ? 0 : t > 1 ? 1 : t;
+	return t < XING_MARGIN ? XING_MARGIN : t > 1 - XING_MARGIN ? 1 - XING_MARGIN : t;
 }
 
 struct grid {
@@ -73,11 +79,6 @@ static int real(const struct grid *g, int i, int j)
 static float val(const struct grid *g, int i, int j)
 {
 	return real(g, i, j) ? g->f[(size_t)j * (size_t)g->w + (size_t)i] : -INFINITY;
-}
-
-static int inside(const struct grid *g, int i, int j)
-{
-	return real(g, i, j) && g->f[(size_t)j * (size_t)g->w + (size_t)i] > g->iso;
 }
 
 /* Crossing id of the horizontal edge (i,j)-(i+1,j), created on demand. */
@@ -140,7 +141,7 @@ static void cell(const struct grid *g, struct xings *x, int i, int j, const int 
 				if (!in[q] && in[(q + 1) & 3])
 					partner = q;
 		}
-		x->next[id[k]] = id[partner];
+		x->v[id[k]].next = id[partner];
 	}
 }
 
@@ -151,6 +152,10 @@ int slice_field_contours(const float *field, int w, int h, float iso,
 	struct xings x;
 	struct paths raw;
 	int32_t *top = NULL, *bottom = NULL, *vert = NULL;
+	unsigned char *rows = NULL;
+	int *touched = NULL;
+	struct pt2 *buf = NULL;
+	size_t buf_cap = 0;
 	unsigned char *seen = NULL;
 	double det, ia00, ia01, ia10, ia11;
 	int rc = 0;
@@ -167,37 +172,60 @@ int slice_field_contours(const float *field, int w, int h, float iso,
 	top = mem_alloc(((size_t)w + 1) * sizeof *top);
 	bottom = mem_alloc(((size_t)w + 1) * sizeof *bottom);
 	vert = mem_alloc(((size_t)w + 2) * sizeof *vert);
-	if (!top || !bottom || !vert) {
+	rows = mem_alloc(2 * ((size_t)w + 2));
+	touched = mem_alloc(2 * ((size_t)w + 1) * sizeof *touched);
+	if (!top || !bottom || !vert || !rows || !touched) {
 		rc = ERR_SET(e, ERR_NOMEM, "out of memory for marching squares");
 		goto out;
 	}
 	memset(top, 0xff, ((size_t)w + 1) * sizeof *top);
-	/* Cell rows j = -1 .. h-1 over the grid plus its virtual ring. */
-	for (int j = -1; j < h; j++) {
-		int in[4];
-		memset(bottom, 0xff, ((size_t)w + 1) * sizeof *bottom);
-		memset(vert, 0xff, ((size_t)w + 2) * sizeof *vert);
-		in[1] = inside(&g, -1, j);
-		in[2] = inside(&g, -1, j + 1);
-		for (int i = -1; i < w; i++) {
-			in[0] = in[1];
-			in[3] = in[2];
-			in[1] = inside(&g, i + 1, j);
-			in[2] = inside(&g, i + 1, j + 1);
-			if ((in[0] & in[1] & in[2] & in[3]) || !(in[0] | in[1] | in[2] | in[3]))
-				continue;
-			cell(&g, &x, i, j, in, &top[i + 1], &vert[i + 2], &bottom[i + 1],
-			     &vert[i + 1]);
-			if (x.nomem) {
-				rc = ERR_SET(e, ERR_NOMEM, "out of memory for %zu contour crossings",
-					     x.n);
-				goto out;
+	memset(bottom, 0xff, ((size_t)w + 1) * sizeof *bottom);
+	memset(vert, 0xff, ((size_t)w + 2) * sizeof *vert);
+	/* Inside flags of sample rows j and j + 1, index i + 1 for i = -1..w
+	 * (the virtual ring is 0). */
+	memset(rows, 0, 2 * ((size_t)w + 2));
+	{
+		unsigned char *r0 = rows, *r1 = rows + w + 2;
+		int *tcur = touched, *tprev = touched + w + 1;
+		int ncur = 0, nprev = 0;
+
+		/* Cell rows j = -1 .. h-1 over the grid plus its virtual ring. */
+		for (int j = -1; j < h; j++) {
+			if (j + 1 < h) {
+				const float *f = field + (size_t)(j + 1) * (size_t)w;
+				for (int i = 0; i < w; i++)
+					r1[i + 1] = f[i] > iso;
+			} else {
+				memset(r1, 0, (size_t)w + 2);
 			}
-		}
-		{
-			int32_t *t = top;
-			top = bottom;
-			bottom = t;
+			for (int i = -1; i < w; i++) {
+				int in[4] = {r0[i + 1], r0[i + 2], r1[i + 2], r1[i + 1]};
+				if (in[0] == in[1] && in[1] == in[2] && in[2] == in[3])
+					continue;
+				cell(&g, &x, i, j, in, &top[i + 1], &vert[i + 2], &bottom[i + 1],
+				     &vert[i + 1]);
+				if (x.nomem) {
+					rc = ERR_SET(e, ERR_NOMEM,
+						     "out of memory for %zu contour crossings", x.n);
+					goto out;
+				}
+				tcur[ncur++] = i;
+			}
+			/* Reset only what was set: this row's vertical edges, and
+			 * the previous row's bottom edges (the top array now). */
+			for (int t = 0; t < ncur; t++)
+				vert[tcur[t] + 1] = vert[tcur[t] + 2] = -1;
+			for (int t = 0; t < nprev; t++)
+				top[tprev[t] + 1] = -1;
+			{
+				int32_t *tb = top;
+				unsigned char *tr = r0;
+				int *tt = tprev;
+				top = bottom, bottom = tb;
+				r0 = r1, r1 = tr;
+				tprev = tcur, tcur = tt;
+				nprev = ncur, ncur = 0;
+			}
 		}
 	}
 	/* Every crossing starts one segment and ends one: follow the loops. */
@@ -208,37 +236,46 @@ int slice_field_contours(const float *field, int w, int h, float iso,
 	}
 	for (size_t s = 0; s < x.n; s++) {
 		struct path *p;
+		size_t len = 0;
 		if (seen[s])
 			continue;
-		p = paths_add(&raw);
-		if (!p) {
+		/* follow the loop once into a reused buffer, then copy it out */
+		for (int32_t c = (int32_t)s; c >= 0 && !seen[c]; c = x.v[c].next) {
+			double du = x.v[c].u - map->b[0], dv = x.v[c].v - map->b[1];
+			if (len == buf_cap) {
+				void *a = buf;
+				if (mem_grow(&a, &buf_cap, len + 1, sizeof *buf)) {
+					rc = ERR_SET(e, ERR_NOMEM, "out of memory for contours");
+					goto out;
+				}
+				buf = a;
+			}
+			buf[len].x = geom_mm_to_nm(ia00 * du + ia01 * dv);
+			buf[len].y = geom_mm_to_nm(ia10 * du + ia11 * dv);
+			len++;
+			seen[c] = 1;
+		}
+		if (paths_add_pts(&raw, buf, len)) {
 			rc = ERR_SET(e, ERR_NOMEM, "out of memory for contours");
 			goto out;
 		}
-		for (int32_t c = (int32_t)s; c >= 0 && !seen[c]; c = x.next[c]) {
-			double du = x.uv[2 * c] - map->b[0], dv = x.uv[2 * c + 1] - map->b[1];
-			struct pt2 q = {geom_mm_to_nm(ia00 * du + ia01 * dv),
-					geom_mm_to_nm(ia10 * du + ia11 * dv)};
-			seen[c] = 1;
-			if (path_push(p, q)) {
-				rc = ERR_SET(e, ERR_NOMEM, "out of memory for contours");
-				goto out;
-			}
-		}
+		p = &raw.v[raw.n - 1];
 		if (det < 0) /* the map mirrors: material-left becomes material-right */
 			path_reverse(p);
 	}
-	if (raw.n == 0)
-		paths_clear(region);
-	else
-		rc = clip_union(&raw, CLIP_FILL_NONZERO, region, e);
+	/* Simple, disjoint, oriented loops: already normalised. */
+	paths_fini(region);
+	*region = raw;
+	paths_init(&raw);
 out:
 	mem_free(top);
 	mem_free(bottom);
 	mem_free(vert);
+	mem_free(rows);
+	mem_free(touched);
+	mem_free(buf);
 	mem_free(seen);
-	mem_free(x.uv);
-	mem_free(x.next);
+	mem_free(x.v);
 	paths_fini(&raw);
 	return rc;
 }

@@ -3,6 +3,7 @@
  * of those layers on the SL1 image (1440 x 2560, portrait map), and the
  * 3D erosion of the stack by a 1 mm ball.  Prints figures only.
  * Usage: bench_slice MESH [y_up] */
+#include <math.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <time.h>
@@ -87,6 +88,38 @@ static int bench_erode(const struct mesh *m, int n, double layer_mm, double pixe
 	return 0;
 }
 
+/* Marching squares on a full SL1 frame of a lattice-like field (many
+ * small loops), as the lattice engine uses it. */
+static void bench_contours(void)
+{
+	const int w = 1440, h = 2560, reps = 5;
+	float *f = malloc((size_t)w * h * sizeof *f);
+	struct raster_map map = {{{1 / 0.04725, 0}, {0, 1 / 0.04725}}, {0, 0}};
+	struct paths reg;
+	struct err e;
+	double t0, t;
+	size_t pts = 0;
+
+	paths_init(&reg);
+	err_clear(&e);
+	for (int j = 0; j < h; j++)
+		for (int i = 0; i < w; i++)
+			f[(size_t)j * w + i] = (float)(sin(i / 7.3) * sin(j / 9.1) + 0.2 * sin(i / 31.0));
+	t0 = now_s();
+	for (int r = 0; r < reps; r++) {
+		if (slice_field_contours(f, w, h, 0.3f, &map, &reg, &e)) {
+			fprintf(stderr, "contours: %s\n", e.msg);
+			break;
+		}
+	}
+	t = (now_s() - t0) / reps;
+	pts = paths_point_count(&reg);
+	printf("marching squares 1440x2560 lattice-like field: %.1f ms/frame, %zu loops, %zu points\n",
+	       t * 1e3, reg.n, pts);
+	paths_fini(&reg);
+	free(f);
+}
+
 int main(int argc, char **argv)
 {
 	const char *path = argc > 1 ? argv[1] : "../shared/meshes/armadillo.off";
@@ -160,6 +193,7 @@ int main(int argc, char **argv)
 	slice_free(s);
 	raster_free(r);
 
+	bench_contours();
 	bench_erode(m, n, layer_mm, 0.1, 1.0);
 	bench_erode(m, n, layer_mm, 0.05, 1.0);
 	tm_free(m);
