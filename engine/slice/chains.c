@@ -16,14 +16,18 @@ struct head {
 	size_t chain;
 };
 
+struct onhole {
+	uint32_t hole;
+	size_t chain;
+};
+
 struct heads {
 	struct head *h; /* sorted by x, then y */
 	size_t *slot;   /* chain -> index in h */
 	size_t *right;  /* right[i] == i: alive (i == m: sentinel) */
 	size_t *left;   /* shifted by one: left[i+1] is element i; left[0] sentinel */
 	size_t m;
-	const uint32_t *key; /* 2 per chain (chains.h), NULL = none */
-	size_t *byhole;      /* chains with a head on a hole, by that hole */
+	struct onhole *byhole; /* chains with a head on a hole, by that hole */
 	size_t nbyhole;
 	unsigned char *dead; /* per chain: head consumed */
 };
@@ -69,16 +73,13 @@ static void head_remove(struct heads *hs, size_t chain)
 	hs->dead[chain] = 1;
 }
 
-static const uint32_t *sort_key; /* qsort has no context argument */
-
 static int byhole_cmp(const void *a, const void *b)
 {
-	size_t p = *(const size_t *)a, q = *(const size_t *)b;
-	uint32_t kp = sort_key[2 * p], kq = sort_key[2 * q];
+	const struct onhole *p = a, *q = b;
 
-	if (kp != kq)
-		return kp < kq ? -1 : 1;
-	return p < q ? -1 : p > q;
+	if (p->hole != q->hole)
+		return p->hole < q->hole ? -1 : 1;
+	return p->chain < q->chain ? -1 : p->chain > q->chain;
 }
 
 static double dist2(struct pt2 a, struct pt2 b)
@@ -98,13 +99,13 @@ static size_t head_nearest_on_hole(const struct heads *hs, const struct paths *o
 		return SIZE_MAX;
 	while (lo < hi) {
 		size_t mid = lo + (hi - lo) / 2;
-		if (hs->key[2 * hs->byhole[mid]] < hole)
+		if (hs->byhole[mid].hole < hole)
 			lo = mid + 1;
 		else
 			hi = mid;
 	}
-	for (; lo < hs->nbyhole && hs->key[2 * hs->byhole[lo]] == hole; lo++) {
-		size_t c = hs->byhole[lo];
+	for (; lo < hs->nbyhole && hs->byhole[lo].hole == hole; lo++) {
+		size_t c = hs->byhole[lo].chain;
 		double d;
 		if (hs->dead[c])
 			continue;
@@ -185,7 +186,6 @@ int slice_chains_close(struct paths *open, const uint32_t *key, struct paths *lo
 	used = mem_calloc(m, 1);
 	hs.dead = mem_calloc(m, 1);
 	hs.byhole = mem_alloc(m * sizeof *hs.byhole);
-	hs.key = key;
 	if (!hs.h || !hs.slot || !hs.right || !hs.left || !used || !hs.dead || !hs.byhole) {
 		rc = ERR_SET(e, ERR_NOMEM, "out of memory closing %zu open contour chains", m);
 		goto out;
@@ -196,10 +196,12 @@ int slice_chains_close(struct paths *open, const uint32_t *key, struct paths *lo
 		hs.h[c].chain = c;
 	}
 	qsort(hs.h, m, sizeof *hs.h, head_cmp);
-	for (size_t c = 0; key && c < m; c++)
-		if (key[2 * c] != UINT32_MAX)
-			hs.byhole[hs.nbyhole++] = c;
-	sort_key = key;
+	for (size_t c = 0; key && c < m; c++) {
+		if (key[2 * c] != UINT32_MAX) {
+			hs.byhole[hs.nbyhole].hole = key[2 * c];
+			hs.byhole[hs.nbyhole++].chain = c;
+		}
+	}
 	qsort(hs.byhole, hs.nbyhole, sizeof *hs.byhole, byhole_cmp);
 	for (size_t i = 0; i <= m; i++) {
 		hs.right[i] = i;

@@ -425,11 +425,10 @@ static void test_bad_input(void)
 	struct slicer *s = NULL;
 	struct paths reg;
 	struct err e;
+	uint32_t saved;
 
 	paths_init(&reg);
 	err_clear(&e);
-	uint32_t saved;
-
 	tm_box(m, 0, 0, 0, 1, 1, 1);
 	saved = m->tri[7];
 	m->tri[7] = 99;
