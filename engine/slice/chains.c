@@ -16,6 +16,9 @@ struct head {
 	size_t chain;
 };
 
+/* Heads this close to a tail (nm) continue it, whatever the holes say. */
+#define SEAM_NM 1000.0
+
 struct onhole {
 	uint32_t hole;
 	size_t chain;
@@ -222,11 +225,15 @@ int slice_chains_close(struct paths *open, const uint32_t *key, struct paths *lo
 		open->v[c].pts = &g.pts[0]; /* its head point, for the hole search */
 		open->v[c].n = 1;
 		for (size_t tail = c;;) {
-			size_t n = key ? head_nearest_on_hole(&hs, open, key[2 * tail + 1],
-							      g.pts[g.n - 1])
-				       : SIZE_MAX;
-			if (n == SIZE_MAX)
-				n = head_nearest(&hs, g.pts[g.n - 1]);
+			struct pt2 t = g.pts[g.n - 1];
+			size_t n = head_nearest(&hs, t);
+			/* A head on the tail's very point is a seam the weld missed:
+			 * the surface goes on there.  Otherwise cross the hole. */
+			if (key && n != SIZE_MAX && dist2(open->v[n].pts[0], t) > SEAM_NM * SEAM_NM) {
+				size_t h = head_nearest_on_hole(&hs, open, key[2 * tail + 1], t);
+				if (h != SIZE_MAX)
+					n = h;
+			}
 			if (n == c || n == SIZE_MAX) {
 				head_remove(&hs, c);
 				break;

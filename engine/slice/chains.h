@@ -15,9 +15,10 @@ struct err;
  * its tail (last point) with the material on its left.  key (may be
  * NULL): 2 per chain, the hole (mesh border loop) its head and its tail
  * lie on, UINT32_MAX when not on a border.  Greedy joining: starting from
- * a chain, repeatedly connect its current tail to the nearest alive head
- * on the same hole (the missing surface spans that hole, so it meets the
- * plane between that hole's crossings), or failing that to the nearest
+ * a chain, repeatedly connect its current tail to a head coinciding with
+ * it (within 1 um: a seam the weld missed), else to the nearest alive
+ * head on the same hole (the missing surface spans that hole, so it
+ * meets the plane between that hole's crossings), else to the nearest
  * alive head of any chain; the chain's own head is a candidate, and
  * reaching it closes the loop.  Each closed loop is appended to loops;
  * open is emptied.  Orientation is never reversed, so the joined loops

@@ -382,6 +382,43 @@ static void test_nonmanifold(void)
 	CHECK_NEAR(sliced_volume(m, 1, 0.05, &st, &bad), 2, 1e-9);
 	tm_free(m);
 
+	/* A fin: one triangle hanging off a cube edge (three faces on that
+	 * edge).  Its chain closes on itself with no area. */
+	m = tm_new();
+	tm_box(m, 0, 0, 0, 1, 1, 1);
+	tm_weld(m);
+	/* welded vertices are sorted: 4 = (1,0,0), 5 = (1,0,1) */
+	CHECK(m->v[4].x == 1 && m->v[4].y == 0 && m->v[4].z == 0 && m->v[5].z == 1);
+	tm_tri(m, 4, 5, tm_vert(m, 2, 0, 0.5));
+	CHECK_NEAR(sliced_volume(m, 1, 0.05, &st, &bad), 1, 1e-9);
+	CHECK_EQ_INT(bad, 0);
+	tm_free(m);
+
+	/* An unwelded soup (every triangle its own vertices): chains meet
+	 * end to end at seams and are joined there. */
+	m = tm_icosphere(v3(0, 0, 5), 5, 3);
+	{
+		struct mesh *soup = tm_new();
+		double vw, vs;
+		for (size_t t = 0; t < m->nt; t++) {
+			uint32_t c[3];
+			for (int k = 0; k < 3; k++) {
+				struct vec3 p = m->v[m->tri[3 * t + (size_t)k]];
+				c[k] = tm_vert(soup, p.x, p.y, p.z);
+			}
+			tm_tri(soup, c[0], c[1], c[2]);
+		}
+		memset(&st, 0, sizeof st);
+		vw = sliced_volume(m, 10, 0.1, &st, &bad);
+		memset(&st, 0, sizeof st);
+		vs = sliced_volume(soup, 10, 0.1, &st, &bad);
+		CHECK_REL(vs, vw, 1e-6);
+		CHECK_EQ_INT(bad, 0);
+		CHECK_INT(st.chains_closed, >, 1000);
+		tm_free(soup);
+	}
+	tm_free(m);
+
 	/* Overlapping shells: the union counts once. */
 	m = tm_new();
 	tm_box(m, 0, 0, 0, 2, 2, 1);
