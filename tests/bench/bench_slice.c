@@ -88,6 +88,47 @@ static int bench_erode(const struct mesh *m, int n, double layer_mm, double pixe
 	return 0;
 }
 
+/* Rasterising a large section: the 50 mm ball's equator (a 2,560-gon)
+ * and a 50 mm square, on the SL1 frame. */
+static void bench_big_sections(const struct raster_map *map, struct raster *r)
+{
+	struct paths ball, sq;
+	struct err e;
+	const int reps = 200;
+	double t0, t_ball = 0, t_sq = 0;
+
+	paths_init(&ball);
+	paths_init(&sq);
+	err_clear(&e);
+	{
+		struct path *p = paths_add(&ball);
+		for (int i = 0; i < 2560; i++) {
+			double a = 2 * M_PI * i / 2560;
+			path_push(p, (struct pt2){geom_mm_to_nm(60.48 + 25 * cos(a)),
+						  geom_mm_to_nm(34.02 + 25 * sin(a))});
+		}
+		struct pt2 q[4] = {{geom_mm_to_nm(35.48), geom_mm_to_nm(9.02)},
+				   {geom_mm_to_nm(85.48), geom_mm_to_nm(9.02)},
+				   {geom_mm_to_nm(85.48), geom_mm_to_nm(59.02)},
+				   {geom_mm_to_nm(35.48), geom_mm_to_nm(59.02)}};
+		paths_add_pts(&sq, q, 4);
+	}
+	for (int k = 0; k < reps; k++) {
+		raster_clear(r);
+		t0 = now_s();
+		slice_rasterize(&ball, map, 1, r, &e);
+		t_ball += now_s() - t0;
+		raster_clear(r);
+		t0 = now_s();
+		slice_rasterize(&sq, map, 1, r, &e);
+		t_sq += now_s() - t0;
+	}
+	printf("raster 1440x2560, anti-aliased: 50 mm disc %.3f ms/layer, 50 mm square %.3f ms/layer\n",
+	       t_ball * 1e3 / reps, t_sq * 1e3 / reps);
+	paths_fini(&ball);
+	paths_fini(&sq);
+}
+
 /* Marching squares on a full SL1 frame of a lattice-like field (many
  * small loops), as the lattice engine uses it. */
 static void bench_contours(void)
@@ -187,6 +228,7 @@ int main(int argc, char **argv)
 	       "%.3f ms/layer (%.0f Mpx/s); clearing the image %.3f ms/layer; AA volume %.1f mm3\n",
 	       t_aa * 1e3 / n, 1440.0 * 2560 * n / t_aa * 1e-6, t_bin * 1e3 / n,
 	       1440.0 * 2560 * n / t_bin * 1e-6, t_clear * 1e3 / n, cov);
+	bench_big_sections(&map, r);
 	for (int k = 0; k < n; k++)
 		paths_fini(&layers[k]);
 	free(layers);
