@@ -141,7 +141,8 @@ static void cell(const struct grid *g, struct xings *x, int i, int j, const int 
 				if (!in[q] && in[(q + 1) & 3])
 					partner = q;
 		}
-		x->v[id[k]].next = id[partner];
+		if (partner >= 0) /* always: a mixed cell has both kinds of edge */
+			x->v[id[k]].next = id[partner];
 	}
 }
 
