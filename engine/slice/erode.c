@@ -5,8 +5,9 @@
  * to the nearest outside slab in its own column, from the start of its
  * current inside run and the first outside layer above it (bit planes of
  * the look-ahead window); (2)-(3) Felzenszwalb-Huttenlocher lower
- * envelopes along columns then rows with the voxel-box metric; (4)
- * marching squares of D - r on the layer's bounding box.
+ * envelopes along the inside runs of columns then rows, with the
+ * voxel-box metric; (4) marching squares of D - r on the cavity's
+ * bounding box.
  */
 #include "engine/slice/erode.h"
 #include "engine/core/err.h"
