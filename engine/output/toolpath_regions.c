@@ -1,0 +1,394 @@
+/* toolpath_regions.c - what a layer's material becomes: perimeter loops,
+ * thin walls and gap fill, skins and sparse infill areas, and the skirt
+ * (tp_regions() in toolpath_int.h; docs/gcode.md, "perimeters" and
+ * "skins").
+ *
+ * Offsets follow Slic3r/PrusaSlicer: the external loop's centreline lies
+ * w/2 inside the outline (its bead edge touches it), each further loop
+ * one bead spacing s = w - h (1 - pi/4) further in, and the fill area
+ * starts s/2 inside the innermost loop.  Inward offsets use mitred joins
+ * (limit 3): the offset of a region by -d keeps every point at least d
+ * from its outline whatever the join, and mitres keep corners sharp.
+ */
+#include "engine/output/toolpath_int.h"
+#include "engine/core/err.h"
+#include "engine/core/mem.h"
+#include "engine/geom/clip.h"
+
+#include <math.h>
+#include <stdlib.h>
+#include <string.h>
+
+static int offset(const struct paths *in, double delta_nm, struct paths *out, struct err *e)
+{
+	if (in->n == 0) {
+		paths_clear(out);
+		return 0;
+	}
+	return clip_offset(in, delta_nm, CLIP_JOIN_MITER, 3.0, 0, out, e);
+}
+
+static int add_loops(struct tp_plan *items, const struct paths *ps, int depth, int64_t w,
+		     struct err *e)
+{
+	enum tp_role role = depth == 0 ? TP_ROLE_EXT_PERIMETER : TP_ROLE_PERIMETER;
+
+	for (size_t i = 0; i < ps->n; i++) {
+		int rc;
+		if (ps->v[i].n < 3)
+			continue;
+		rc = tp_plan_add(items, role, 1, depth, w, ps->v[i].pts, ps->v[i].n, NULL, e);
+		if (rc)
+			return rc;
+	}
+	return 0;
+}
+
+/* Same outline, vertex for vertex (prismatic parts repeat their region). */
+static int same_region(const struct paths *a, const struct paths *b)
+{
+	if (a == b)
+		return 1;
+	if (a->n != b->n)
+		return 0;
+	for (size_t i = 0; i < a->n; i++)
+		if (a->v[i].n != b->v[i].n ||
+		    memcmp(a->v[i].pts, b->v[i].pts, a->v[i].n * sizeof *a->v[i].pts) != 0)
+			return 0;
+	return 1;
+}
+
+/* Append the complement of region nb inside the box [lo, hi]: the box CCW
+ * plus every loop of nb reversed.  Under the nonzero rule its winding is
+ * 1 - w_nb(p) inside the box (0 or 1 for a normalised nb). */
+static int add_complement(struct paths *dst, const struct paths *nb, struct pt2 lo, struct pt2 hi,
+			  struct err *e)
+{
+	struct pt2 box[4] = {lo, {hi.x, lo.y}, hi, {lo.x, hi.y}};
+
+	if (paths_add_pts(dst, box, 4))
+		return ERR_SET(e, ERR_NOMEM, "out of memory computing skins");
+	for (size_t i = 0; i < nb->n; i++) {
+		if (paths_add_pts(dst, nb->v[i].pts, nb->v[i].n))
+			return ERR_SET(e, ERR_NOMEM, "out of memory computing skins");
+		path_reverse(&dst->v[dst->n - 1]);
+	}
+	return 0;
+}
+
+/* Part of fill area F not covered by every one of the neighbour layers
+ * (above[0..T), below[0..B)): the skin.  One Clipper call: the union of
+ * the neighbours' complements has winding sum_j (1 - w_j) >= 0, nonzero
+ * exactly where some neighbour is missing.  A missing layer (past the
+ * bed or the top) covers nothing, so then all of F is skin. */
+static int skin_of(const struct tp_config *c, const struct tp_layer_in *in, const struct paths *F,
+		   struct paths *skin, struct err *e)
+{
+	struct paths comp;
+	struct pt2 lo, hi;
+	int rc = 0, any = 0;
+
+	paths_clear(skin);
+	if (F->n == 0)
+		return 0;
+	if (in->nabove < c->top_layers || in->nbelow < c->bottom_layers)
+		return paths_copy(skin, F) ? ERR_SET(e, ERR_NOMEM, "out of memory") : 0;
+	for (int j = 0; j < c->top_layers; j++)
+		if (!in->above[j])
+			return paths_copy(skin, F) ? ERR_SET(e, ERR_NOMEM, "out of memory") : 0;
+	for (int j = 0; j < c->bottom_layers; j++)
+		if (!in->below[j])
+			return paths_copy(skin, F) ? ERR_SET(e, ERR_NOMEM, "out of memory") : 0;
+	paths_init(&comp);
+	paths_bbox(F, &lo, &hi);
+	lo.x -= 1000000;
+	lo.y -= 1000000;
+	hi.x += 1000000;
+	hi.y += 1000000;
+	for (int j = 0; !rc && j < c->top_layers + c->bottom_layers; j++) {
+		const struct paths *nb = j < c->top_layers ? in->above[j]
+							   : in->below[j - c->top_layers];
+		if (same_region(nb, in->region))
+			continue; /* covers all of F */
+		rc = add_complement(&comp, nb, lo, hi, e);
+		any = 1;
+	}
+	if (!rc && any)
+		rc = clip_boolean(CLIP_INTERSECTION, F, &comp, CLIP_FILL_NONZERO, skin, e);
+	paths_fini(&comp);
+	return rc;
+}
+
+/* Keep the pieces (outer loop with its holes) of a normalised region whose
+ * outer loop encloses at least min_mm2; drops slivers at sloped walls
+ * that are too small to hold solid lines.  Each hole goes with the
+ * smallest outer loop containing it.  O(holes x outers). */
+static int drop_small(struct paths *ps, double min_mm2, struct err *e)
+{
+	unsigned char *keep;
+	double *area;
+	size_t k = 0;
+
+	if (ps->n == 0)
+		return 0;
+	keep = mem_calloc(ps->n, 1);
+	area = mem_calloc(ps->n, sizeof *area);
+	if (!keep || !area) {
+		mem_free(keep);
+		mem_free(area);
+		return ERR_SET(e, ERR_NOMEM, "out of memory computing skins");
+	}
+	for (size_t i = 0; i < ps->n; i++) {
+		area[i] = path_area_mm2(&ps->v[i]);
+		keep[i] = area[i] >= min_mm2;
+	}
+	for (size_t i = 0; i < ps->n; i++) {
+		size_t best = SIZE_MAX;
+		if (area[i] >= 0 || ps->v[i].n == 0)
+			continue;
+		for (size_t j = 0; j < ps->n; j++) {
+			struct paths one = {&ps->v[j], 1, 1};
+			if (area[j] <= 0 || (best != SIZE_MAX && area[j] >= area[best]))
+				continue;
+			if (paths_winding(&one, ps->v[i].pts[0]))
+				best = j;
+		}
+		keep[i] = best != SIZE_MAX && keep[best];
+	}
+	for (size_t i = 0; i < ps->n; i++) {
+		if (keep[i])
+			ps->v[k++] = ps->v[i];
+		else
+			path_fini(&ps->v[i]);
+	}
+	ps->n = k;
+	mem_free(keep);
+	mem_free(area);
+	return 0;
+}
+
+/* Convex hull of all points of ps (monotone chain), CCW, into out. */
+static int cmp_pt(const void *pa, const void *pb)
+{
+	const struct pt2 *a = pa, *b = pb;
+
+	if (a->x != b->x)
+		return a->x < b->x ? -1 : 1;
+	return (a->y > b->y) - (a->y < b->y);
+}
+
+static __int128 cross3(struct pt2 o, struct pt2 a, struct pt2 b)
+{
+	return (__int128)(a.x - o.x) * (b.y - o.y) - (__int128)(a.y - o.y) * (b.x - o.x);
+}
+
+static int hull(const struct paths *ps, struct path *out, struct err *e)
+{
+	size_t n = paths_point_count(ps), k = 0, m = 0;
+	struct pt2 *p = mem_alloc((n ? n : 1) * sizeof *p), *h;
+
+	h = mem_alloc((2 * n + 1) * sizeof *h);
+	if (!p || !h) {
+		mem_free(p);
+		mem_free(h);
+		return ERR_SET(e, ERR_NOMEM, "out of memory planning the skirt");
+	}
+	for (size_t i = 0; i < ps->n; i++)
+		for (size_t j = 0; j < ps->v[i].n; j++)
+			p[m++] = ps->v[i].pts[j];
+	qsort(p, m, sizeof *p, cmp_pt);
+	for (size_t i = 0; i < m; i++) {
+		while (k >= 2 && cross3(h[k - 2], h[k - 1], p[i]) <= 0)
+			k--;
+		h[k++] = p[i];
+	}
+	for (size_t i = m - 1, t = k + 1; i-- > 0;) {
+		while (k >= t && cross3(h[k - 2], h[k - 1], p[i]) <= 0)
+			k--;
+		h[k++] = p[i];
+	}
+	mem_free(p);
+	out->pts = h;
+	out->n = k > 1 ? k - 1 : k;
+	out->cap = 2 * n + 1;
+	return 0;
+}
+
+/* Skirt loops around the convex hull of the first layer.  Skipped when
+ * they would leave the bed. */
+static int skirt(const struct tp_config *c, const struct tp_layer_in *in, struct tp_plan *items,
+		 struct err *e)
+{
+	struct paths hp, loop;
+	int64_t s = tp_spacing_nm(c->width_nm, in->height_mm);
+	int rc;
+
+	paths_init(&hp);
+	paths_init(&loop);
+	if (!paths_add(&hp)) {
+		rc = ERR_SET(e, ERR_NOMEM, "out of memory planning the skirt");
+		goto out;
+	}
+	rc = hull(in->region, &hp.v[0], e);
+	if (rc || hp.v[0].n < 3)
+		goto out;
+	for (int i = 0; i < c->skirt_loops; i++) {
+		struct pt2 lo, hi;
+		double d = (double)c->skirt_distance_nm + 0.5 * (double)c->width_nm +
+			   (double)i * (double)s;
+		rc = clip_offset(&hp, d, CLIP_JOIN_ROUND, 0, 5000, &loop, e);
+		if (rc)
+			goto out;
+		if (loop.n != 1 || !paths_bbox(&loop, &lo, &hi) || lo.x < c->bed_lo.x ||
+		    lo.y < c->bed_lo.y || hi.x > c->bed_hi.x || hi.y > c->bed_hi.y)
+			break;
+		rc = tp_plan_add(items, TP_ROLE_SKIRT, 1, -2, c->width_nm, loop.v[0].pts,
+				 loop.v[0].n, NULL, e);
+		if (rc)
+			goto out;
+	}
+out:
+	paths_fini(&hp);
+	paths_fini(&loop);
+	return rc;
+}
+
+/* Split the skin into top (exposed upwards), bridge (over air, not on
+ * the bed) and plain solid areas; narrow parts become gap fill. */
+static int classify_skin(const struct tp_config *c, const struct tp_layer_in *in,
+			 struct paths *skin, int64_t s, struct tp_plan *items, struct tp_areas *ar,
+			 struct err *e)
+{
+	struct paths open, narrow, rest;
+	const struct paths *up = in->nabove > 0 ? in->above[0] : NULL;
+	const struct paths *down = in->nbelow > 0 ? in->below[0] : NULL;
+	int rc;
+
+	paths_init(&open);
+	paths_init(&narrow);
+	paths_init(&rest);
+	/* Opening by s/2: parts too narrow for a solid line go to gap fill. */
+	rc = offset(skin, -0.5 * (double)s, &narrow, e);
+	if (!rc)
+		rc = offset(&narrow, 0.5 * (double)s, &open, e);
+	if (!rc)
+		rc = clip_boolean(CLIP_DIFFERENCE, skin, &open, CLIP_FILL_NONZERO, &narrow, e);
+	if (!rc)
+		rc = tp_thin(&narrow, TP_ROLE_GAP_FILL, geom_mm_to_nm(in->height_mm), c->width_nm,
+			     items, e);
+	if (rc || open.n == 0)
+		goto out;
+	if (!up) {
+		rc = paths_copy(&ar->fill[TP_ROLE_TOP], &open) ? ERR_NOMEM : 0;
+		goto out;
+	}
+	if (!same_region(up, in->region)) {
+		rc = clip_boolean(CLIP_DIFFERENCE, &open, up, CLIP_FILL_NONZERO,
+				  &ar->fill[TP_ROLE_TOP], e);
+		if (!rc)
+			rc = clip_boolean(CLIP_INTERSECTION, &open, up, CLIP_FILL_NONZERO, &rest, e);
+	} else {
+		rc = paths_copy(&rest, &open) ? ERR_NOMEM : 0;
+	}
+	if (rc)
+		goto out;
+	if (in->index > 0 && down && !same_region(down, in->region)) {
+		rc = clip_boolean(CLIP_DIFFERENCE, &rest, down, CLIP_FILL_NONZERO,
+				  &ar->fill[TP_ROLE_BRIDGE], e);
+		if (!rc)
+			rc = clip_boolean(CLIP_INTERSECTION, &rest, down, CLIP_FILL_NONZERO,
+					  &ar->fill[TP_ROLE_SOLID], e);
+	} else if (in->index > 0 && !down) {
+		paths_append_move(&ar->fill[TP_ROLE_BRIDGE], &rest);
+	} else {
+		paths_append_move(&ar->fill[TP_ROLE_SOLID], &rest);
+	}
+out:
+	if (rc == ERR_NOMEM)
+		rc = ERR_SET(e, ERR_NOMEM, "out of memory classifying skins");
+	paths_fini(&open);
+	paths_fini(&narrow);
+	paths_fini(&rest);
+	return rc;
+}
+
+int tp_regions(const struct tp_config *c, const struct tp_layer_in *in, struct tp_plan *items,
+	       struct tp_areas *ar, struct err *e)
+{
+	struct paths prev, cur, a, b, gap, F, skin;
+	int64_t w = c->width_nm, s = tp_spacing_nm(w, in->height_mm);
+	int64_t thin_min = geom_mm_to_nm(in->height_mm);
+	int rc;
+
+	if (in->region->n == 0)
+		return 0;
+	paths_init(&prev);
+	paths_init(&cur);
+	paths_init(&a);
+	paths_init(&b);
+	paths_init(&gap);
+	paths_init(&F);
+	paths_init(&skin);
+	rc = in->index == 0 && c->skirt_loops > 0 ? skirt(c, in, items, e) : 0;
+	/* External loop: centreline w/2 inside.  What its bead cannot reach
+	 * (R minus the loop region grown back by w/2) is thinner than a line:
+	 * thin walls, printed as single variable-width lines. */
+	if (!rc)
+		rc = offset(in->region, -0.5 * (double)w, &prev, e);
+	if (!rc)
+		rc = offset(&prev, 0.5 * (double)w, &a, e);
+	if (!rc)
+		rc = clip_boolean(CLIP_DIFFERENCE, in->region, &a, CLIP_FILL_NONZERO, &gap, e);
+	if (!rc)
+		rc = tp_thin(&gap, TP_ROLE_EXT_PERIMETER, thin_min, w, items, e);
+	if (!rc)
+		rc = add_loops(items, &prev, 0, w, e);
+	for (int k = 1; !rc && k < c->perimeters && prev.n; k++) {
+		/* Loop k one spacing further in; the strip between the beads of
+		 * loops k-1 and k that neither covers is gap fill. */
+		rc = offset(&prev, -(double)s, &cur, e);
+		if (!rc)
+			rc = offset(&prev, -0.5 * (double)s, &a, e);
+		if (!rc)
+			rc = offset(&cur, 0.5 * (double)s, &b, e);
+		if (!rc)
+			rc = clip_boolean(CLIP_DIFFERENCE, &a, &b, CLIP_FILL_NONZERO, &gap, e);
+		if (!rc)
+			rc = tp_thin(&gap, TP_ROLE_GAP_FILL, thin_min, w, items, e);
+		if (!rc)
+			rc = add_loops(items, &cur, k, w, e);
+		if (!rc) {
+			struct paths t = prev;
+			prev = cur;
+			cur = t;
+		}
+	}
+	/* Fill area: s/2 inside the innermost loop. */
+	if (!rc)
+		rc = offset(&prev, -0.5 * (double)s, &F, e);
+	if (rc || F.n == 0)
+		goto out;
+	if (in->fill == LAYER_FILL_SOLID) {
+		paths_append_move(&skin, &F);
+	} else {
+		rc = skin_of(c, in, &F, &skin, e);
+		if (!rc)
+			rc = drop_small(&skin, geom_nm_to_mm(s) * geom_nm_to_mm(s), e);
+		if (!rc && skin.n)
+			rc = clip_boolean(CLIP_DIFFERENCE, &F, &skin, CLIP_FILL_NONZERO,
+					  &ar->fill[TP_ROLE_SPARSE], e);
+		else if (!rc)
+			paths_append_move(&ar->fill[TP_ROLE_SPARSE], &F);
+	}
+	if (!rc && skin.n)
+		rc = classify_skin(c, in, &skin, s, items, ar, e);
+out:
+	paths_fini(&prev);
+	paths_fini(&cur);
+	paths_fini(&a);
+	paths_fini(&b);
+	paths_fini(&gap);
+	paths_fini(&F);
+	paths_fini(&skin);
+	return rc;
+}
