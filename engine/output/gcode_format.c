@@ -101,11 +101,14 @@ struct fmt {
 	int64_t e_done;     /* printed so far, units */
 };
 
+/* E per mm for the width as printed in ;WIDTH: (1 um), so readers can
+ * reproduce it exactly. */
 static void set_width(struct fmt *s, int64_t width_nm)
 {
-	double w = geom_nm_to_mm(width_nm);
+	double w;
 
 	s->width_um = um_of(width_nm);
+	w = (double)s->width_um / 1000.0;
 	s->e_per_mm_um = tp_bead_area_mm2(w, s->h_mm) / s->g->filament_area_mm2 *
 			 (double)GC_E_PER_MM;
 }

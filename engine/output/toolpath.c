@@ -70,6 +70,7 @@ int tp_config_init(struct tp_config *c, const struct fdm_printer *f, double laye
 				 hmax, f->line_width_mm);
 	memset(c, 0, sizeof *c);
 	c->width_nm = geom_mm_to_nm(f->line_width_mm);
+	c->nozzle_nm = geom_mm_to_nm(f->nozzle_mm);
 	c->layer_mm = layer_mm;
 	c->first_layer_mm = f->first_layer_mm;
 	c->perimeters = f->perimeters;

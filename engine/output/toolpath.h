@@ -41,6 +41,7 @@ const char *tp_role_key(enum tp_role r);
  * height.  Lengths in nm, speeds in mm/s. */
 struct tp_config {
 	int64_t width_nm;              /* bead width w (line_width_mm) */
+	int64_t nozzle_nm;
 	double layer_mm, first_layer_mm;
 	int perimeters, top_layers, bottom_layers;
 	double infill_frac;            /* sparse density, 0..1 */

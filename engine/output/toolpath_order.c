@@ -161,10 +161,10 @@ static long nn_nearest(struct nn *g, struct pt2 p)
 				continue;
 			for (int x = x0; x <= x1; x++) {
 				size_t k;
-				if (x < 0 || x >= g->nx)
-					continue;
 				if (y != y0 && y != y1 && x != x0 && x != x1)
 					x = x1; /* interior cells were seen at smaller r */
+				if (x < 0 || x >= g->nx)
+					continue;
 				k = (size_t)y * (size_t)g->nx + (size_t)x;
 				for (uint32_t t = 0; t < g->cell_n[k];) {
 					uint32_t ci = g->slot[g->cell_start[k] + t];

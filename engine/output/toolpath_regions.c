@@ -274,7 +274,7 @@ static int classify_skin(const struct tp_config *c, const struct tp_layer_in *in
 	if (!rc)
 		rc = clip_boolean(CLIP_DIFFERENCE, skin, &open, CLIP_FILL_NONZERO, &narrow, e);
 	if (!rc)
-		rc = tp_thin(&narrow, TP_ROLE_GAP_FILL, geom_mm_to_nm(in->height_mm), c->width_nm,
+		rc = tp_thin(&narrow, TP_ROLE_GAP_FILL, geom_mm_to_nm(in->height_mm), 2 * c->nozzle_nm,
 			     items, e);
 	if (rc || open.n == 0)
 		goto out;
@@ -312,12 +312,25 @@ out:
 	return rc;
 }
 
+/* Inward offset by d followed by an opening of radius r: drops the parts
+ * narrower than 2r, where a loop would fold onto itself and print one
+ * bead over another (Slic3r's offset2). */
+static int inset_open(const struct paths *in, double d, double r, struct paths *tmp,
+		      struct paths *out, struct err *e)
+{
+	int rc = offset(in, -(d + r), tmp, e);
+
+	return rc ? rc : offset(tmp, r, out, e);
+}
+
 int tp_regions(const struct tp_config *c, const struct tp_layer_in *in, struct tp_plan *items,
 	       struct tp_areas *ar, struct err *e)
 {
 	struct paths prev, cur, a, b, gap, F, skin;
 	int64_t w = c->width_nm, s = tp_spacing_nm(w, in->height_mm);
 	int64_t thin_min = geom_mm_to_nm(in->height_mm);
+	/* Widest single bead for thin walls and gaps: twice the nozzle. */
+	int64_t thin_max = 2 * c->nozzle_nm;
 	int rc;
 
 	if (in->region->n == 0)
@@ -330,23 +343,24 @@ int tp_regions(const struct tp_config *c, const struct tp_layer_in *in, struct t
 	paths_init(&F);
 	paths_init(&skin);
 	rc = in->index == 0 && c->skirt_loops > 0 ? skirt(c, in, items, e) : 0;
-	/* External loop: centreline w/2 inside.  What its bead cannot reach
-	 * (R minus the loop region grown back by w/2) is thinner than a line:
-	 * thin walls, printed as single variable-width lines. */
+	/* External loop: centreline w/2 inside, where at least a spacing wide.
+	 * What its bead cannot reach (R minus the loop region grown back by
+	 * w/2) is narrower than w + s: thin walls, printed as single
+	 * variable-width lines. */
 	if (!rc)
-		rc = offset(in->region, -0.5 * (double)w, &prev, e);
+		rc = inset_open(in->region, 0.5 * (double)w, 0.5 * (double)s, &a, &prev, e);
 	if (!rc)
 		rc = offset(&prev, 0.5 * (double)w, &a, e);
 	if (!rc)
 		rc = clip_boolean(CLIP_DIFFERENCE, in->region, &a, CLIP_FILL_NONZERO, &gap, e);
 	if (!rc)
-		rc = tp_thin(&gap, TP_ROLE_EXT_PERIMETER, thin_min, w, items, e);
+		rc = tp_thin(&gap, TP_ROLE_EXT_PERIMETER, thin_min, thin_max, items, e);
 	if (!rc)
 		rc = add_loops(items, &prev, 0, w, e);
 	for (int k = 1; !rc && k < c->perimeters && prev.n; k++) {
 		/* Loop k one spacing further in; the strip between the beads of
 		 * loops k-1 and k that neither covers is gap fill. */
-		rc = offset(&prev, -(double)s, &cur, e);
+		rc = inset_open(&prev, (double)s, 0.5 * (double)s, &a, &cur, e);
 		if (!rc)
 			rc = offset(&prev, -0.5 * (double)s, &a, e);
 		if (!rc)
@@ -354,7 +368,7 @@ int tp_regions(const struct tp_config *c, const struct tp_layer_in *in, struct t
 		if (!rc)
 			rc = clip_boolean(CLIP_DIFFERENCE, &a, &b, CLIP_FILL_NONZERO, &gap, e);
 		if (!rc)
-			rc = tp_thin(&gap, TP_ROLE_GAP_FILL, thin_min, w, items, e);
+			rc = tp_thin(&gap, TP_ROLE_GAP_FILL, thin_min, thin_max, items, e);
 		if (!rc)
 			rc = add_loops(items, &cur, k, w, e);
 		if (!rc) {

@@ -6,11 +6,15 @@
  * little under half the narrowest printable width: what survives is a
  * sliver hugging P's medial axis wherever P is at least 2d wide.  A
  * sliver around an open strip is cut at its two mutually farthest
- * vertices and the shorter side kept (at branches this skips a branch
- * rather than printing it twice); a sliver with a hole (a ring-shaped
- * wall) keeps its outer loop, closed.  Every vertex is then moved to the
- * middle of the chord through it that joins the nearest wall point to
- * the opposite wall, and that chord's length is the bead width there.
+ * vertices into two sides; points sampled along one side are paired
+ * with their nearest points on the other, and the midpoints of the pairs
+ * form the centreline, their distance plus 2d the local width (the two
+ * walls of a strip run side by side, so this pairs each wall point with
+ * the one across).  A
+ * sliver with a hole (a ring-shaped wall) keeps its outer loop, closed,
+ * and each vertex moves to the middle of the chord through it that joins
+ * the nearest wall point to the opposite wall, the chord's length being
+ * the width there.
  */
 #include "engine/output/toolpath_int.h"
 #include "engine/core/err.h"
@@ -24,6 +28,11 @@
 #define WIDTH_STEP_NM 5000
 /* Centred vertices closer than this to the previous one are merged. */
 #define MIN_STEP_NM 20000
+/* Pieces shrink by this fraction of the narrowest printable width: parts
+ * at least 90% of it wide survive. */
+#define SHRINK 0.45
+/* Spacing of the samples along a strip's sides. */
+#define STRIP_STEP_NM 200000
 
 struct thin_buf {
 	struct pt2 *pts;
@@ -139,6 +148,134 @@ static int emit_chain(struct tp_index *ix, const struct pt2 *pts, size_t n, int 
 	return tp_plan_add(items, role, closed, -1, b->w[0], b->pts, b->n, b->w, e);
 }
 
+/* Samples along a polyline at increasing arc lengths. */
+struct walker {
+	const struct pt2 *p;
+	size_t n, i;  /* current segment p[i] -> p[i + 1] */
+	double at;    /* arc length at p[i] */
+};
+
+static void walk_at(struct walker *wk, double s, double *x, double *y)
+{
+	while (wk->i + 1 < wk->n - 1 && wk->at + tp_dist_nm(wk->p[wk->i], wk->p[wk->i + 1]) < s) {
+		wk->at += tp_dist_nm(wk->p[wk->i], wk->p[wk->i + 1]);
+		wk->i++;
+	}
+	{
+		struct pt2 a = wk->p[wk->i], b = wk->p[wk->i + 1 < wk->n ? wk->i + 1 : wk->i];
+		double l = tp_dist_nm(a, b), t = l > 0 ? (s - wk->at) / l : 0;
+		if (t < 0)
+			t = 0;
+		if (t > 1)
+			t = 1;
+		*x = (double)a.x + t * (double)(b.x - a.x);
+		*y = (double)a.y + t * (double)(b.y - a.y);
+	}
+}
+
+/* Nearest point to (x, y) on polyline p. O(n). */
+static void nearest_on(const struct pt2 *p, size_t n, double x, double y, double *qx, double *qy)
+{
+	double best = INFINITY;
+
+	*qx = (double)p[0].x;
+	*qy = (double)p[0].y;
+	for (size_t i = 0; i + 1 < n || (n == 1 && i == 0); i++) {
+		struct pt2 a = p[i], b = p[i + 1 < n ? i + 1 : i];
+		double dx = (double)(b.x - a.x), dy = (double)(b.y - a.y), l2 = dx * dx + dy * dy;
+		double t = l2 > 0 ? ((x - (double)a.x) * dx + (y - (double)a.y) * dy) / l2 : 0, px, py, d;
+		if (t < 0)
+			t = 0;
+		if (t > 1)
+			t = 1;
+		px = (double)a.x + t * dx;
+		py = (double)a.y + t * dy;
+		d = (px - x) * (px - x) + (py - y) * (py - y);
+		if (d < best) {
+			best = d;
+			*qx = px;
+			*qy = py;
+		}
+		if (n == 1)
+			break;
+	}
+}
+
+static double poly_len(const struct pt2 *p, size_t n)
+{
+	double l = 0;
+
+	for (size_t i = 0; i + 1 < n; i++)
+		l += tp_dist_nm(p[i], p[i + 1]);
+	return l;
+}
+
+/* Centreline of an open strip's sliver from its two sides l and r (both
+ * running from the same end to the other), d = the shrink distance. */
+static int emit_strip(const struct pt2 *l, size_t nl, const struct pt2 *r, size_t nr, double d,
+		      enum tp_role role, int64_t min_w, int64_t max_w, struct thin_buf *b,
+		      struct tp_plan *items, struct err *e, int *added)
+{
+	double ll = poly_len(l, nl), total = 0;
+	size_t n = (size_t)ceil(ll / STRIP_STEP_NM) + 1, k = 0;
+	struct walker wl = {l, nl, 0, 0};
+
+	if (n < 2)
+		n = 2;
+	b->n = 0;
+	for (size_t i = 0; i < n; i++) {
+		double t = (double)i / (double)(n - 1), xl, yl, xr, yr;
+		struct pt2 c;
+		int64_t w;
+		walk_at(&wl, t * ll, &xl, &yl);
+		nearest_on(r, nr, xl, yl, &xr, &yr);
+		/* A sample on a sliver tip pairs with itself: not centred, skip. */
+		if (hypot(xl - xr, yl - yr) < 1000 && n > 2)
+			continue;
+		c.x = (int64_t)llround(0.5 * (xl + xr));
+		c.y = (int64_t)llround(0.5 * (yl + yr));
+		w = (int64_t)(hypot(xl - xr, yl - yr) + 2 * d);
+		if (w > max_w)
+			w = max_w;
+		if (w < min_w)
+			w = min_w;
+		w -= w % WIDTH_STEP_NM;
+		if (b->n && tp_dist_nm(c, b->pts[b->n - 1]) < MIN_STEP_NM && i + 1 < n) {
+			if (w < b->w[b->n - 1])
+				b->w[b->n - 1] = w;
+			continue;
+		}
+		if (b->n)
+			total += tp_dist_nm(c, b->pts[b->n - 1]);
+		if (push(b, c, w))
+			return ERR_SET(e, ERR_NOMEM, "out of memory planning thin walls");
+	}
+	if (b->n < 2 || total < (double)min_w / 2)
+		return 0;
+	/* Segment widths: the narrower end; then drop vertices that neither
+	 * bend the line (5 um) nor change the width. */
+	for (size_t i = 0; i + 1 < b->n; i++)
+		if (b->w[i + 1] < b->w[i])
+			b->w[i] = b->w[i + 1];
+	for (size_t i = 0; i < b->n; i++) {
+		if (k >= 1 && i + 1 < b->n && b->w[i] == b->w[k - 1]) {
+			struct pt2 a = b->pts[k - 1], c = b->pts[i + 1], q = b->pts[i];
+			double ab = tp_dist_nm(a, c);
+			double dev = ab > 0 ? fabs((double)(c.x - a.x) * (double)(q.y - a.y) -
+						   (double)(c.y - a.y) * (double)(q.x - a.x)) / ab
+					    : tp_dist_nm(a, q);
+			if (dev < 5000)
+				continue;
+		}
+		b->pts[k] = b->pts[i];
+		b->w[k] = b->w[i];
+		k++;
+	}
+	b->n = k;
+	*added = 1;
+	return tp_plan_add(items, role, 0, -1, b->w[0], b->pts, b->n, b->w, e);
+}
+
 /* Vertex farthest from p in path q. */
 static size_t farthest(const struct path *q, struct pt2 p)
 {
@@ -153,15 +290,6 @@ static size_t farthest(const struct path *q, struct pt2 p)
 		}
 	}
 	return best;
-}
-
-static double arc_len(const struct path *q, size_t i, size_t j)
-{
-	double l = 0;
-
-	for (size_t k = i; k != j; k = (k + 1) % q->n)
-		l += tp_dist_nm(q->pts[k], q->pts[(k + 1) % q->n]);
-	return l;
 }
 
 int tp_thin(const struct paths *pieces, enum tp_role role, int64_t min_w_nm, int64_t max_w_nm,
@@ -183,7 +311,7 @@ int tp_thin(const struct paths *pieces, enum tp_role role, int64_t min_w_nm, int
 	paths_init(&sliver);
 	memset(&b, 0, sizeof b);
 	memset(&ix, 0, sizeof ix);
-	rc = clip_offset(pieces, -0.45 * (double)min_w_nm, CLIP_JOIN_MITER, 3.0, 0, &sliver, e);
+	rc = clip_offset(pieces, -SHRINK * (double)min_w_nm, CLIP_JOIN_MITER, 3.0, 0, &sliver, e);
 	if (!rc)
 		rc = tp_index_build(&ix, pieces, e);
 	if (rc)
@@ -206,25 +334,27 @@ int tp_thin(const struct paths *pieces, enum tp_role role, int64_t min_w_nm, int
 			rc = emit_chain(&ix, o->pts, o->n, 1, role, min_w_nm, max_w_nm, &b, items, e,
 					&added);
 		} else {
-			size_t a = farthest(o, o->pts[0]), z = farthest(o, o->pts[a]), m = 0;
-			size_t from = a, to = z;
+			/* Sides a -> z and (reversed) z -> a of the sliver. */
+			size_t a = farthest(o, o->pts[0]), z = farthest(o, o->pts[a]), m = 0, ml;
 			void *arr = chain;
-			if (arc_len(o, z, a) < arc_len(o, a, z)) {
-				from = z;
-				to = a;
-			}
-			if (mem_grow(&arr, &chain_cap, o->n + 1, sizeof *chain)) {
+			if (mem_grow(&arr, &chain_cap, 2 * o->n + 2, sizeof *chain)) {
 				rc = ERR_SET(e, ERR_NOMEM, "out of memory planning thin walls");
 				goto out;
 			}
 			chain = arr;
-			for (size_t k = from;; k = (k + 1) % o->n) {
+			for (size_t k = a;; k = (k + 1) % o->n) {
 				chain[m++] = o->pts[k];
-				if (k == to)
+				if (k == z)
 					break;
 			}
-			rc = emit_chain(&ix, chain, m, 0, role, min_w_nm, max_w_nm, &b, items, e,
-					&added);
+			ml = m;
+			for (size_t k = a;; k = (k + o->n - 1) % o->n) {
+				chain[m++] = o->pts[k];
+				if (k == z)
+					break;
+			}
+			rc = emit_strip(chain, ml, chain + ml, m - ml, SHRINK * (double)min_w_nm, role,
+					min_w_nm, max_w_nm, &b, items, e, &added);
 		}
 		if (rc)
 			goto out;
