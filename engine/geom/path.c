@@ -114,6 +114,8 @@ int paths_append_move(struct paths *dst, struct paths *src)
 {
 	void *arr = dst->v;
 
+	if (src->n == 0)
+		return 0;
 	if (mem_grow(&arr, &dst->cap, dst->n + src->n, sizeof *dst->v))
 		return ERR_NOMEM;
 	dst->v = arr;

@@ -599,9 +599,14 @@ static int end_code(struct gc_writer *w, struct buf *b, double *time_s, struct e
 		rc = bprintf(b, e, "G1 Z%s F%.0f ; lift\n", mm(z), f->z_speed_mm_s * 60);
 		*time_s += (z - w->last_z_mm) / f->z_speed_mm_s;
 	}
-	if (!rc)
+	if (!rc) {
+		double dx = w->have_pos ? geom_nm_to_mm(w->pos.x) : 0;
+		double dy = w->have_pos ? f->bed_y_mm - geom_nm_to_mm(w->pos.y) : 0;
 		rc = bprintf(b, e, "G0 X0 Y%s F%.0f ; present the part\n", mm(f->bed_y_mm),
 			     f->travel_speed_mm_s * 60);
+		w->travel_mm += hypot(dx, dy);
+		*time_s += hypot(dx, dy) / f->travel_speed_mm_s;
+	}
 	if (!rc)
 		rc = bprintf(b, e, "M107 ; fan off\nM104 S0 ; nozzle off\nM140 S0 ; bed off\n"
 				   "M84 ; motors off\nM73 P100 R0\n");

@@ -299,9 +299,9 @@ static int classify_skin(const struct tp_config *c, const struct tp_layer_in *in
 			rc = clip_boolean(CLIP_INTERSECTION, &rest, down, CLIP_FILL_NONZERO,
 					  &ar->fill[TP_ROLE_SOLID], e);
 	} else if (in->index > 0 && !down) {
-		paths_append_move(&ar->fill[TP_ROLE_BRIDGE], &rest);
+		rc = paths_append_move(&ar->fill[TP_ROLE_BRIDGE], &rest);
 	} else {
-		paths_append_move(&ar->fill[TP_ROLE_SOLID], &rest);
+		rc = paths_append_move(&ar->fill[TP_ROLE_SOLID], &rest);
 	}
 out:
 	if (rc == ERR_NOMEM)
@@ -383,7 +383,8 @@ int tp_regions(const struct tp_config *c, const struct tp_layer_in *in, struct t
 	if (rc || F.n == 0)
 		goto out;
 	if (in->fill == LAYER_FILL_SOLID) {
-		paths_append_move(&skin, &F);
+		if (paths_append_move(&skin, &F))
+			rc = ERR_SET(e, ERR_NOMEM, "out of memory planning layer %d", in->index);
 	} else {
 		rc = skin_of(c, in, &F, &skin, e);
 		if (!rc)
@@ -391,8 +392,8 @@ int tp_regions(const struct tp_config *c, const struct tp_layer_in *in, struct t
 		if (!rc && skin.n)
 			rc = clip_boolean(CLIP_DIFFERENCE, &F, &skin, CLIP_FILL_NONZERO,
 					  &ar->fill[TP_ROLE_SPARSE], e);
-		else if (!rc)
-			paths_append_move(&ar->fill[TP_ROLE_SPARSE], &F);
+		else if (!rc && paths_append_move(&ar->fill[TP_ROLE_SPARSE], &F))
+			rc = ERR_SET(e, ERR_NOMEM, "out of memory planning layer %d", in->index);
 	}
 	if (!rc && skin.n)
 		rc = classify_skin(c, in, &skin, s, items, ar, e);

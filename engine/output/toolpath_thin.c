@@ -212,8 +212,8 @@ static double poly_len(const struct pt2 *p, size_t n)
 
 /* Centreline of an open strip's sliver from its two sides l and r (both
  * running from the same end to the other), d = the shrink distance. */
-static int emit_strip(const struct pt2 *l, size_t nl, const struct pt2 *r, size_t nr, double d,
-		      enum tp_role role, int64_t min_w, int64_t max_w, struct thin_buf *b,
+static int emit_strip(struct tp_index *ix, const struct pt2 *l, size_t nl, const struct pt2 *r,
+		      size_t nr, double d, enum tp_role role, int64_t min_w, int64_t max_w, struct thin_buf *b,
 		      struct tp_plan *items, struct err *e, int *added)
 {
 	double ll = poly_len(l, nl), total = 0;
@@ -235,6 +235,13 @@ static int emit_strip(const struct pt2 *l, size_t nl, const struct pt2 *r, size_
 		c.x = (int64_t)llround(0.5 * (xl + xr));
 		c.y = (int64_t)llround(0.5 * (yl + yr));
 		w = (int64_t)(hypot(xl - xr, yl - yr) + 2 * d);
+		{
+			/* Near a strip's ends the pair spans the end wall: the
+			 * clearance at the midpoint bounds the bead there. */
+			struct pt2 q;
+			if (tp_index_nearest(ix, c, w, &q) && 2 * tp_dist_nm(c, q) < (double)w)
+				w = (int64_t)(2 * tp_dist_nm(c, q));
+		}
 		if (w > max_w)
 			w = max_w;
 		if (w < min_w)
@@ -353,7 +360,7 @@ int tp_thin(const struct paths *pieces, enum tp_role role, int64_t min_w_nm, int
 				if (k == z)
 					break;
 			}
-			rc = emit_strip(chain, ml, chain + ml, m - ml, SHRINK * (double)min_w_nm, role,
+			rc = emit_strip(&ix, chain, ml, chain + ml, m - ml, SHRINK * (double)min_w_nm, role,
 					min_w_nm, max_w_nm, &b, items, e, &added);
 		}
 		if (rc)
