@@ -179,10 +179,17 @@ int tp_plan_slowdown(struct tp_plan *p, const struct fdm_printer *f, double *tim
 	rc = plan_time(p, f, &t, &te, e);
 	if (rc)
 		return rc;
-	if (f->min_layer_time_s > 0 && t < f->min_layer_time_s && te > 0) {
-		/* Stretch the extruding part by the missing time: speeds scale by
-		 * te / (te + missing); the floor may keep it short of the target. */
-		p->speed_factor = te / (te + (f->min_layer_time_s - t));
+	/* Stretch the extruding part by the missing time: speeds scale by
+	 * te / (te + missing).  Acceleration makes time less than inversely
+	 * proportional to speed, so correct the factor a few times; the floor
+	 * may keep a small layer short of the target. */
+	for (int it = 0; it < 4 && f->min_layer_time_s > 0 && te > 0 &&
+			 t < 0.99 * f->min_layer_time_s;
+	     it++) {
+		double factor = p->speed_factor * te / (te + (f->min_layer_time_s - t));
+		if (p->min_speed_mm_s > 0 && factor >= p->speed_factor * 0.999)
+			break;
+		p->speed_factor = factor;
 		p->min_speed_mm_s = f->min_print_speed_mm_s;
 		rc = plan_time(p, f, &t, &te, e);
 		if (rc)
