@@ -23,6 +23,7 @@
 #include "engine/output/writer.h"
 
 #include <math.h>
+#include <pthread.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <string.h>
@@ -32,11 +33,16 @@
 #define SPOOL_MEM_BYTES (1u << 20)
 
 /* A received layer region, shared by the plans that need it; reference
- * counts change only on the writer's (submitting) thread. */
+ * counts change only on the writer's (submitting) thread.  Its exposures
+ * (the parts the layers above and below do not cover) are computed once,
+ * by whichever plan needs them first, under the region's lock. */
 struct gc_region {
 	struct paths region;
 	enum layer_fill fill;
 	int refs;
+	pthread_mutex_t mu;
+	int top_done, bottom_done;
+	struct paths top, bottom;
 };
 
 struct gc_writer;
@@ -44,10 +50,10 @@ struct gc_writer;
 struct gc_item {
 	struct gc_writer *w;
 	int index;
+	int known;             /* layers received when it was queued */
 	double z_mm, h_mm;
 	struct gc_region *self;
 	struct gc_region **nb; /* below[0..nbelow) then above[0..nabove) */
-	const struct paths **nbp;
 	int nbelow, nabove;
 	struct gc_layer_out out;
 	double time_s;
@@ -94,8 +100,37 @@ static void region_unref(struct gc_region *r)
 {
 	if (r && --r->refs == 0) {
 		paths_fini(&r->region);
+		paths_fini(&r->top);
+		paths_fini(&r->bottom);
+		pthread_mutex_destroy(&r->mu);
 		mem_free(r);
 	}
+}
+
+/* Region of layer j as seen from item it (j within its window), or NULL
+ * when no such layer exists. */
+static struct gc_region *item_region(const struct gc_item *it, int j)
+{
+	if (j == it->index)
+		return it->self;
+	if (j < it->index)
+		return it->index - j <= it->nbelow ? it->nb[it->index - j - 1] : NULL;
+	return j - it->index <= it->nabove ? it->nb[it->nbelow + j - it->index - 1] : NULL;
+}
+
+/* r's exposure towards other (NULL: none there), computed once. */
+static int exposure(struct gc_region *r, int *done, struct paths *out, const struct gc_region *other,
+		    struct err *e)
+{
+	int rc = 0;
+
+	pthread_mutex_lock(&r->mu);
+	if (!*done) {
+		rc = tp_exposure(&r->region, other ? &other->region : NULL, out, e);
+		*done = rc == 0;
+	}
+	pthread_mutex_unlock(&r->mu);
+	return rc;
 }
 
 static void item_free(struct gc_item *it)
@@ -106,7 +141,6 @@ static void item_free(struct gc_item *it)
 	for (int i = 0; it->nb && i < it->nbelow + it->nabove; i++)
 		region_unref(it->nb[i]);
 	mem_free(it->nb);
-	mem_free(it->nbp);
 	gc_layer_out_fini(&it->out);
 	mem_free(it);
 }
@@ -178,9 +212,10 @@ static int work(void *ctx, void *item, struct err *e)
 {
 	struct gc_writer *w = ctx;
 	struct gc_item *it = item;
+	const struct paths *top[TP_WINDOW_MAX], *bottom[TP_WINDOW_MAX];
 	struct tp_layer_in in;
 	struct tp_plan plan;
-	int rc;
+	int rc = 0;
 
 	memset(&in, 0, sizeof in);
 	in.index = it->index;
@@ -188,13 +223,28 @@ static int work(void *ctx, void *item, struct err *e)
 	in.height_mm = it->h_mm;
 	in.fill = it->self->fill;
 	in.region = &it->self->region;
-	in.below = it->nbp;
-	in.above = it->nbp + it->nbelow;
-	in.nbelow = it->nbelow;
-	in.nabove = it->nabove;
+	/* Exposures of layers index .. index + T - 1 upwards and index ..
+	 * index - B + 1 downwards, stopping at the part's ends. */
+	for (int j = 0; !rc && j < w->f.top_layers && it->index + j < it->known; j++) {
+		struct gc_region *r = item_region(it, it->index + j);
+		rc = exposure(r, &r->top_done, &r->top,
+			      it->index + j + 1 < it->known ? item_region(it, it->index + j + 1)
+							    : NULL,
+			      e);
+		top[in.ntop++] = &r->top;
+	}
+	for (int j = 0; !rc && j < w->f.bottom_layers && it->index - j >= 0; j++) {
+		struct gc_region *r = item_region(it, it->index - j);
+		rc = exposure(r, &r->bottom_done, &r->bottom,
+			      it->index - j - 1 >= 0 ? item_region(it, it->index - j - 1) : NULL, e);
+		bottom[in.nbottom++] = &r->bottom;
+	}
+	in.top = top;
+	in.bottom = bottom;
 	in.start = w->start_ref;
 	tp_plan_init(&plan);
-	rc = tp_plan_layer(&w->cfg, &in, &plan, e);
+	if (!rc)
+		rc = tp_plan_layer(&w->cfg, &in, &plan, e);
 	if (!rc)
 		rc = tp_plan_slowdown(&plan, &w->f, &it->time_s, e);
 	if (!rc)
@@ -441,9 +491,9 @@ static int submit(struct gc_writer *w, int j, struct err *e)
 	it->nbelow = j < B ? j : B;
 	it->nabove = w->received - 1 - j < T ? w->received - 1 - j : T;
 	n = it->nbelow + it->nabove;
+	it->known = w->received;
 	it->nb = mem_calloc((size_t)(n ? n : 1), sizeof *it->nb);
-	it->nbp = mem_calloc((size_t)(n ? n : 1), sizeof *it->nbp);
-	if (!it->nb || !it->nbp) {
+	if (!it->nb) {
 		it->nbelow = it->nabove = 0;
 		item_free(it);
 		return ERR_SET(e, ERR_NOMEM, "out of memory queueing layer %d", j);
@@ -454,10 +504,8 @@ static int submit(struct gc_writer *w, int j, struct err *e)
 		it->nb[i] = w->win[(j - 1 - i) % w->win_n];
 	for (int i = 0; i < it->nabove; i++)
 		it->nb[it->nbelow + i] = w->win[(j + 1 + i) % w->win_n];
-	for (int i = 0; i < n; i++) {
+	for (int i = 0; i < n; i++)
 		it->nb[i]->refs++;
-		it->nbp[i] = &it->nb[i]->region;
-	}
 	it->h_mm = j == 0 ? w->f.first_layer_mm : w->info.layer_mm;
 	it->z_mm = (j + 1) * w->info.layer_mm + w->z_shift_mm;
 	w->submitted = j + 1;
@@ -498,6 +546,9 @@ static int gc_layer(void *state, struct layer *ly, struct err *e)
 		return fail(w, ERR_SET(e, ERR_NOMEM, "out of memory taking layer %d", ly->index), e);
 	r->region = ly->region;
 	paths_init(&ly->region);
+	paths_init(&r->top);
+	paths_init(&r->bottom);
+	pthread_mutex_init(&r->mu, NULL);
 	r->fill = ly->fill;
 	r->refs = 1;
 	rc = tp_region_clean(&w->cfg, &r->region, e);

@@ -107,20 +107,34 @@ static inline int64_t tp_seg_width(const struct tp_plan *p, const struct tp_path
 	return pa->seg_w == SIZE_MAX ? pa->width_nm : p->seg_w[pa->seg_w + k];
 }
 
-/* What the planner sees of one layer.  Neighbour regions are borrowed and
- * read-only (planned concurrently by other threads); a NULL entry or an
- * index past nbelow/nabove means "no layer there" (below the bed, above
- * the top): surfaces facing it get skins. */
+/* Most skin layers a profile may ask for (printer_fdm.c's table limit). */
+#define TP_WINDOW_MAX 100
+
+/* What the planner sees of one layer.  Skins come from the exposed parts
+ * of the layers around it (docs/gcode.md, "skins"): top[j] is the part of
+ * layer index + j that the layer above it does not cover (all of it for
+ * the last layer), bottom[j] the part of layer index - j that the layer
+ * below does not cover (all of it on the bed).  A point of this layer
+ * needs a solid skin exactly when it lies in one of top[0..top_layers) or
+ * bottom[0..bottom_layers).  All borrowed and read-only (planned
+ * concurrently); ntop/nbottom stop at the part's last and first layers
+ * (past them no exposure is missed: see toolpath_regions.c). */
 struct tp_layer_in {
 	int index, count;
-	double height_mm;                 /* printed height of this layer */
+	double height_mm;                  /* printed height of this layer */
 	enum layer_fill fill;
-	const struct paths *region;       /* material, normalised, nm */
-	const struct paths *const *below; /* below[j] = layer index - 1 - j */
-	const struct paths *const *above; /* above[j] = layer index + 1 + j */
-	int nbelow, nabove;
-	struct pt2 start;                 /* nozzle position the ordering starts at */
+	const struct paths *region;        /* material, normalised, nm */
+	const struct paths *const *top;    /* top[0] = this layer's own top */
+	const struct paths *const *bottom; /* bottom[0] = this layer's own bottom */
+	int ntop, nbottom;
+	struct pt2 start;                  /* nozzle position the ordering starts at */
 };
+
+/* The exposure of region r towards a neighbour layer: r minus other
+ * (all of r when other is NULL: no layer there).  Into out (replaced).
+ * 0, ERR_NOMEM or ERR_INTERNAL. */
+int tp_exposure(const struct paths *r, const struct paths *other, struct paths *out,
+		struct err *e);
 
 /* Plan layer `in` into out (reset first).  Output order: skirt (layer 0),
  * then island by island (nearest first): perimeters (inner loops first

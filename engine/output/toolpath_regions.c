@@ -19,13 +19,89 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* Coverage regions are grown by this much more before they are
+ * subtracted: the difference of two nearly coincident outlines is a cloud
+ * of slivers (and Clipper's slowest case); real gaps lose 10 um. */
+#define COVER_EPS_NM 10000.0
+
+/* Islands that an inward offset by d removes entirely: those whose
+ * bounding box is at most 2d across (the offset of a shape lies inside
+ * its bounding box shrunk by d).  Clipper builds the offset of a polygon
+ * shrunk past its inradius from self-crossing raw edges, O(n^2) crossings
+ * per polygon, so removing them first matters for layers of many small
+ * islands (lattice struts).  Each hole goes with the smallest outer loop
+ * around it.  kept receives shallow copies (no ownership); returns the
+ * number of paths dropped. */
+static size_t prune_vanishing(const struct paths *in, double d, struct paths *kept,
+			      unsigned char *mark)
+{
+	size_t dropped = 0;
+
+	for (size_t i = 0; i < in->n; i++) {
+		struct paths one = {&in->v[i], 1, 1};
+		struct pt2 lo, hi;
+		mark[i] = 0;
+		if (path_area2_nm2(&in->v[i]) > 0 && paths_bbox(&one, &lo, &hi) &&
+		    ((double)(hi.x - lo.x) <= 2 * d || (double)(hi.y - lo.y) <= 2 * d))
+			mark[i] = 1;
+	}
+	for (size_t i = 0; i < in->n; i++) {
+		size_t best = SIZE_MAX;
+		double best_a = 0;
+		if (in->v[i].n == 0 || path_area2_nm2(&in->v[i]) >= 0)
+			continue;
+		for (size_t j = 0; j < in->n; j++) {
+			struct paths one = {&in->v[j], 1, 1};
+			double a = (double)path_area2_nm2(&in->v[j]);
+			if (a <= 0 || (best != SIZE_MAX && a >= best_a))
+				continue;
+			if (paths_winding(&one, in->v[i].pts[0])) {
+				best = j;
+				best_a = a;
+			}
+		}
+		mark[i] = best != SIZE_MAX && mark[best];
+	}
+	kept->n = 0;
+	for (size_t i = 0; i < in->n; i++) {
+		if (mark[i])
+			dropped++;
+		else
+			kept->v[kept->n++] = in->v[i];
+	}
+	return dropped;
+}
+
 static int offset(const struct paths *in, double delta_nm, struct paths *out, struct err *e)
 {
+	struct paths kept;
+	unsigned char *mark;
+	int rc;
+
 	if (in->n == 0) {
 		paths_clear(out);
 		return 0;
 	}
-	return clip_offset(in, delta_nm, CLIP_JOIN_MITER, 3.0, 0, out, e);
+	if (delta_nm >= 0)
+		return clip_offset(in, delta_nm, CLIP_JOIN_MITER, 3.0, 0, out, e);
+	kept.v = mem_alloc(in->n * sizeof *kept.v);
+	mark = mem_alloc(in->n);
+	if (!kept.v || !mark) {
+		mem_free(kept.v);
+		mem_free(mark);
+		return ERR_SET(e, ERR_NOMEM, "out of memory offsetting a region");
+	}
+	kept.cap = in->n;
+	prune_vanishing(in, -delta_nm, &kept, mark);
+	if (kept.n == 0) {
+		paths_clear(out);
+		rc = 0;
+	} else {
+		rc = clip_offset(&kept, delta_nm, CLIP_JOIN_MITER, 3.0, 0, out, e);
+	}
+	mem_free(kept.v);
+	mem_free(mark);
+	return rc;
 }
 
 static int add_loops(struct tp_plan *items, const struct paths *ps, int depth, int64_t w,
@@ -58,64 +134,93 @@ static int same_region(const struct paths *a, const struct paths *b)
 	return 1;
 }
 
-/* Append the complement of region nb inside the box [lo, hi]: the box CCW
- * plus every loop of nb reversed.  Under the nonzero rule its winding is
- * 1 - w_nb(p) inside the box (0 or 1 for a normalised nb). */
-static int add_complement(struct paths *dst, const struct paths *nb, struct pt2 lo, struct pt2 hi,
-			  struct err *e)
+int tp_exposure(const struct paths *r, const struct paths *other, struct paths *out,
+		struct err *e)
 {
-	struct pt2 box[4] = {lo, {hi.x, lo.y}, hi, {lo.x, hi.y}};
-
-	if (paths_add_pts(dst, box, 4))
-		return ERR_SET(e, ERR_NOMEM, "out of memory computing skins");
-	for (size_t i = 0; i < nb->n; i++) {
-		if (paths_add_pts(dst, nb->v[i].pts, nb->v[i].n))
-			return ERR_SET(e, ERR_NOMEM, "out of memory computing skins");
-		path_reverse(&dst->v[dst->n - 1]);
+	if (!other)
+		return paths_copy(out, r) ? ERR_SET(e, ERR_NOMEM, "out of memory computing skins")
+					  : 0;
+	if (same_region(r, other)) {
+		paths_clear(out);
+		return 0;
 	}
+	return clip_boolean(CLIP_DIFFERENCE, r, other, CLIP_FILL_NONZERO, out, e);
+}
+
+/* Whether exposure loop q can meet fill area F (indexed in fx): a vertex
+ * of q inside F, an edge of q crossing F's outline, or F inside q.  Holes
+ * are always kept: a hole whose outer loop is dropped encloses only area
+ * outside F, so reading it as filled adds nothing to F's skin. */
+static int meets(struct tp_index *fx, const struct paths *F, const struct path *q)
+{
+	struct paths one = {(struct path *)q, 1, 1};
+
+	if (q->n < 3)
+		return 0;
+	if (path_area2_nm2(q) < 0)
+		return 1;
+	for (size_t i = 0; i < q->n; i++)
+		if (tp_index_inside(fx, q->pts[i]) ||
+		    tp_index_crosses(fx, q->pts[i], q->pts[(i + 1) % q->n]))
+			return 1;
+	for (size_t i = 0; i < F->n; i++)
+		if (F->v[i].n && paths_winding(&one, F->v[i].pts[0]))
+			return 1;
 	return 0;
 }
 
-/* Part of fill area F not covered by every one of the neighbour layers
- * (above[0..T), below[0..B)): the skin.  One Clipper call: the union of
- * the neighbours' complements has winding sum_j (1 - w_j) >= 0, nonzero
- * exactly where some neighbour is missing.  A missing layer (past the
- * bed or the top) covers nothing, so then all of F is skin. */
+/* Skin of fill area F: F within some exposure of the window.  Every
+ * point p of this layer k that some layer k+1..k+T misses lies in the
+ * exposure top[j] of the last layer k+j (j < T) that still holds it, and
+ * conversely; the same below.  A window cut short by the part's last
+ * (first) layer misses nothing: that layer's exposure is all of it.
+ * Exposures are mostly narrow strips along sloped walls, inside the
+ * perimeters and far from F: loops that cannot meet F are left out
+ * before one Clipper call against the union of the rest. */
 static int skin_of(const struct tp_config *c, const struct tp_layer_in *in, const struct paths *F,
 		   struct paths *skin, struct err *e)
 {
-	struct paths comp;
-	struct pt2 lo, hi;
-	int rc = 0, any = 0;
+	struct paths exp;
+	struct tp_index fx;
+	size_t total = 0;
+	int rc = 0, outer = 0;
 
 	paths_clear(skin);
 	if (F->n == 0)
 		return 0;
-	if (in->nabove < c->top_layers || in->nbelow < c->bottom_layers)
-		return paths_copy(skin, F) ? ERR_SET(e, ERR_NOMEM, "out of memory") : 0;
-	for (int j = 0; j < c->top_layers; j++)
-		if (!in->above[j])
-			return paths_copy(skin, F) ? ERR_SET(e, ERR_NOMEM, "out of memory") : 0;
-	for (int j = 0; j < c->bottom_layers; j++)
-		if (!in->below[j])
-			return paths_copy(skin, F) ? ERR_SET(e, ERR_NOMEM, "out of memory") : 0;
-	paths_init(&comp);
-	paths_bbox(F, &lo, &hi);
-	lo.x -= 1000000;
-	lo.y -= 1000000;
-	hi.x += 1000000;
-	hi.y += 1000000;
-	for (int j = 0; !rc && j < c->top_layers + c->bottom_layers; j++) {
-		const struct paths *nb = j < c->top_layers ? in->above[j]
-							   : in->below[j - c->top_layers];
-		if (same_region(nb, in->region))
-			continue; /* covers all of F */
-		rc = add_complement(&comp, nb, lo, hi, e);
-		any = 1;
+	for (int j = 0; j < c->top_layers && j < in->ntop; j++)
+		total += in->top[j]->n;
+	for (int j = 0; j < c->bottom_layers && j < in->nbottom; j++)
+		total += in->bottom[j]->n;
+	if (total == 0)
+		return 0;
+	rc = tp_index_build(&fx, F, e);
+	if (rc)
+		return rc;
+	/* a shallow concatenation: the paths stay owned by the window */
+	exp.v = mem_alloc(total * sizeof *exp.v);
+	if (!exp.v) {
+		tp_index_fini(&fx);
+		return ERR_SET(e, ERR_NOMEM, "out of memory computing skins");
 	}
-	if (!rc && any)
-		rc = clip_boolean(CLIP_INTERSECTION, F, &comp, CLIP_FILL_NONZERO, skin, e);
-	paths_fini(&comp);
+	exp.cap = total;
+	exp.n = 0;
+	for (int j = 0; j < c->top_layers + c->bottom_layers; j++) {
+		const struct paths *x = j < c->top_layers
+						? (j < in->ntop ? in->top[j] : NULL)
+						: (j - c->top_layers < in->nbottom ? in->bottom[j - c->top_layers]
+										   : NULL);
+		for (size_t i = 0; x && i < x->n; i++) {
+			if (!meets(&fx, F, &x->v[i]))
+				continue;
+			exp.v[exp.n++] = x->v[i];
+			outer |= path_area2_nm2(&x->v[i]) > 0;
+		}
+	}
+	if (outer)
+		rc = clip_boolean(CLIP_INTERSECTION, F, &exp, CLIP_FILL_NONZERO, skin, e);
+	mem_free(exp.v);
+	tp_index_fini(&fx);
 	return rc;
 }
 
@@ -260,8 +365,8 @@ static int classify_skin(const struct tp_config *c, const struct tp_layer_in *in
 			 struct err *e)
 {
 	struct paths open, narrow, rest;
-	const struct paths *up = in->nabove > 0 ? in->above[0] : NULL;
-	const struct paths *down = in->nbelow > 0 ? in->below[0] : NULL;
+	const struct paths *up = in->ntop > 0 ? in->top[0] : NULL;
+	const struct paths *down = in->index > 0 && in->nbottom > 0 ? in->bottom[0] : NULL;
 	int rc;
 
 	paths_init(&open);
@@ -270,7 +375,7 @@ static int classify_skin(const struct tp_config *c, const struct tp_layer_in *in
 	/* Opening by s/2: parts too narrow for a solid line go to gap fill. */
 	rc = offset(skin, -0.5 * (double)s, &narrow, e);
 	if (!rc)
-		rc = offset(&narrow, 0.5 * (double)s, &open, e);
+		rc = offset(&narrow, 0.5 * (double)s + COVER_EPS_NM, &open, e);
 	if (!rc)
 		rc = clip_boolean(CLIP_DIFFERENCE, skin, &open, CLIP_FILL_NONZERO, &narrow, e);
 	if (!rc)
@@ -278,28 +383,22 @@ static int classify_skin(const struct tp_config *c, const struct tp_layer_in *in
 			     items, e);
 	if (rc || open.n == 0)
 		goto out;
-	if (!up) {
-		rc = paths_copy(&ar->fill[TP_ROLE_TOP], &open) ? ERR_NOMEM : 0;
-		goto out;
-	}
-	if (!same_region(up, in->region)) {
-		rc = clip_boolean(CLIP_DIFFERENCE, &open, up, CLIP_FILL_NONZERO,
+	if (up && up->n) {
+		rc = clip_boolean(CLIP_INTERSECTION, &open, up, CLIP_FILL_NONZERO,
 				  &ar->fill[TP_ROLE_TOP], e);
 		if (!rc)
-			rc = clip_boolean(CLIP_INTERSECTION, &open, up, CLIP_FILL_NONZERO, &rest, e);
+			rc = clip_boolean(CLIP_DIFFERENCE, &open, up, CLIP_FILL_NONZERO, &rest, e);
 	} else {
 		rc = paths_copy(&rest, &open) ? ERR_NOMEM : 0;
 	}
-	if (rc)
+	if (rc || rest.n == 0)
 		goto out;
-	if (in->index > 0 && down && !same_region(down, in->region)) {
-		rc = clip_boolean(CLIP_DIFFERENCE, &rest, down, CLIP_FILL_NONZERO,
+	if (down && down->n) {
+		rc = clip_boolean(CLIP_INTERSECTION, &rest, down, CLIP_FILL_NONZERO,
 				  &ar->fill[TP_ROLE_BRIDGE], e);
 		if (!rc)
-			rc = clip_boolean(CLIP_INTERSECTION, &rest, down, CLIP_FILL_NONZERO,
+			rc = clip_boolean(CLIP_DIFFERENCE, &rest, down, CLIP_FILL_NONZERO,
 					  &ar->fill[TP_ROLE_SOLID], e);
-	} else if (in->index > 0 && !down) {
-		rc = paths_append_move(&ar->fill[TP_ROLE_BRIDGE], &rest);
 	} else {
 		rc = paths_append_move(&ar->fill[TP_ROLE_SOLID], &rest);
 	}
@@ -350,7 +449,7 @@ int tp_regions(const struct tp_config *c, const struct tp_layer_in *in, struct t
 	if (!rc)
 		rc = inset_open(in->region, 0.5 * (double)w, 0.5 * (double)s, &a, &prev, e);
 	if (!rc)
-		rc = offset(&prev, 0.5 * (double)w, &a, e);
+		rc = offset(&prev, 0.5 * (double)w + COVER_EPS_NM, &a, e);
 	if (!rc)
 		rc = clip_boolean(CLIP_DIFFERENCE, in->region, &a, CLIP_FILL_NONZERO, &gap, e);
 	if (!rc)
@@ -364,7 +463,7 @@ int tp_regions(const struct tp_config *c, const struct tp_layer_in *in, struct t
 		if (!rc)
 			rc = offset(&prev, -0.5 * (double)s, &a, e);
 		if (!rc)
-			rc = offset(&cur, 0.5 * (double)s, &b, e);
+			rc = offset(&cur, 0.5 * (double)s + COVER_EPS_NM, &b, e);
 		if (!rc)
 			rc = clip_boolean(CLIP_DIFFERENCE, &a, &b, CLIP_FILL_NONZERO, &gap, e);
 		if (!rc)

@@ -218,8 +218,9 @@ static struct tp_config config(void)
 	return c;
 }
 
+/* Layer `index` with exposures top[0..ntop) and bottom[0..nbottom). */
 static void layer_in(struct tp_layer_in *in, const struct paths *reg, int index, int count,
-		     const struct paths **nb, int nbelow, int nabove)
+		     const struct paths **top, int ntop, const struct paths **bottom, int nbottom)
 {
 	memset(in, 0, sizeof *in);
 	in->index = index;
@@ -227,10 +228,10 @@ static void layer_in(struct tp_layer_in *in, const struct paths *reg, int index,
 	in->height_mm = 0.2;
 	in->fill = LAYER_FILL_PART;
 	in->region = reg;
-	in->below = nb;
-	in->above = nb + nbelow;
-	in->nbelow = nbelow;
-	in->nabove = nabove;
+	in->top = top;
+	in->bottom = bottom;
+	in->ntop = ntop;
+	in->nbottom = nbottom;
 }
 
 /* Distance of every vertex of the plan's paths with this role from the
@@ -255,8 +256,8 @@ static void role_depth(const struct tp_plan *p, enum tp_role r, double *lo, doub
 static void test_perimeters_and_order(void)
 {
 	struct tp_config c = config();
-	struct paths sq;
-	const struct paths *nb[10];
+	struct paths sq, none;
+	const struct paths *nb[10], *own[1];
 	struct tp_layer_in in;
 	struct tp_plan p;
 	struct err e;
@@ -266,10 +267,11 @@ static void test_perimeters_and_order(void)
 	paths_init(&sq);
 	tp_plan_init(&p);
 	err_clear(&e);
+	paths_init(&none);
 	rect(&sq, 0, 0, 20, 20, 1);
 	for (int i = 0; i < 10; i++)
-		nb[i] = &sq;
-	layer_in(&in, &sq, 5, 20, nb, 4, 5);
+		nb[i] = &none; /* prismatic: no exposures */
+	layer_in(&in, &sq, 5, 20, nb, 5, nb + 5, 4);
 	c.skirt_loops = 0;
 	REQUIRE_OK(tp_plan_layer(&c, &in, &p, &e), &e);
 	role_depth(&p, TP_ROLE_EXT_PERIMETER, &lo, &hi);
@@ -292,8 +294,9 @@ static void test_perimeters_and_order(void)
 	c.external_first = 1;
 	REQUIRE_OK(tp_plan_layer(&c, &in, &p, &e), &e);
 	CHECK_EQ_INT(p.paths[0].role, TP_ROLE_EXT_PERIMETER);
-	/* nothing above: the whole fill area is a top skin */
-	layer_in(&in, &sq, 19, 20, nb, 4, 0);
+	/* nothing above: the whole layer is exposed, a top skin */
+	own[0] = &sq;
+	layer_in(&in, &sq, 19, 20, own, 1, nb + 5, 4);
 	REQUIRE_OK(tp_plan_layer(&c, &in, &p, &e), &e);
 	{
 		/* solid lines s apart cover the fill area: length = area / s */
@@ -309,12 +312,13 @@ static void test_perimeters_and_order(void)
 	CHECK_NUM(hi, <, 0);
 	tp_plan_fini(&p);
 	paths_fini(&sq);
+	paths_fini(&none);
 }
 
 static void test_travel_retraction(void)
 {
 	struct tp_config c = config();
-	struct paths two;
+	struct paths two, none;
 	const struct paths *nb[10];
 	struct tp_layer_in in;
 	struct tp_plan p;
@@ -326,9 +330,10 @@ static void test_travel_retraction(void)
 	err_clear(&e);
 	rect(&two, 0, 0, 5, 5, 1);
 	rect(&two, 5.5, 0, 10.5, 5, 1); /* 0.5 mm away: a short travel over air */
+	paths_init(&none);
 	for (int i = 0; i < 10; i++)
-		nb[i] = &two;
-	layer_in(&in, &two, 5, 20, nb, 4, 5);
+		nb[i] = &none;
+	layer_in(&in, &two, 5, 20, nb, 5, nb + 5, 4);
 	c.skirt_loops = 0;
 	REQUIRE_OK(tp_plan_layer(&c, &in, &p, &e), &e);
 	for (size_t i = 1; i < p.npaths; i++) {
@@ -348,6 +353,7 @@ static void test_travel_retraction(void)
 	CHECK_EQ_INT(islands_entered, 1);
 	tp_plan_fini(&p);
 	paths_fini(&two);
+	paths_fini(&none);
 }
 
 static void test_thin_pieces(void)
@@ -405,7 +411,7 @@ static void test_cursor_and_slowdown(void)
 {
 	struct tp_config c = config();
 	struct fdm_printer f = printer_fdm_profiles[0].fdm;
-	struct paths sq;
+	struct paths sq, none;
 	const struct paths *nb[10];
 	struct tp_layer_in in;
 	struct tp_plan p;
@@ -420,9 +426,10 @@ static void test_cursor_and_slowdown(void)
 	err_clear(&e);
 	rect(&sq, 0, 0, 5, 5, 1);
 	rect(&sq, 10, 0, 15, 5, 1);
+	paths_init(&none);
 	for (int i = 0; i < 10; i++)
-		nb[i] = &sq;
-	layer_in(&in, &sq, 5, 20, nb, 4, 5);
+		nb[i] = &none;
+	layer_in(&in, &sq, 5, 20, nb, 5, nb + 5, 4);
 	c.skirt_loops = 0;
 	REQUIRE_OK(tp_plan_layer(&c, &in, &p, &e), &e);
 	tp_cursor_init(&cu, &p, 1);
@@ -457,6 +464,7 @@ static void test_cursor_and_slowdown(void)
 	CHECK_REL(t2, 1.3 * t, 0.05);
 	tp_plan_fini(&p);
 	paths_fini(&sq);
+	paths_fini(&none);
 }
 
 static void test_spool(void)
