@@ -6,7 +6,6 @@
 #include "engine/output/toolpath_int.h"
 #include "engine/core/err.h"
 #include "engine/core/mem.h"
-#include "engine/geom/clip.h"
 #include "engine/output/printer.h"
 
 #include <math.h>
@@ -83,9 +82,10 @@ int tp_config_init(struct tp_config *c, const struct fdm_printer *f, double laye
 	c->min_travel_retract_nm = geom_mm_to_nm(f->min_travel_retract_mm);
 	c->skirt_loops = f->skirt_loops;
 	c->skirt_distance_nm = geom_mm_to_nm(f->skirt_distance_mm);
-	/* 5 um: removes the collinear vertices slicing leaves on flat faces,
-	 * moves outlines far less than the checker's 0.02 mm tolerance. */
-	c->clean_nm = 5000;
+	/* 12.5 um (PrusaSlicer's G-code resolution): Douglas-Peucker keeps
+	 * every dropped vertex within it, below the checker's 0.02 mm
+	 * containment tolerance (docs/gcode.md). */
+	c->clean_nm = 12500;
 	c->speed_mm_s[TP_ROLE_SKIRT] = f->print_speed_mm_s;
 	c->speed_mm_s[TP_ROLE_EXT_PERIMETER] = f->external_perimeter_speed_mm_s;
 	c->speed_mm_s[TP_ROLE_PERIMETER] = f->perimeter_speed_mm_s;
@@ -167,19 +167,102 @@ nomem:
 	return ERR_SET(e, ERR_NOMEM, "out of memory storing toolpaths");
 }
 
+/* Douglas-Peucker on the chain pts[i..j] (indices modulo n): marks in keep
+ * the vertices needed so that no dropped vertex lies farther than tol
+ * from the simplified chain.  Explicit stack: O(n log n) typical, O(n^2)
+ * worst case. */
+static int dp_chain(const struct pt2 *pts, size_t n, size_t i, size_t j, double tol,
+		    unsigned char *keep, size_t *stack)
+{
+	size_t sp = 0;
+
+	stack[sp++] = i;
+	stack[sp++] = j;
+	while (sp) {
+		size_t b = stack[--sp], a = stack[--sp], best = SIZE_MAX;
+		double ax = (double)pts[a % n].x, ay = (double)pts[a % n].y;
+		double dx = (double)pts[b % n].x - ax, dy = (double)pts[b % n].y - ay;
+		double len = sqrt(dx * dx + dy * dy), worst = tol;
+		for (size_t k = a + 1; k < b; k++) {
+			double px = (double)pts[k % n].x - ax, py = (double)pts[k % n].y - ay, d;
+			if (len > 0) {
+				double t = (px * dx + py * dy) / (len * len);
+				if (t < 0)
+					t = 0;
+				if (t > 1)
+					t = 1;
+				d = hypot(px - t * dx, py - t * dy);
+			} else {
+				d = hypot(px, py);
+			}
+			if (d > worst) {
+				worst = d;
+				best = k;
+			}
+		}
+		if (best != SIZE_MAX) {
+			keep[best % n] = 1;
+			stack[sp++] = a;
+			stack[sp++] = best;
+			stack[sp++] = best;
+			stack[sp++] = b;
+		}
+	}
+	return 0;
+}
+
+/* Simplify one closed loop in place: split at vertex 0 and the vertex
+ * farthest from it, Douglas-Peucker both halves. */
+static int simplify_loop(struct path *p, double tol, unsigned char *keep, size_t *stack)
+{
+	size_t n = p->n, far = 0, k = 0;
+	double fd = -1;
+
+	for (size_t i = 1; i < n; i++) {
+		double d = hypot((double)(p->pts[i].x - p->pts[0].x), (double)(p->pts[i].y - p->pts[0].y));
+		if (d > fd) {
+			fd = d;
+			far = i;
+		}
+	}
+	memset(keep, 0, n);
+	keep[0] = keep[far] = 1;
+	dp_chain(p->pts, n, 0, far, tol, keep, stack);
+	dp_chain(p->pts, n, far, n, tol, keep, stack);
+	for (size_t i = 0; i < n; i++)
+		if (keep[i])
+			p->pts[k++] = p->pts[i];
+	p->n = k;
+	return 0;
+}
+
 int tp_region_clean(const struct tp_config *c, struct paths *region, struct err *e)
 {
-	size_t k = 0;
-	int rc;
+	size_t k = 0, nmax = 0;
+	unsigned char *keep;
+	size_t *stack;
 
-	if (region->n == 0)
+	for (size_t i = 0; i < region->n; i++)
+		if (region->v[i].n > nmax)
+			nmax = region->v[i].n;
+	if (nmax == 0)
 		return 0;
-	rc = clip_clean(region, (double)c->clean_nm, e);
-	if (rc)
-		return rc;
-	/* Cleaning can leave degenerate loops (fewer than 3 points): drop them. */
+	keep = mem_alloc(nmax + 1);
+	stack = mem_alloc((4 * nmax + 8) * sizeof *stack);
+	if (!keep || !stack) {
+		mem_free(keep);
+		mem_free(stack);
+		return ERR_SET(e, ERR_NOMEM, "out of memory simplifying a layer");
+	}
+	for (size_t i = 0; i < region->n; i++)
+		if (region->v[i].n > 3)
+			simplify_loop(&region->v[i], (double)c->clean_nm, keep, stack);
+	mem_free(keep);
+	mem_free(stack);
+	/* Loops that collapsed below a triangle (slivers under the tolerance)
+	 * are dropped. */
 	for (size_t i = 0; i < region->n; i++) {
-		if (region->v[i].n >= 3) {
+		if (region->v[i].n >= 3 && path_area2_nm2(&region->v[i]) != 0) {
 			region->v[k++] = region->v[i];
 		} else {
 			path_fini(&region->v[i]);

@@ -143,9 +143,12 @@ int tp_exposure(const struct paths *r, const struct paths *other, struct paths *
 int tp_plan_layer(const struct tp_config *c, const struct tp_layer_in *in, struct tp_plan *out,
 		  struct err *e);
 
-/* Simplify a region in place before planning: drops vertices within
- * c->clean_nm of their neighbours' chord (the outline moves at most that
- * far; docs/gcode.md counts it in the containment tolerance). */
+/* Simplify a region in place before planning (Douglas-Peucker per loop):
+ * every dropped vertex lies within c->clean_nm of the new outline
+ * (docs/gcode.md counts it in the containment tolerance); loops that
+ * collapse are dropped.  Simplifying a normalised region can, in rare
+ * near-touching cases, make loops touch; the planner's offsets
+ * re-normalise.  0 or ERR_NOMEM. */
 int tp_region_clean(const struct tp_config *c, struct paths *region, struct err *e);
 
 /* ---- Walking a plan: the primitive moves the printer makes ----------- */

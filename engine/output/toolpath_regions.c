@@ -147,8 +147,9 @@ int tp_exposure(const struct paths *r, const struct paths *other, struct paths *
 	return clip_boolean(CLIP_DIFFERENCE, r, other, CLIP_FILL_NONZERO, out, e);
 }
 
-/* Whether exposure loop q can meet fill area F (indexed in fx): a vertex
- * of q inside F, an edge of q crossing F's outline, or F inside q.  Holes
+/* Whether exposure loop q can meet fill area F (indexed in fx): an edge
+ * of q crossing F's outline, q inside F, or F inside q (touching without
+ * crossing counts as not meeting: no area in common).  Holes
  * are always kept: a hole whose outer loop is dropped encloses only area
  * outside F, so reading it as filled adds nothing to F's skin. */
 static int meets(struct tp_index *fx, const struct paths *F, const struct path *q)
@@ -159,10 +160,13 @@ static int meets(struct tp_index *fx, const struct paths *F, const struct path *
 		return 0;
 	if (path_area2_nm2(q) < 0)
 		return 1;
+	/* Without a crossing, q's outline lies wholly inside or wholly outside
+	 * F: one vertex tells which. */
 	for (size_t i = 0; i < q->n; i++)
-		if (tp_index_inside(fx, q->pts[i]) ||
-		    tp_index_crosses(fx, q->pts[i], q->pts[(i + 1) % q->n]))
+		if (tp_index_crosses(fx, q->pts[i], q->pts[(i + 1) % q->n]))
 			return 1;
+	if (tp_index_inside(fx, q->pts[0]))
+		return 1;
 	for (size_t i = 0; i < F->n; i++)
 		if (F->v[i].n && paths_winding(&one, F->v[i].pts[0]))
 			return 1;
@@ -188,6 +192,12 @@ static int skin_of(const struct tp_config *c, const struct tp_layer_in *in, cons
 	paths_clear(skin);
 	if (F->n == 0)
 		return 0;
+	/* A window cut short by the part's top or bottom: every point either
+	 * leaves within it or lasts to that last layer, whose exposure is
+	 * all of it; so all of F is skin. */
+	if (in->ntop < c->top_layers || in->nbottom < c->bottom_layers)
+		return paths_copy(skin, F) ? ERR_SET(e, ERR_NOMEM, "out of memory computing skins")
+					   : 0;
 	for (int j = 0; j < c->top_layers && j < in->ntop; j++)
 		total += in->top[j]->n;
 	for (int j = 0; j < c->bottom_layers && j < in->nbottom; j++)
@@ -411,21 +421,10 @@ out:
 	return rc;
 }
 
-/* Inward offset by d followed by an opening of radius r: drops the parts
- * narrower than 2r, where a loop would fold onto itself and print one
- * bead over another (Slic3r's offset2). */
-static int inset_open(const struct paths *in, double d, double r, struct paths *tmp,
-		      struct paths *out, struct err *e)
-{
-	int rc = offset(in, -(d + r), tmp, e);
-
-	return rc ? rc : offset(tmp, r, out, e);
-}
-
 int tp_regions(const struct tp_config *c, const struct tp_layer_in *in, struct tp_plan *items,
 	       struct tp_areas *ar, struct err *e)
 {
-	struct paths prev, cur, a, b, gap, F, skin;
+	struct paths prev, cur, a, b, gap, E, F, skin;
 	int64_t w = c->width_nm, s = tp_spacing_nm(w, in->height_mm);
 	int64_t thin_min = geom_mm_to_nm(in->height_mm);
 	/* Widest single bead for thin walls and gaps: twice the nozzle. */
@@ -439,17 +438,22 @@ int tp_regions(const struct tp_config *c, const struct tp_layer_in *in, struct t
 	paths_init(&a);
 	paths_init(&b);
 	paths_init(&gap);
+	paths_init(&E);
 	paths_init(&F);
 	paths_init(&skin);
 	rc = in->index == 0 && c->skirt_loops > 0 ? skirt(c, in, items, e) : 0;
-	/* External loop: centreline w/2 inside, where at least a spacing wide.
-	 * What its bead cannot reach (R minus the loop region grown back by
-	 * w/2) is narrower than w + s: thin walls, printed as single
-	 * variable-width lines. */
+	/* External loop: centreline w/2 inside, where the region is at least
+	 * w + s wide: E = R eroded by w/2 + s/2, the loop region C0 = E grown
+	 * by s/2 (Slic3r's offset2: parts too narrow for a loop that does not
+	 * fold onto itself drop out).  What the loop's bead cannot reach, R
+	 * minus E grown by w/2 + s/2, is thinner than w + s: thin walls,
+	 * printed as single variable-width lines. */
 	if (!rc)
-		rc = inset_open(in->region, 0.5 * (double)w, 0.5 * (double)s, &a, &prev, e);
+		rc = offset(in->region, -0.5 * (double)(w + s), &E, e);
 	if (!rc)
-		rc = offset(&prev, 0.5 * (double)w + COVER_EPS_NM, &a, e);
+		rc = offset(&E, 0.5 * (double)s, &prev, e);
+	if (!rc)
+		rc = offset(&E, 0.5 * (double)(w + s) + COVER_EPS_NM, &a, e);
 	if (!rc)
 		rc = clip_boolean(CLIP_DIFFERENCE, in->region, &a, CLIP_FILL_NONZERO, &gap, e);
 	if (!rc)
@@ -457,13 +461,17 @@ int tp_regions(const struct tp_config *c, const struct tp_layer_in *in, struct t
 	if (!rc)
 		rc = add_loops(items, &prev, 0, w, e);
 	for (int k = 1; !rc && k < c->perimeters && prev.n; k++) {
-		/* Loop k one spacing further in; the strip between the beads of
-		 * loops k-1 and k that neither covers is gap fill. */
-		rc = inset_open(&prev, (double)s, 0.5 * (double)s, &a, &cur, e);
+		/* Loop k one spacing further in: a = the previous loop region
+		 * eroded by s/2 (its bead's inner edge), E = a eroded by s, loop
+		 * region C = E grown by s/2.  The parts of a narrower than 2s,
+		 * a minus E grown by s, are the gaps neither bead covers. */
+		rc = offset(&prev, -0.5 * (double)s, &a, e);
 		if (!rc)
-			rc = offset(&prev, -0.5 * (double)s, &a, e);
+			rc = offset(&a, -(double)s, &E, e);
 		if (!rc)
-			rc = offset(&cur, 0.5 * (double)s + COVER_EPS_NM, &b, e);
+			rc = offset(&E, 0.5 * (double)s, &cur, e);
+		if (!rc)
+			rc = offset(&E, (double)s + COVER_EPS_NM, &b, e);
 		if (!rc)
 			rc = clip_boolean(CLIP_DIFFERENCE, &a, &b, CLIP_FILL_NONZERO, &gap, e);
 		if (!rc)
@@ -476,9 +484,13 @@ int tp_regions(const struct tp_config *c, const struct tp_layer_in *in, struct t
 			cur = t;
 		}
 	}
-	/* Fill area: s/2 inside the innermost loop. */
-	if (!rc)
-		rc = offset(&prev, -0.5 * (double)s, &F, e);
+	/* Fill area: the last E, s/2 inside the innermost loop (C = E grown
+	 * by s/2, so E lies at least s/2 inside C's outline). */
+	if (!rc) {
+		paths_fini(&F);
+		F = E;
+		paths_init(&E);
+	}
 	if (rc || F.n == 0)
 		goto out;
 	if (in->fill == LAYER_FILL_SOLID) {
@@ -502,6 +514,7 @@ out:
 	paths_fini(&a);
 	paths_fini(&b);
 	paths_fini(&gap);
+	paths_fini(&E);
 	paths_fini(&F);
 	paths_fini(&skin);
 	return rc;

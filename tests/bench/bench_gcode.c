@@ -121,6 +121,15 @@ static int lattice_layer(int k, struct paths *out, enum layer_fill *fill, struct
 	return rc;
 }
 
+static double cpu_s(void)
+{
+	struct rusage ru;
+
+	getrusage(RUSAGE_SELF, &ru);
+	return (double)ru.ru_utime.tv_sec + ru.ru_utime.tv_usec / 1e6 + (double)ru.ru_stime.tv_sec +
+	       ru.ru_stime.tv_usec / 1e6;
+}
+
 static int count_write(void *ctx, const void *p, size_t n, struct err *e)
 {
 	(void)p;
@@ -140,7 +149,7 @@ static int run(const char *name, layer_fn fn, int threads, int n)
 	struct err e;
 	size_t bytes = 0;
 	void *st = NULL;
-	double t0, t_regions = 0, t;
+	double t0, t_regions = 0, t, c0, c_regions = 0, cpu;
 	int rc;
 
 	memset(&info, 0, sizeof info);
@@ -159,10 +168,11 @@ static int run(const char *name, layer_fn fn, int threads, int n)
 	metrics_init(&m);
 	err_clear(&e);
 	t0 = progress_now_s();
+	c0 = cpu_s();
 	rc = gcode_writer_ops.open(&info, &s, &st, &e);
 	for (int k = 0; !rc && k < n; k++) {
 		struct layer ly;
-		double a = progress_now_s();
+		double a = progress_now_s(), ca = cpu_s();
 		memset(&ly, 0, sizeof ly);
 		ly.index = k;
 		ly.count = n;
@@ -172,6 +182,7 @@ static int run(const char *name, layer_fn fn, int threads, int n)
 		paths_init(&ly.region);
 		rc = fn(k, &ly.region, &ly.fill, &e);
 		t_regions += progress_now_s() - a;
+		c_regions += cpu_s() - ca;
 		if (!rc)
 			rc = gcode_writer_ops.layer(st, &ly, &e);
 		paths_fini(&ly.region);
@@ -179,15 +190,16 @@ static int run(const char *name, layer_fn fn, int threads, int n)
 	if (!rc)
 		rc = gcode_writer_ops.close(st, &m, &e);
 	t = progress_now_s() - t0 - t_regions;
+	cpu = cpu_s() - c0 - c_regions;
 	gcode_writer_ops.free_state(st);
 	if (rc) {
 		fprintf(stderr, "%s: %s\n", name, e.msg);
 		metrics_fini(&m);
 		return rc;
 	}
-	printf("%-8s threads %d: %4d layers in %6.3f s = %7.1f layers/s, %6.1f MB G-code "
-	       "(%5.1f MB/s), print %5.0f min, %6.1f g, %ld retractions\n",
-	       name, threads, n, t, n / t, bytes / 1e6, bytes / 1e6 / t,
+	printf("%-8s threads %d: %4d layers in %6.3f s = %7.1f layers/s (cpu %6.3f s = %6.1f "
+	       "layers/cpu-s), %5.1f MB G-code, print %4.0f min, %5.1f g, %ld retractions\n",
+	       name, threads, n, t, n / t, cpu, n / cpu, bytes / 1e6,
 	       metrics_get(&m, "gcode.print_time_s")->num / 60,
 	       metrics_get(&m, "gcode.filament_g")->num,
 	       (long)metrics_get(&m, "gcode.retractions")->ival);
