@@ -147,28 +147,6 @@ static void item_free(struct gc_item *it)
 
 /* ---- small text helpers ------------------------------------------------- */
 
-static int bprintf(struct buf *b, struct err *e, const char *fmt, ...)
-#if defined(__GNUC__)
-	__attribute__((format(printf, 3, 4)))
-#endif
-	;
-
-static int bprintf(struct buf *b, struct err *e, const char *fmt, ...)
-{
-	char line[1024];
-	va_list ap;
-	int n;
-
-	va_start(ap, fmt);
-	n = vsnprintf(line, sizeof line, fmt, ap);
-	va_end(ap);
-	if (n < 0 || (size_t)n >= sizeof line)
-		return ERR_SET(e, ERR_INTERNAL, "G-code line longer than %zu bytes", sizeof line);
-	if (buf_append(b, line, (size_t)n))
-		return ERR_SET(e, ERR_NOMEM, "out of memory writing G-code");
-	return 0;
-}
-
 /* "%s" of a mm value at 1 um, into a small rotating buffer. */
 static const char *mm(double v)
 {
@@ -260,7 +238,7 @@ static int work(void *ctx, void *item, struct err *e)
 
 /* Retract, move to the new layer's height and first point, prime: the
  * layer change (Z moves only while travelling).  Adds its time. */
-static int layer_change(struct gc_writer *w, const struct gc_item *it, struct buf *b,
+static int layer_change(struct gc_writer *w, const struct gc_item *it, struct sink *b,
 			struct err *e)
 {
 	const struct fdm_printer *f = &w->f;
@@ -272,30 +250,30 @@ static int layer_change(struct gc_writer *w, const struct gc_item *it, struct bu
 
 	tp_motion_init(&m, f->accel_mm_s2, f->jerk_mm_s);
 	if (w->primed && f->retract_mm > 0) {
-		rc = bprintf(b, e, "G1 E-%s F%.0f\n", mm(f->retract_mm), f->retract_speed_mm_s * 60);
+		rc = sink_printf(b, e, "G1 E-%s F%.0f\n", mm(f->retract_mm), f->retract_speed_mm_s * 60);
 		tp_motion_stop(&m, retract_s);
 		w->retractions++;
 	}
 	if (!rc)
-		rc = bprintf(b, e, "G1 Z%s F%.0f\n", mm(z + hop), f->z_speed_mm_s * 60);
+		rc = sink_printf(b, e, "G1 Z%s F%.0f\n", mm(z + hop), f->z_speed_mm_s * 60);
 	if (!rc)
 		rc = tp_motion_move(&m, 0, 0, z + hop - w->last_z_mm, f->z_speed_mm_s, 0, e);
 	if (!rc) {
 		struct pt2 from = w->have_pos ? w->pos : to;
 		double dx = geom_nm_to_mm(to.x - from.x), dy = geom_nm_to_mm(to.y - from.y);
-		rc = bprintf(b, e, "G0 X%s Y%s F%.0f\n", mm(geom_nm_to_mm(to.x)),
+		rc = sink_printf(b, e, "G0 X%s Y%s F%.0f\n", mm(geom_nm_to_mm(to.x)),
 			     mm(geom_nm_to_mm(to.y)), f->travel_speed_mm_s * 60);
 		w->travel_mm += sqrt(dx * dx + dy * dy);
 		if (!rc)
 			rc = tp_motion_move(&m, dx, dy, 0, f->travel_speed_mm_s, 0, e);
 	}
 	if (!rc && hop > 0) {
-		rc = bprintf(b, e, "G1 Z%s F%.0f\n", mm(z), f->z_speed_mm_s * 60);
+		rc = sink_printf(b, e, "G1 Z%s F%.0f\n", mm(z), f->z_speed_mm_s * 60);
 		if (!rc)
 			rc = tp_motion_move(&m, 0, 0, -hop, f->z_speed_mm_s, 0, e);
 	}
 	if (!rc && f->retract_mm > 0) {
-		rc = bprintf(b, e, "G1 E%s F%.0f\n", mm(f->retract_mm), f->retract_speed_mm_s * 60);
+		rc = sink_printf(b, e, "G1 E%s F%.0f\n", mm(f->retract_mm), f->retract_speed_mm_s * 60);
 		tp_motion_stop(&m, retract_s);
 	}
 	tp_motion_stop(&m, 0);
@@ -310,10 +288,12 @@ static int emit(void *ctx, void *item, struct err *e)
 	struct gc_item *it = item;
 	struct gc_layer_out *o = &it->out;
 	struct buf b;
+	struct sink bs;
 	int rc;
 
 	buf_init(&b);
-	rc = bprintf(&b, e, ";LAYER_CHANGE\n;Z:%s\n;HEIGHT:%s\n;LAYER:%d\n", mm(it->z_mm),
+	sink_init_buf(&bs, &b);
+	rc = sink_printf(&bs, e, ";LAYER_CHANGE\n;Z:%s\n;HEIGHT:%s\n;LAYER:%d\n", mm(it->z_mm),
 		     mm(it->h_mm), it->index);
 	if (!rc)
 		rc = gc_spool_text(&w->spool, b.data, b.len, e);
@@ -321,11 +301,11 @@ static int emit(void *ctx, void *item, struct err *e)
 		rc = gc_spool_mark(&w->spool, w->elapsed_s, e);
 	buf_reset(&b);
 	if (!rc && w->f.klipper)
-		rc = bprintf(&b, e, "SET_PRINT_STATS_INFO CURRENT_LAYER=%d\n", it->index + 1);
+		rc = sink_printf(&bs, e, "SET_PRINT_STATS_INFO CURRENT_LAYER=%d\n", it->index + 1);
 	if (!rc && it->index == 1 && w->f.fan_pct > 0)
-		rc = bprintf(&b, e, "M106 S%.0f\n", 255.0 * w->f.fan_pct / 100.0);
+		rc = sink_printf(&bs, e, "M106 S%.0f\n", 255.0 * w->f.fan_pct / 100.0);
 	if (!rc && o->has_moves)
-		rc = layer_change(w, it, &b, e);
+		rc = layer_change(w, it, &bs, e);
 	if (!rc)
 		rc = gc_spool_text(&w->spool, b.data, b.len, e);
 	if (!rc && o->has_moves)
@@ -571,7 +551,7 @@ static int gc_layer(void *state, struct layer *ly, struct err *e)
 /* ---- start, end, header, footer ------------------------------------------ */
 
 
-static int start_code(struct gc_writer *w, struct buf *b, int64_t *prime_units, double *time_s,
+static int start_code(struct gc_writer *w, struct sink *b, int64_t *prime_units, double *time_s,
 		      struct err *e)
 {
 	const struct fdm_printer *f = &w->f;
@@ -581,19 +561,19 @@ static int start_code(struct gc_writer *w, struct buf *b, int64_t *prime_units, 
 
 	*prime_units = 0;
 	*time_s = 0;
-	rc = bprintf(b, e, "M107\n");
+	rc = sink_printf(b, e, "M107\n");
 	if (!rc && f->bed_c > 0)
-		rc = bprintf(b, e, "M140 S%.0f ; bed\n", f->bed_c);
+		rc = sink_printf(b, e, "M140 S%.0f ; bed\n", f->bed_c);
 	if (!rc)
-		rc = bprintf(b, e, "M104 S%.0f ; nozzle\n", f->nozzle_c);
+		rc = sink_printf(b, e, "M104 S%.0f ; nozzle\n", f->nozzle_c);
 	if (!rc && f->bed_c > 0)
-		rc = bprintf(b, e, "M190 S%.0f ; wait for the bed\n", f->bed_c);
+		rc = sink_printf(b, e, "M190 S%.0f ; wait for the bed\n", f->bed_c);
 	if (!rc)
-		rc = bprintf(b, e, "M109 S%.0f ; wait for the nozzle\n", f->nozzle_c);
+		rc = sink_printf(b, e, "M109 S%.0f ; wait for the nozzle\n", f->nozzle_c);
 	if (!rc && f->klipper)
-		rc = bprintf(b, e, "SET_PRINT_STATS_INFO TOTAL_LAYER=%d\n", w->received);
+		rc = sink_printf(b, e, "SET_PRINT_STATS_INFO TOTAL_LAYER=%d\n", w->received);
 	if (!rc)
-		rc = bprintf(b, e,
+		rc = sink_printf(b, e,
 			     "G28 ; home\nG90 ; absolute XYZ\nM83 ; relative E\nG92 E0\n");
 	if (!rc && p.on) {
 		/* Two strokes of the first-layer bead (Slic3r flow), out and back
@@ -605,14 +585,14 @@ static int start_code(struct gc_writer *w, struct buf *b, int64_t *prime_units, 
 		char eb[32];
 		struct tp_motion m;
 		eb[gc_fmt_fixed(eb, units, 5)] = '\0';
-		rc = bprintf(b, e, ";prime line\nG1 Z2 F%.0f\nG0 X%s Y%s F%.0f\nG1 Z%s F%.0f\n",
+		rc = sink_printf(b, e, ";prime line\nG1 Z2 F%.0f\nG0 X%s Y%s F%.0f\nG1 Z%s F%.0f\n",
 			     f->z_speed_mm_s * 60, mm(p.x0), mm(p.y0), f->travel_speed_mm_s * 60,
 			     mm(h), f->z_speed_mm_s * 60);
 		if (!rc)
-			rc = bprintf(b, e, "G1 X%s Y%s E%s F%.0f\n", mm(p.x1), mm(p.y1), eb,
+			rc = sink_printf(b, e, "G1 X%s Y%s E%s F%.0f\n", mm(p.x1), mm(p.y1), eb,
 				     f->first_layer_speed_mm_s * 60);
 		if (!rc)
-			rc = bprintf(b, e, "G1 X%s Y%s F%.0f\nG1 X%s Y%s E%s F%.0f\n",
+			rc = sink_printf(b, e, "G1 X%s Y%s F%.0f\nG1 X%s Y%s E%s F%.0f\n",
 				     mm(p.x1 + ox), mm(p.y1 + oy), f->first_layer_speed_mm_s * 60,
 				     mm(p.x0 + ox), mm(p.y0 + oy), eb,
 				     f->first_layer_speed_mm_s * 60);
@@ -633,33 +613,33 @@ static int start_code(struct gc_writer *w, struct buf *b, int64_t *prime_units, 
 	return rc;
 }
 
-static int end_code(struct gc_writer *w, struct buf *b, double *time_s, struct err *e)
+static int end_code(struct gc_writer *w, struct sink *b, double *time_s, struct err *e)
 {
 	const struct fdm_printer *f = &w->f;
 	double z = w->last_z_mm + 10 < f->max_z_mm ? w->last_z_mm + 10 : f->max_z_mm;
 	int rc = 0;
 
 	*time_s = 0;
-	rc = bprintf(b, e, ";end\n");
+	rc = sink_printf(b, e, ";end\n");
 	if (!rc && w->primed && f->retract_mm > 0) {
-		rc = bprintf(b, e, "G1 E-%s F%.0f\n", mm(f->retract_mm), f->retract_speed_mm_s * 60);
+		rc = sink_printf(b, e, "G1 E-%s F%.0f\n", mm(f->retract_mm), f->retract_speed_mm_s * 60);
 		*time_s += f->retract_mm / f->retract_speed_mm_s;
 		w->retractions++;
 	}
 	if (!rc && z > w->last_z_mm) {
-		rc = bprintf(b, e, "G1 Z%s F%.0f ; lift\n", mm(z), f->z_speed_mm_s * 60);
+		rc = sink_printf(b, e, "G1 Z%s F%.0f ; lift\n", mm(z), f->z_speed_mm_s * 60);
 		*time_s += (z - w->last_z_mm) / f->z_speed_mm_s;
 	}
 	if (!rc) {
 		double dx = w->have_pos ? geom_nm_to_mm(w->pos.x) : 0;
 		double dy = w->have_pos ? f->bed_y_mm - geom_nm_to_mm(w->pos.y) : 0;
-		rc = bprintf(b, e, "G0 X0 Y%s F%.0f ; present the part\n", mm(f->bed_y_mm),
+		rc = sink_printf(b, e, "G0 X0 Y%s F%.0f ; present the part\n", mm(f->bed_y_mm),
 			     f->travel_speed_mm_s * 60);
 		w->travel_mm += hypot(dx, dy);
 		*time_s += hypot(dx, dy) / f->travel_speed_mm_s;
 	}
 	if (!rc)
-		rc = bprintf(b, e, "M107 ; fan off\nM104 S0 ; nozzle off\nM140 S0 ; bed off\n"
+		rc = sink_printf(b, e, "M107 ; fan off\nM104 S0 ; nozzle off\nM140 S0 ; bed off\n"
 				   "M84 ; motors off\nM73 P100 R0\n");
 	return rc;
 }
@@ -667,11 +647,11 @@ static int end_code(struct gc_writer *w, struct buf *b, double *time_s, struct e
 static const char b64[] = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
 
 /* "; thumbnail begin WxH LEN" + base64 in 78-character comment lines. */
-static int thumbnail_block(const struct buf *png, int wpx, int hpx, struct buf *out,
+static int thumbnail_block(const struct buf *png, int wpx, int hpx, struct sink *out,
 			   struct err *e)
 {
 	size_t n = png->len, len = 4 * ((n + 2) / 3), col = 0;
-	int rc = bprintf(out, e, ";\n; thumbnail begin %dx%d %zu\n", wpx, hpx, len);
+	int rc = sink_printf(out, e, ";\n; thumbnail begin %dx%d %zu\n", wpx, hpx, len);
 
 	for (size_t i = 0; !rc && i < n; i += 3) {
 		unsigned v = (unsigned)png->data[i] << 16;
@@ -684,24 +664,22 @@ static int thumbnail_block(const struct buf *png, int wpx, int hpx, struct buf *
 		q[1] = b64[v >> 12 & 63];
 		q[2] = i + 1 < n ? b64[v >> 6 & 63] : '=';
 		q[3] = i + 2 < n ? b64[v & 63] : '=';
-		if (col == 0 && buf_append(out, "; ", 2))
-			rc = ERR_NOMEM;
-		if (!rc && buf_append(out, q, 4))
-			rc = ERR_NOMEM;
+		if (col == 0)
+			rc = sink_write(out, "; ", 2, e);
+		if (!rc)
+			rc = sink_write(out, q, 4, e);
 		col += 4;
 		if (!rc && (col >= 76 || i + 3 >= n)) {
-			rc = buf_append(out, "\n", 1) ? ERR_NOMEM : 0;
+			rc = sink_write(out, "\n", 1, e);
 			col = 0;
 		}
 	}
-	if (rc == ERR_NOMEM)
-		return ERR_SET(e, ERR_NOMEM, "out of memory encoding a thumbnail");
-	return rc ? rc : bprintf(out, e, "; thumbnail end\n;\n");
+	return rc ? rc : sink_printf(out, e, "; thumbnail end\n;\n");
 }
 
 /* Thumbnails for host UIs (Moonraker/Mainsail read 32x32 and 300x300).
  * Rendering problems other than memory leave the thumbnail out. */
-static int thumbnails(const struct gc_writer *w, struct buf *out, int *count, struct err *e)
+static int thumbnails(const struct gc_writer *w, struct sink *out, int *count, struct err *e)
 {
 	static const int sizes[][2] = {{32, 32}, {300, 300}};
 	struct buf png;
@@ -733,7 +711,7 @@ static int thumbnails(const struct gc_writer *w, struct buf *out, int *count, st
 	return rc;
 }
 
-static int header(struct gc_writer *w, struct buf *b, double total_s, double filament_mm,
+static int header(struct gc_writer *w, struct sink *b, double total_s, double filament_mm,
 		  struct err *e)
 {
 	struct tm tm;
@@ -743,26 +721,26 @@ static int header(struct gc_writer *w, struct buf *b, double total_s, double fil
 
 	gmtime_r(&t, &tm);
 	strftime(when, sizeof when, "%Y-%m-%d at %H:%M:%S UTC", &tm);
-	rc = bprintf(b, e, "; generated by infilld %s on %s\n", INFILLD_VERSION, when);
+	rc = sink_printf(b, e, "; generated by infilld %s on %s\n", INFILLD_VERSION, when);
 	if (!rc)
-		rc = bprintf(b, e, ";FLAVOR:Marlin\n;TIME:%.0f\n;Filament used: %.5fm\n"
+		rc = sink_printf(b, e, ";FLAVOR:Marlin\n;TIME:%.0f\n;Filament used: %.5fm\n"
 				   ";Layer height: %s\n",
 			     total_s, filament_mm / 1000.0, mm(w->info.layer_mm));
 	if (!rc)
-		rc = bprintf(b, e, ";MINX:%s\n;MINY:%s\n;MINZ:%s\n;MAXX:%s\n;MAXY:%s\n;MAXZ:%s\n",
+		rc = sink_printf(b, e, ";MINX:%s\n;MINY:%s\n;MINZ:%s\n;MAXX:%s\n;MAXY:%s\n;MAXZ:%s\n",
 			     mm((double)w->lo_x_um / 1000), mm((double)w->lo_y_um / 1000),
 			     mm(w->first_z_mm), mm((double)w->hi_x_um / 1000),
 			     mm((double)w->hi_y_um / 1000), mm(w->last_z_mm));
 	if (!rc)
-		rc = bprintf(b, e, ";LAYER_COUNT:%d\n;TARGET_MACHINE.NAME:%s\n", w->received,
+		rc = sink_printf(b, e, ";LAYER_COUNT:%d\n;TARGET_MACHINE.NAME:%s\n", w->received,
 			     w->printer_name);
 	if (!rc)
-		rc = bprintf(b, e, "; job = %s\n; engine = %s\n", w->job_name,
+		rc = sink_printf(b, e, "; job = %s\n; engine = %s\n", w->job_name,
 			     w->engine_name[0] ? w->engine_name : "solid");
 	return rc;
 }
 
-static int footer(struct gc_writer *w, struct buf *b, double total_s, double filament_mm,
+static int footer(struct gc_writer *w, struct sink *b, double total_s, double filament_mm,
 		  struct err *e)
 {
 	const struct fdm_printer *f = &w->f;
@@ -771,25 +749,25 @@ static int footer(struct gc_writer *w, struct buf *b, double total_s, double fil
 	int rc;
 
 	duration(dur, sizeof dur, total_s);
-	rc = bprintf(b, e,
+	rc = sink_printf(b, e,
 		     "; filament used [mm] = %.2f\n; filament used [cm3] = %.2f\n"
 		     "; filament used [g] = %.2f\n; total filament used [g] = %.2f\n",
 		     filament_mm, cm3, cm3 * f->filament_density_g_cm3,
 		     cm3 * f->filament_density_g_cm3);
 	if (!rc)
-		rc = bprintf(b, e,
+		rc = sink_printf(b, e,
 			     "; estimated printing time (normal mode) = %s\n"
 			     "; total layers count = %d\n",
 			     dur, w->received);
 	if (!rc)
-		rc = bprintf(b, e,
+		rc = sink_printf(b, e,
 			     "; layer_height = %s\n; first_layer_height = %s\n"
 			     "; nozzle_diameter = %s\n; filament_diameter = %s\n"
 			     "; filament_type = %s\n; filament_density = %g\n",
 			     mm(w->info.layer_mm), mm(f->first_layer_mm), mm(f->nozzle_mm),
 			     mm(f->filament_mm), f->filament_type, f->filament_density_g_cm3);
 	if (!rc)
-		rc = bprintf(b, e,
+		rc = sink_printf(b, e,
 			     "; extrusion_width = %s\n; perimeters = %d\n; fill_density = %g%%\n"
 			     "; top_solid_layers = %d\n; bottom_solid_layers = %d\n"
 			     "; temperature = %.0f\n; bed_temperature = %.0f\n"
@@ -805,7 +783,7 @@ static int put_buf(struct sink *s, const struct buf *b, struct err *e)
 }
 
 static int metrics_out(struct gc_writer *w, struct metrics *m, double total_s,
-		       int64_t prime_units, double bytes, int nthumbs)
+		       int64_t prime_units, double bytes, int nthumbs, struct err *e)
 {
 	double area = w->gp.filament_area_mm2;
 	int64_t units = prime_units, part_units = 0;
@@ -839,13 +817,14 @@ static int metrics_out(struct gc_writer *w, struct metrics *m, double total_s,
 		snprintf(key, sizeof key, "gcode.volume_mm3.%s", tp_role_key((enum tp_role)r));
 		rc |= metrics_num(m, key, (double)w->e_units[r] / GC_E_PER_MM * area);
 	}
-	return rc ? ERR_NOMEM : 0;
+	return rc ? ERR_SET(e, ERR_NOMEM, "out of memory recording G-code metrics") : 0;
 }
 
 static int gc_close(void *state, struct metrics *m, struct err *e)
 {
 	struct gc_writer *w = state;
 	struct buf head, start, end;
+	struct sink hs, ss, es;
 	int64_t prime_units = 0, units = 0;
 	double start_s = 0, end_s = 0, total_s, filament_mm;
 	uint64_t bytes0 = w->sink->bytes;
@@ -859,28 +838,31 @@ static int gc_close(void *state, struct metrics *m, struct err *e)
 	buf_init(&head);
 	buf_init(&start);
 	buf_init(&end);
+	sink_init_buf(&hs, &head);
+	sink_init_buf(&ss, &start);
+	sink_init_buf(&es, &end);
 	/* Plan the last top_layers layers (nothing above them). */
 	for (int j = w->submitted; !rc && j < w->received; j++)
 		rc = submit(w, j, e);
 	if (!rc)
 		rc = pipeline_finish(w->pl, e);
+	/* Every total is known now: header, start, body, end, footer. */
 	if (!rc)
-		rc = start_code(w, &start, &prime_units, &start_s, e);
+		rc = start_code(w, &ss, &prime_units, &start_s, e);
 	if (!rc)
-		rc = end_code(w, &end, &end_s, e);
+		rc = end_code(w, &es, &end_s, e);
 	for (int r = 0; r < TP_ROLE_COUNT; r++)
 		units += w->e_units[r];
 	units += prime_units;
 	filament_mm = (double)units / GC_E_PER_MM;
 	total_s = start_s + w->elapsed_s + end_s;
 	if (!rc)
-		rc = header(w, &head, total_s, filament_mm, e);
+		rc = header(w, &hs, total_s, filament_mm, e);
 	if (!rc)
-		rc = thumbnails(w, &head, &nthumbs, e);
+		rc = thumbnails(w, &hs, &nthumbs, e);
 	if (!rc) {
 		char line[32];
-		size_t n = gc_m73(line, 0, total_s);
-		rc = buf_append(&head, line, n) ? ERR_SET(e, ERR_NOMEM, "out of memory") : 0;
+		rc = sink_write(&hs, line, gc_m73(line, 0, total_s), e);
 	}
 	if (!rc)
 		rc = put_buf(w->sink, &head, e);
@@ -892,14 +874,12 @@ static int gc_close(void *state, struct metrics *m, struct err *e)
 		rc = put_buf(w->sink, &end, e);
 	buf_reset(&head);
 	if (!rc)
-		rc = footer(w, &head, total_s, filament_mm, e);
+		rc = footer(w, &hs, total_s, filament_mm, e);
 	if (!rc)
 		rc = put_buf(w->sink, &head, e);
 	if (!rc && m)
 		rc = metrics_out(w, m, total_s, prime_units, (double)(w->sink->bytes - bytes0),
-				 nthumbs);
-	if (rc == ERR_NOMEM && e && !e->msg[0])
-		ERR_SET(e, ERR_NOMEM, "out of memory recording G-code metrics");
+				 nthumbs, e);
 	buf_fini(&head);
 	buf_fini(&start);
 	buf_fini(&end);

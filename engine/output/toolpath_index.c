@@ -22,13 +22,19 @@ static int orient(struct pt2 a, struct pt2 b, struct pt2 q)
 	return (c > 0) - (c < 0);
 }
 
-static int cell_of(int64_t v, int64_t lo, int64_t cell, int n)
+void tp_grid_size(struct pt2 lo, struct pt2 hi, size_t n, double per_cell, int64_t min_cell_nm,
+		  int64_t *cell_nm, int *nx, int *ny)
 {
-	int64_t k = (v - lo) / cell;
-	if (v < lo)
-		k = -1;
-	return k < 0 ? 0 : k >= n ? n - 1 : (int)k;
+	double w = (double)(hi.x - lo.x) + 1, h = (double)(hi.y - lo.y) + 1;
+	double cell = sqrt(per_cell * w * h / (double)(n ? n : 1));
+
+	if (cell < (double)min_cell_nm)
+		cell = (double)min_cell_nm;
+	*cell_nm = (int64_t)cell;
+	*nx = (int)(w / cell) + 1;
+	*ny = (int)(h / cell) + 1;
 }
+
 
 /* Cells [x0, x1] of row band y covered by segment ab clipped to the band
  * [ylo, yhi] (inclusive, so edges on a cell border land in both cells). */
@@ -60,8 +66,8 @@ static void row_span(const struct tp_index *ix, struct pt2 a, struct pt2 b, int6
 		xa = xb;
 		xb = t;
 	}
-	*x0 = cell_of((int64_t)floor(xa) - 1, ix->lo.x, ix->cell_nm, ix->nx);
-	*x1 = cell_of((int64_t)ceil(xb) + 1, ix->lo.x, ix->cell_nm, ix->nx);
+	*x0 = tp_cell_of((int64_t)floor(xa) - 1, ix->lo.x, ix->cell_nm, ix->nx);
+	*x1 = tp_cell_of((int64_t)ceil(xb) + 1, ix->lo.x, ix->cell_nm, ix->nx);
 }
 
 /* Call visit(cell) for every cell segment ab passes through. */
@@ -69,8 +75,8 @@ static void row_span(const struct tp_index *ix, struct pt2 a, struct pt2 b, int6
 	do {                                                                                    \
 		int64_t ymin_ = (a).y < (b).y ? (a).y : (b).y;                                 \
 		int64_t ymax_ = (a).y < (b).y ? (b).y : (a).y;                                 \
-		int r0_ = cell_of(ymin_ - 1, (ix)->lo.y, (ix)->cell_nm, (ix)->ny);             \
-		int r1_ = cell_of(ymax_ + 1, (ix)->lo.y, (ix)->cell_nm, (ix)->ny);             \
+		int r0_ = tp_cell_of(ymin_ - 1, (ix)->lo.y, (ix)->cell_nm, (ix)->ny);             \
+		int r1_ = tp_cell_of(ymax_ + 1, (ix)->lo.y, (ix)->cell_nm, (ix)->ny);             \
 		for (int r_ = r0_; r_ <= r1_; r_++) {                                          \
 			int64_t blo_ = (ix)->lo.y + (int64_t)r_ * (ix)->cell_nm - 1;           \
 			int64_t bhi_ = blo_ + (ix)->cell_nm + 2;                               \
@@ -95,7 +101,6 @@ int tp_index_build(struct tp_index *ix, const struct paths *ps, struct err *e)
 {
 	struct pt2 lo, hi;
 	size_t n = 0, k = 0, ncell;
-	double w, h, cell;
 	uint32_t *fill = NULL;
 
 	memset(ix, 0, sizeof *ix);
@@ -124,14 +129,7 @@ int tp_index_build(struct tp_index *ix, const struct paths *ps, struct err *e)
 	}
 	ix->nedges = n;
 	/* About one edge per cell, at least 0.2 mm cells. */
-	w = (double)(hi.x - lo.x) + 1;
-	h = (double)(hi.y - lo.y) + 1;
-	cell = sqrt(w * h / (double)n);
-	if (cell < 200000)
-		cell = 200000;
-	ix->cell_nm = (int64_t)cell;
-	ix->nx = (int)(w / cell) + 1;
-	ix->ny = (int)(h / cell) + 1;
+	tp_grid_size(lo, hi, n, 1.0, 200000, &ix->cell_nm, &ix->nx, &ix->ny);
 	ix->lo = lo;
 	ncell = (size_t)ix->nx * (size_t)ix->ny;
 	ix->start = mem_calloc(ncell + 1, sizeof *ix->start);
@@ -219,27 +217,20 @@ int tp_index_inside(struct tp_index *ix, struct pt2 q)
 	    q.x > ix->lo.x + (int64_t)ix->nx * ix->cell_nm)
 		return 0;
 	s = next_query(ix);
-	r = cell_of(q.y, ix->lo.y, ix->cell_nm, ix->ny);
+	r = tp_cell_of(q.y, ix->lo.y, ix->cell_nm, ix->ny);
 	/* Ray towards +x: every edge crossing it at x >= q.x lies in a cell of
 	 * row r at or right of q's column. */
-	for (int c = cell_of(q.x, ix->lo.x, ix->cell_nm, ix->nx); c < ix->nx; c++) {
+	for (int c = tp_cell_of(q.x, ix->lo.x, ix->cell_nm, ix->nx); c < ix->nx; c++) {
 		size_t cidx = (size_t)r * (size_t)ix->nx + (size_t)c;
 		for (uint32_t t = ix->start[cidx]; t < ix->start[cidx + 1]; t++) {
 			uint32_t id = ix->items[t];
-			struct pt2 a = ix->edges[id].a, b = ix->edges[id].b;
+			int on = 0;
 			if (ix->stamp[id] == s)
 				continue;
 			ix->stamp[id] = s;
-			if (orient(a, b, q) == 0 && q.x >= (a.x < b.x ? a.x : b.x) &&
-			    q.x <= (a.x > b.x ? a.x : b.x) && q.y >= (a.y < b.y ? a.y : b.y) &&
-			    q.y <= (a.y > b.y ? a.y : b.y))
+			w += path_edge_winding(ix->edges[id].a, ix->edges[id].b, q, &on);
+			if (on)
 				return 1;
-			if (a.y <= q.y) {
-				if (b.y > q.y && orient(a, b, q) > 0)
-					w++;
-			} else if (b.y <= q.y && orient(a, b, q) < 0) {
-				w--;
-			}
 		}
 	}
 	return w != 0;
@@ -276,10 +267,10 @@ int tp_index_nearest(struct tp_index *ix, struct pt2 p, int64_t max_nm, struct p
 	if (ix->nedges == 0)
 		return 0;
 	s = next_query(ix);
-	c0 = cell_of(p.x - max_nm, ix->lo.x, ix->cell_nm, ix->nx);
-	c1 = cell_of(p.x + max_nm, ix->lo.x, ix->cell_nm, ix->nx);
-	r0 = cell_of(p.y - max_nm, ix->lo.y, ix->cell_nm, ix->ny);
-	r1 = cell_of(p.y + max_nm, ix->lo.y, ix->cell_nm, ix->ny);
+	c0 = tp_cell_of(p.x - max_nm, ix->lo.x, ix->cell_nm, ix->nx);
+	c1 = tp_cell_of(p.x + max_nm, ix->lo.x, ix->cell_nm, ix->nx);
+	r0 = tp_cell_of(p.y - max_nm, ix->lo.y, ix->cell_nm, ix->ny);
+	r1 = tp_cell_of(p.y + max_nm, ix->lo.y, ix->cell_nm, ix->ny);
 	for (int r = r0; r <= r1; r++) {
 		for (int c = c0; c <= c1; c++) {
 			size_t cidx = (size_t)r * (size_t)ix->nx + (size_t)c;

@@ -54,6 +54,21 @@ int tp_fill_lines(const struct paths *area, double angle_rad, int64_t spacing_nm
 int tp_order(const struct tp_config *c, const struct tp_layer_in *in, const struct tp_plan *items,
 	     const struct tp_areas *areas, struct tp_plan *out, struct err *e);
 
+/* ---- Uniform grids (edge index, nearest-neighbour search) ------------ */
+
+/* Cell size and counts for n items spread over [lo, hi]: about per_cell
+ * items per cell, cells no smaller than min_cell_nm. */
+void tp_grid_size(struct pt2 lo, struct pt2 hi, size_t n, double per_cell, int64_t min_cell_nm,
+		  int64_t *cell_nm, int *nx, int *ny);
+
+/* Cell index of coordinate v on an axis starting at lo, clamped to
+ * [0, n). */
+static inline int tp_cell_of(int64_t v, int64_t lo, int64_t cell, int n)
+{
+	int64_t k = v < lo ? -1 : (v - lo) / cell;
+	return k < 0 ? 0 : k >= n ? n - 1 : (int)k;
+}
+
 /* ---- Edge grid: segment and point queries against a region ---------- */
 
 struct tp_edge {

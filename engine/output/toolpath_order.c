@@ -75,18 +75,12 @@ static int nn_add(struct nn *g, struct pt2 p, uint32_t item, uint32_t tag)
 	return 0;
 }
 
-static int cellc(int64_t v, int64_t lo, int64_t cell, int n)
-{
-	int64_t k = v < lo ? -1 : (v - lo) / cell;
-	return k < 0 ? 0 : k >= n ? n - 1 : (int)k;
-}
 
 /* Bucket the candidates: about two per cell. */
 static int nn_build(struct nn *g)
 {
 	struct pt2 lo, hi;
 	size_t ncell;
-	double w, h, cell;
 	void *a;
 
 	if (g->nc == 0)
@@ -99,14 +93,7 @@ static int nn_build(struct nn *g)
 		if (p.x > hi.x) hi.x = p.x;
 		if (p.y > hi.y) hi.y = p.y;
 	}
-	w = (double)(hi.x - lo.x) + 1;
-	h = (double)(hi.y - lo.y) + 1;
-	cell = sqrt(2.0 * w * h / (double)g->nc);
-	if (cell < 50000)
-		cell = 50000;
-	g->cell = (int64_t)cell;
-	g->nx = (int)(w / cell) + 1;
-	g->ny = (int)(h / cell) + 1;
+	tp_grid_size(lo, hi, g->nc, 2.0, 50000, &g->cell, &g->nx, &g->ny);
 	g->lo = lo;
 	ncell = (size_t)g->nx * (size_t)g->ny;
 	a = g->cell_start;
@@ -124,8 +111,8 @@ static int nn_build(struct nn *g)
 	memset(g->cell_n, 0, ncell * sizeof *g->cell_n);
 	for (size_t i = 0; i < g->nc; i++) {
 		struct pt2 p = g->c[i].p;
-		size_t k = (size_t)cellc(p.y, lo.y, g->cell, g->ny) * (size_t)g->nx +
-			   (size_t)cellc(p.x, lo.x, g->cell, g->nx);
+		size_t k = (size_t)tp_cell_of(p.y, lo.y, g->cell, g->ny) * (size_t)g->nx +
+			   (size_t)tp_cell_of(p.x, lo.x, g->cell, g->nx);
 		g->cell_n[k]++;
 	}
 	g->cell_start[0] = 0;
@@ -135,8 +122,8 @@ static int nn_build(struct nn *g)
 	}
 	for (size_t i = 0; i < g->nc; i++) {
 		struct pt2 p = g->c[i].p;
-		size_t k = (size_t)cellc(p.y, lo.y, g->cell, g->ny) * (size_t)g->nx +
-			   (size_t)cellc(p.x, lo.x, g->cell, g->nx);
+		size_t k = (size_t)tp_cell_of(p.y, lo.y, g->cell, g->ny) * (size_t)g->nx +
+			   (size_t)tp_cell_of(p.x, lo.x, g->cell, g->nx);
 		g->slot[g->cell_start[k] + g->cell_n[k]++] = (uint32_t)i;
 	}
 	return 0;
@@ -151,8 +138,8 @@ static long nn_nearest(struct nn *g, struct pt2 p)
 
 	if (g->alive == 0 || g->nc == 0)
 		return -1;
-	cx = cellc(p.x, g->lo.x, g->cell, g->nx);
-	cy = cellc(p.y, g->lo.y, g->cell, g->ny);
+	cx = tp_cell_of(p.x, g->lo.x, g->cell, g->nx);
+	cy = tp_cell_of(p.y, g->lo.y, g->cell, g->ny);
 	for (int r = 0;; r++) {
 		int x0 = cx - r, x1 = cx + r, y0 = cy - r, y1 = cy + r;
 		double bound;
