@@ -39,7 +39,8 @@ Tolerances (defaults, each can be changed on the command line):
 
 Usage as a program:
   gcodecheck.py FILE.gcode [--regions R.json | --mesh M.stl [--mesh-scale S]
-      [--mesh-translate X,Y,Z]] [--summary OUT.txt] [--bed X,Y] [--quiet]
+      [--mesh-up z|y] [--mesh-center X,Y] [--mesh-translate X,Y,Z]]
+      [--summary OUT.txt] [--bed X,Y] [--quiet]
 Exit status 0 when every check passes, 1 when some fail, 2 on bad usage.
 
 Region JSON: {"layers": [{"from": 0, "to": 9, "shapes": [SHAPE, ...]}, ...]}
@@ -223,32 +224,23 @@ def read_mesh(path):
         data = f.read()
     low = path.lower()
     if low.endswith(".off"):
-        toks = data.decode("ascii", "replace").split("\n")
-        words = []
-        for line in toks:
-            line = line.split("#", 1)[0].strip()
+        lines = []
+        for line in data.decode("ascii", "replace").split("\n"):
+            line = line.split("#", 1)[0].split()
             if line:
-                words.extend(line.split())
-        if not words or not words[0].endswith("OFF"):
-            raise ValueError("not an OFF file")
-        i = 1
-        if words[0] != "OFF":
-            words[0] = words[0][:-3]
-            i = 0 if words[0] else 1
-        nv, nf = int(words[i]), int(words[i + 1])
-        i += 3
-        verts = []
-        for _ in range(nv):
-            verts.append((float(words[i]), float(words[i + 1]), float(words[i + 2])))
-            i += 3
+                lines.append(line)
+        if not lines or not lines[0][0].endswith("OFF"):
+            raise ValueError("%s: not an OFF file" % path)
+        head = lines[0][1:] if len(lines[0]) > 1 else lines[1]
+        first = 1 if len(lines[0]) > 1 else 2
+        nv, nf = int(head[0]), int(head[1])
+        verts = [tuple(float(v) for v in ln[:3]) for ln in lines[first:first + nv]]
         tris = []
-        for _ in range(nf):
-            k = int(words[i])
-            idx = [int(w) for w in words[i + 1:i + 1 + k]]
-            i += 1 + k
+        for ln in lines[first + nv:first + nv + nf]:
+            k = int(ln[0])
+            idx = [int(w) for w in ln[1:1 + k]]
             for j in range(1, k - 1):  # fan
-                a, b, c = verts[idx[0]], verts[idx[j]], verts[idx[j + 1]]
-                tris.append(a + b + c)
+                tris.append(verts[idx[0]] + verts[idx[j]] + verts[idx[j + 1]])
         return tris
     if len(data) >= 84:
         n = struct.unpack_from("<I", data, 80)[0]
@@ -265,14 +257,33 @@ def read_mesh(path):
 
 
 class MeshRegions:
-    """Slices of a mesh (after x' = s x + t) at each layer's mid height."""
+    """Slices of a mesh placed in the printer frame: p' = s R p + t, where R
+    turns the file's up axis into +z (up="y": a +90 degree turn about x,
+    (x, y, z) -> (x, -z, y)), then, when center=(X, Y) is given, shifted so
+    the bounding box is centred at X, Y in the bed plane and rests on z = 0
+    (the placement infilld documents for jobs; repeated here independently)."""
 
-    def __init__(self, path, scale=1.0, translate=(0.0, 0.0, 0.0)):
+    def __init__(self, path, scale=1.0, translate=(0.0, 0.0, 0.0), up="z", center=None):
         tris = read_mesh(path)
-        tx, ty, tz = translate
-        self.tris = []
+
+        def turn(x, y, z):
+            return (x, -z, y) if up == "y" else (x, y, z)
+        pts = []
         for t in tris:
-            self.tris.append(tuple(t[k] * scale + (tx, ty, tz)[k % 3] for k in range(9)))
+            for k in range(3):
+                x, y, z = turn(t[3 * k], t[3 * k + 1], t[3 * k + 2])
+                pts.append((x * scale, y * scale, z * scale))
+        tx, ty, tz = translate
+        if center is not None and pts:
+            lo = [min(p[a] for p in pts) for a in range(3)]
+            hi = [max(p[a] for p in pts) for a in range(3)]
+            tx += center[0] - (lo[0] + hi[0]) / 2
+            ty += center[1] - (lo[1] + hi[1]) / 2
+            tz += -lo[2]
+        self.tris = []
+        for i in range(0, len(pts), 3):
+            self.tris.append(tuple(c + (tx, ty, tz)[a] for p in pts[i:i + 3]
+                                   for a, c in enumerate(p)))
         self.tris.sort(key=lambda t: min(t[2], t[5], t[8]))
         self.cache = {}
 
@@ -640,6 +651,8 @@ def main(argv):
     ap.add_argument("--mesh")
     ap.add_argument("--mesh-scale", type=float, default=1.0)
     ap.add_argument("--mesh-translate", default="0,0,0")
+    ap.add_argument("--mesh-up", choices=("z", "y"), default="z")
+    ap.add_argument("--mesh-center", help="X,Y: centre the mesh there, resting on z = 0")
     ap.add_argument("--tol", type=float, default=0.02)
     ap.add_argument("--e-rel", type=float, default=0.005)
     ap.add_argument("--e-abs", type=float, default=2e-5)
@@ -655,8 +668,10 @@ def main(argv):
             with open(a.regions) as f:
                 regions = AnalyticRegions(json.load(f))
         elif a.mesh:
+            center = tuple(float(v) for v in a.mesh_center.split(",")) if a.mesh_center else None
             regions = MeshRegions(a.mesh, a.mesh_scale,
-                                  tuple(float(v) for v in a.mesh_translate.split(",")))
+                                  tuple(float(v) for v in a.mesh_translate.split(",")),
+                                  a.mesh_up, center)
         with open(a.gcode, encoding="ascii", errors="replace") as f:
             text = f.read()
     except (OSError, ValueError, KeyError) as exc:
