@@ -55,7 +55,9 @@ must lie inside adds: build overlapping shapes as one polygon).  Circles are
 replaced by polygons conservatively (adds inscribed, holes circumscribed, with
 at most 0.1 um deviation).
 
-Used as a module: check_text(text, regions=None, **opts) -> Report.
+Used as a module: check_file(path, mesh=None, regions=None, ...) -> dict
+(raises GcodeCheckError on a failed check), or check_text(text, regions,
+**opts) -> Report with regions from AnalyticRegions or MeshRegions.
 """
 
 import json
@@ -641,6 +643,54 @@ def check_extrusion(rep, no, layer, layers, x, y, nx, ny, nz, de, width, role, f
         rep.fail("containment", no, "%s segment (%.3f,%.3f)-(%.3f,%.3f) of width %.3f is %.4f mm "
                  "from layer %d's outline (needs %.4f)" % (role, x, y, nx, ny, width, c, layer,
                                                          need))
+
+
+class GcodeCheckError(AssertionError):
+    """Raised by check_file() when a check fails; .report holds the details."""
+
+    def __init__(self, report):
+        self.report = report
+        super().__init__("G-code check failed: " + "; ".join(
+            "line %d: %s" % (ln, msg) for ln, msg in report["errors"][:5]))
+
+
+def check_file(path, mesh=None, regions=None, raise_on_error=True, mesh_scale=1.0,
+               mesh_translate=(0.0, 0.0, 0.0), mesh_up="z", mesh_center=None, **opts):
+    """Check a G-code file.  mesh: an STL/OFF path already in the printer
+    frame (or placed with mesh_scale/mesh_up/mesh_center/mesh_translate, see
+    MeshRegions); regions: a region JSON path or dict.  Returns a dict: every
+    statistic of the summary plus "ok", "errors" [(line, message)],
+    "error_counts", "layers", "containment_violations" and
+    "extruded_volume_mm3" (all E times the filament cross-section, as the
+    writer's material_volume_mm3).  Raises GcodeCheckError when a check
+    fails, unless raise_on_error is false.  opts: check_text()'s keywords."""
+    reg = None
+    if regions is not None:
+        if isinstance(regions, str):
+            with open(regions) as f:
+                regions = json.load(f)
+        reg = AnalyticRegions(regions)
+    elif mesh is not None:
+        reg = MeshRegions(mesh, mesh_scale, mesh_translate, mesh_up, mesh_center)
+    with open(path, encoding="ascii", errors="replace") as f:
+        text = f.read()
+    rep = check_text(text, reg, **opts)
+    out = dict(rep.stats)
+    fd = opts.get("filament_diameter")
+    if fd is None:
+        m = re.search(r"^; filament_diameter = ([0-9.]+)$", text[-20000:], re.M)
+        fd = float(m.group(1)) if m else 1.75
+    out.update({
+        "ok": rep.ok,
+        "errors": list(rep.errors),
+        "error_counts": dict(rep.counts),
+        "layers": int(rep.stats.get("layers", 0)),
+        "containment_violations": rep.counts.get("containment", 0),
+        "extruded_volume_mm3": rep.stats.get("extruded_e_mm", 0.0) * math.pi * fd * fd / 4,
+    })
+    if raise_on_error and not rep.ok:
+        raise GcodeCheckError(out)
+    return out
 
 
 def main(argv):
