@@ -54,7 +54,7 @@ DB_OBJ := $(call obj,$(DB_SRC))
 SERVICE_OBJ := $(call obj,$(SERVICE_SRC))
 TEST_SUPPORT_OBJ := $(call obj,$(TEST_SUPPORT_SRC))
 UNIT_BIN := $(patsubst tests/unit/%.c,$(BUILD)/tests/unit/%,$(UNIT_SRC))
-BENCH_SRC := $(sort $(wildcard tests/bench/*.c))
+BENCH_SRC := $(sort $(wildcard tests/bench/bench_*.c))
 BENCH_BIN := $(patsubst tests/bench/%.c,$(BUILD)/tests/bench/%,$(BENCH_SRC))
 
 LIBS := $(BUILD)/libapi.a $(BUILD)/libdb.a $(BUILD)/libengine.a
@@ -66,7 +66,7 @@ all: build
 deps:
 	@deploy/deps.sh
 
-build: $(BIN) $(UNIT_BIN)
+build: $(BIN) $(UNIT_BIN) $(BENCH_BIN)
 
 # V=1 shows the full commands.
 Q := $(if $(filter 1,$(V)),,@)
@@ -100,13 +100,10 @@ $(BUILD)/tests/unit/%: tests/unit/%.c $(TEST_SUPPORT_OBJ) $(LIBS)
 	$(Q)$(CC) $(CFLAGS) -Itests -c $< -o $@.o
 	$(Q)$(CXX) $(LDFLAGS) -o $@ $@.o $(TEST_SUPPORT_OBJ) $(LIBS) $(LDLIBS)
 
-# Benchmark programs (tests/bench/*.c), run by their tests/bench/*.sh.
-$(BUILD)/tests/bench/%: tests/bench/%.c $(TEST_SUPPORT_OBJ) $(LIBS)
+$(BUILD)/tests/bench/%: tests/bench/%.c $(LIBS)
 	@mkdir -p $(@D)
-	@$(if $(Q),echo "  BENCH   $<")
-	$(Q)$(CC) $(CFLAGS) -Itests -c $< -o $@.o
-	$(Q)$(CXX) $(LDFLAGS) -o $@ $@.o $(TEST_SUPPORT_OBJ) $(LIBS) $(LDLIBS)
-benches: $(BENCH_BIN)
+	$(CC) $(CFLAGS) -Itests -c $< -o $@.o
+	$(CXX) $(LDFLAGS) -o $@ $@.o $(LIBS) $(LDLIBS)
 
 # The README's two commands.
 run: deps
@@ -120,6 +117,7 @@ test: deps
 
 # Only the unit tests (fast inner loop while developing).
 units: $(UNIT_BIN)
+benches: $(BENCH_BIN)
 test-unit: units
 	@tests/run.sh $(BUILD) $(if $(filter 1,$(SANITIZE)),sanitize) unit
 
@@ -139,11 +137,11 @@ fuzz: deps
 	@tests/fuzz/run.sh $(FUZZ_SECONDS)
 
 bench: deps
-	@$(MAKE) --no-print-directory -j$(NPROC) build benches
+	@$(MAKE) --no-print-directory -j$(NPROC) build
 	@tests/bench/run.sh $(BUILD)
 
 bench-large: deps
-	@$(MAKE) --no-print-directory -j$(NPROC) build benches
+	@$(MAKE) --no-print-directory -j$(NPROC) build
 	@tests/bench/run.sh $(BUILD) large
 
 check-style:

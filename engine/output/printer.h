@@ -63,7 +63,21 @@ struct fdm_printer {
 	double min_travel_retract_mm;   /* shorter travels do not retract */
 	char filament_type[16];         /* "PLA" */
 	double filament_density_g_cm3;
+	/* Per-feature speeds (print_speed_mm_s covers gap fill and skirt). */
+	double external_perimeter_speed_mm_s, solid_infill_speed_mm_s;
+	double top_solid_speed_mm_s, bridge_speed_mm_s, z_speed_mm_s;
+	/* Motion model for the time estimate (docs/gcode.md). */
+	double accel_mm_s2, jerk_mm_s;
+	/* Cooling: fan from layer 1 on; slow down layers faster than this. */
+	double fan_pct, min_layer_time_s, min_print_speed_mm_s;
+	int skirt_loops;
+	double skirt_distance_mm;
+	int external_perimeter_first;   /* 0: inner loops first (default) */
+	int seam;                       /* enum fdm_seam */
+	int klipper;                    /* emit SET_PRINT_STATS_INFO */
 };
+
+enum fdm_seam { FDM_SEAM_NEAREST, FDM_SEAM_REAR };
 
 struct printer {
 	char name[32]; /* profile name */

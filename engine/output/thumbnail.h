@@ -1,4 +1,4 @@
-/* thumbnail.h - preview images for printer UIs (SL1 thumbnail/thumbnail<W>x<H>.png,
+/* thumbnail.h - preview images for printer UIs (SL1 thumbnail/thumbnailWxH.png,
  * G-code "; thumbnail begin" blocks).
  *
  * Rendered in software from the placed part: a fixed three-quarter view
