@@ -5,14 +5,18 @@
  *
  *   bench_sl1 [FRAMES] [OUT_DIR] [writer]   ("writer": skip the encoder table)
  *
- * Frames are rendered by the "engine" straight into the writer's images
- * (spans with anti-aliased ends), as the lattice engine does, so the
- * figures are the writer's cost: encode + measure + zip + sink.
+ * Two ways in: "raster" frames are rendered by the "engine" straight
+ * into the writer's images (spans with anti-aliased ends), as the lattice
+ * engine does, so the figures are the writer's cost (encode + measure +
+ * zip + sink); "region" frames are polygons (a 50 mm disk, 720 vertices)
+ * the writer rasterises with slice_rasterize on its workers, as for a
+ * sliced mesh (rasterise + encode + measure + zip + sink).
  */
 #include "engine/core/err.h"
 #include "engine/core/metrics.h"
 #include "engine/core/progress.h"
 #include "engine/core/sink.h"
+#include "engine/geom/path.h"
 #include "engine/output/png_encode.h"
 #include "engine/output/printer_kinds.h"
 #include "engine/output/writer.h"
@@ -68,7 +72,25 @@ static double peak_rss_mb(void)
 	return ru.ru_maxrss / 1024.0;
 }
 
-static int run_writer(int frames, int threads, const char *path)
+/* A CCW polygon approximating a disk of radius r_mm at (cx, cy), in nm. */
+static int disk_region(struct paths *ps, double cx, double cy, double r_mm, int n)
+{
+	struct path *p;
+
+	paths_clear(ps);
+	p = paths_add(ps);
+	if (!p)
+		return -1;
+	for (int i = 0; i < n; i++) {
+		double a = 2 * M_PI * i / n;
+		struct pt2 q = {geom_mm_to_nm(cx + r_mm * cos(a)), geom_mm_to_nm(cy + r_mm * sin(a))};
+		if (path_push(p, q))
+			return -1;
+	}
+	return 0;
+}
+
+static int run_writer(int frames, int threads, int region, const char *path)
 {
 	const struct printer *p = &printer_resin_profiles[0]; /* sl1 */
 	const struct writer_ops *ops = &sl1_writer_ops;
@@ -115,8 +137,18 @@ static int run_writer(int frames, int threads, const char *path)
 			break;
 		raster_map_apply(ops->raster_map(st), 60.48, 34.02, &cx, &cy);
 		rpx = DISK_R_MM / 0.04725 * (1.0 - 0.2 * (k % 100) / 100.0); /* varying size */
-		render_disk(ly.raster, cx, cy, rpx);
-		ly.raster_ready = 1;
+		if (region) {
+			paths_init(&ly.region);
+			if (disk_region(&ly.region, 60.48, 34.02, rpx * 0.04725, 720)) {
+				paths_fini(&ly.region);
+				raster_free(ly.raster);
+				rc = ERR_SET(&e, ERR_NOMEM, "out of memory");
+				break;
+			}
+		} else {
+			render_disk(ly.raster, cx, cy, rpx);
+			ly.raster_ready = 1;
+		}
 		rc = ops->layer(st, &ly, &e);
 	}
 	if (!rc)
@@ -131,9 +163,9 @@ static int run_writer(int frames, int threads, const char *path)
 		metrics_fini(&m);
 		return 1;
 	}
-	printf("writer  threads %d: %d frames in %.2f s = %.0f layers/s, %.0f Mpx/s, "
+	printf("writer %-6s threads %d: %d frames in %.2f s = %.0f layers/s, %.0f Mpx/s, "
 	       "CPU %.2f ms/layer, archive %.1f MB (%.1f KB/layer), peak RSS %.0f MB\n",
-	       threads, frames, t1 - t0, frames / (t1 - t0),
+	       region ? "region" : "raster", threads, frames, t1 - t0, frames / (t1 - t0),
 	       frames * 1440.0 * 2560.0 / (t1 - t0) / 1e6, (c1 - c0) / frames * 1e3,
 	       metrics_get(&m, "sl1.archive_bytes")->ival / 1e6,
 	       metrics_get(&m, "sl1.png_bytes")->ival / 1e3 / frames, peak_rss_mb());
@@ -245,8 +277,9 @@ int main(int argc, char **argv)
 	if (!(argc > 3 && strcmp(argv[3], "writer") == 0))
 		encoders(200);
 	snprintf(path, sizeof path, "%s/bench_sl1.sl1", dir);
-	rc |= run_writer(frames, 1, path);
-	rc |= run_writer(frames, 2, path);
+	for (int region = 0; region <= 1; region++)
+		for (int threads = 1; threads <= 2; threads++)
+			rc |= run_writer(frames, threads, region, path);
 	remove(path);
 	return rc;
 }

@@ -11,18 +11,6 @@
 #include "engine/slice/slice.h"
 #include "sl1_fixture.h"
 
-/* TEMPORARY until engine/slice lands on main: these tests hand the
- * writer rendered images only, so its rasteriser is never called. */
-int slice_rasterize(const struct paths *region, const struct raster_map *map, int antialias,
-		    struct raster *r, struct err *e)
-{
-	(void)region;
-	(void)map;
-	(void)antialias;
-	(void)r;
-	return ERR_SET(e, ERR_UNSUPPORTED, "no rasteriser linked");
-}
-
 #include <malloc.h>
 #if defined(__SANITIZE_ADDRESS__)
 /* ASan's allocator statistics (libasan; gcc ships no header for it) */
@@ -70,6 +58,7 @@ struct job {
 	double box[4]; /* mm box of the shape */
 	int ss;        /* supersampling, 1 = binary */
 	int stop_after; /* > 0: abandon the archive after this many layers */
+	const struct paths *region; /* set: layers carry it, the writer rasterises */
 	uint64_t sum;   /* out: pixel sum of every layer (all equal) */
 	struct metrics m;
 };
@@ -101,9 +90,17 @@ static int write_job(const char *path, struct job *j, struct err *e)
 		rc = ops->raster_get(st, &ly.raster, e);
 		if (rc)
 			break;
-		j->sum = fixture_paint(ly.raster, ops->raster_map(st), j->shape, j->arg, j->box[0],
-				       j->box[1], j->box[2], j->box[3], j->ss);
-		ly.raster_ready = 1;
+		if (j->region) {
+			if (paths_copy(&ly.region, j->region)) {
+				raster_free(ly.raster);
+				rc = ERR_SET(e, ERR_NOMEM, "out of memory");
+				break;
+			}
+		} else {
+			j->sum = fixture_paint(ly.raster, ops->raster_map(st), j->shape, j->arg,
+					       j->box[0], j->box[1], j->box[2], j->box[3], j->ss);
+			ly.raster_ready = 1;
+		}
 		rc = ops->layer(st, &ly, e);
 	}
 	if (!rc && j->stop_after == 0)
@@ -314,6 +311,91 @@ static void test_threads_deterministic(void)
 	CHECK_EQ_INT(system(cmd), 0);
 	remove(a);
 	remove(b);
+}
+
+/* ---- regions: the writer rasterises (slice_rasterize) ---- */
+
+static void add_rect(struct paths *ps, double x0, double y0, double x1, double y1)
+{
+	struct pt2 q[4] = {{geom_mm_to_nm(x0), geom_mm_to_nm(y0)},
+			   {geom_mm_to_nm(x1), geom_mm_to_nm(y0)},
+			   {geom_mm_to_nm(x1), geom_mm_to_nm(y1)},
+			   {geom_mm_to_nm(x0), geom_mm_to_nm(y1)}};
+	paths_add_pts(ps, q, 4);
+}
+
+/* The L as a polygon (CCW): the writer's rasteriser puts it where
+ * REFERENCE.md says, with exact anti-aliased area. */
+static void test_region_orientation(void)
+{
+	const struct pt2 ell[6] = {
+		{geom_mm_to_nm(50), geom_mm_to_nm(20)}, {geom_mm_to_nm(70), geom_mm_to_nm(20)},
+		{geom_mm_to_nm(70), geom_mm_to_nm(25)}, {geom_mm_to_nm(55), geom_mm_to_nm(25)},
+		{geom_mm_to_nm(55), geom_mm_to_nm(32)}, {geom_mm_to_nm(50), geom_mm_to_nm(32)}};
+	struct paths region;
+	struct job j = {.fmt = OUT_SL1, .printer = fixture_printer("sl1"), .layers = 4,
+			.threads = 2, .layer_mm = 0.05, .box = {50, 20, 70, 32},
+			.region = &region};
+	const char *path = fixture_path("region-ell.sl1");
+	/* pixels the L touches: rows (120.96 - 70) / p .. (120.96 - 50) / p,
+	 * columns 20 / p .. 32 / p, partial ones included */
+	int r0 = (int)floor((SL1_LONG_MM - 70) / SL1_PITCH_MM);
+	int r1 = (int)ceil((SL1_LONG_MM - 50) / SL1_PITCH_MM) - 1;
+	int c0 = (int)floor(20 / SL1_PITCH_MM), c1 = (int)ceil(32 / SL1_PITCH_MM) - 1;
+	int rl = (int)((SL1_LONG_MM - 69) / SL1_PITCH_MM), cl = (int)(22 / SL1_PITCH_MM);
+	int rs = (int)((SL1_LONG_MM - 52) / SL1_PITCH_MM), cs = (int)(31 / SL1_PITCH_MM);
+	double area = 20 * 5 + 5 * 7;
+	struct err e;
+
+	paths_init(&region);
+	REQUIRE(paths_add_pts(&region, ell, 6) == 0);
+	err_clear(&e);
+	REQUIRE_OK(write_job(path, &j, &e), &e);
+	CHECK_EQ_INT(fixture_check(path,
+				   "--printer sl1 --expect-layers 4 --expect-bbox 2:%d,%d,%d,%d "
+				   "--expect-pixel 2:%d:%d:255 --expect-pixel 2:%d:%d:255 "
+				   "--expect-pixel 2:%d:%d:0 --expect-volume-mm3 %.6f --volume-rel 0.001",
+				   r0, c0, r1, c1, rl, cl, rs, cs, rl, cs, area * 0.05 * 4),
+		     0);
+	/* anti-aliased coverage: the area to within 8-bit rounding */
+	CHECK_REL(metric(&j.m, "material_volume_mm3"), area * 0.05 * 4, 2e-4);
+	metrics_fini(&j.m);
+	paths_fini(&region);
+	remove(path);
+}
+
+/* A square with a square hole, binary pixels: centre sampling gives the
+ * area to within the boundary pixels; the hole stays empty. */
+static void test_region_hole_binary(void)
+{
+	struct printer p = *fixture_printer("sl1s");
+	struct paths region;
+	struct pt2 hole[4];
+	struct job j = {.fmt = OUT_SL1S, .printer = &p, .layers = 2, .threads = 1,
+			.layer_mm = 0.05, .box = {40, 20, 80, 60}, .region = &region};
+	const char *path = fixture_path("region-hole.sl1s");
+	struct err e;
+
+	p.resin.antialias = 0;
+	paths_init(&region);
+	add_rect(&region, 40, 20, 80, 60);
+	add_rect(&region, 50, 30, 70, 50);
+	/* the hole runs clockwise */
+	for (int k = 0; k < 4; k++)
+		hole[k] = region.v[1].pts[3 - k];
+	memcpy(region.v[1].pts, hole, sizeof hole);
+	err_clear(&e);
+	REQUIRE_OK(write_job(path, &j, &e), &e);
+	CHECK_EQ_INT(fixture_check(path,
+				   "--printer sl1s --expect-layers 2 --expect-key gamma_correction=0 "
+				   "--expect-pixel 0:%d:%d:0 --expect-pixel 0:%d:%d:255 "
+				   "--expect-volume-mm3 %.6f --volume-rel 0.002",
+				   (int)((128 - 60) / 0.05), (int)(40 / 0.05), (int)((128 - 45) / 0.05),
+				   (int)(25 / 0.05), (1600.0 - 400.0) * 0.05 * 2),
+		     0);
+	metrics_fini(&j.m);
+	paths_fini(&region);
+	remove(path);
 }
 
 /* ---- memory independent of the layer count ---- */
@@ -622,6 +704,8 @@ int main(void)
 	RUN(test_sl1s);
 	RUN(test_mirror_and_landscape);
 	RUN(test_zip_stack);
+	RUN(test_region_orientation);
+	RUN(test_region_hole_binary);
 	RUN(test_threads_deterministic);
 	RUN(test_memory_independent_of_layers);
 	RUN(test_disk_full);

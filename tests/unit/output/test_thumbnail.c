@@ -18,18 +18,6 @@
 
 #include <png.h>
 
-/* TEMPORARY until engine/slice lands on main: these tests feed the
- * accumulator rasters only, so its region path is never called. */
-int slice_rasterize(const struct paths *region, const struct raster_map *map, int antialias,
-		    struct raster *r, struct err *e)
-{
-	(void)region;
-	(void)map;
-	(void)antialias;
-	(void)r;
-	return ERR_SET(e, ERR_UNSUPPORTED, "no rasteriser linked");
-}
-
 /* Boxes as a triangle soup (outward, CCW seen from outside). */
 struct soup {
 	struct vec3 v[8 * 4];
@@ -264,6 +252,52 @@ static void test_layers_match_mesh(void)
 	raster_free(r);
 }
 
+/* Layers given as regions (FDM jobs, engines without pixels) reduce to
+ * the same grid as their rasters. */
+static void test_region_layers(void)
+{
+	struct box3 box = {{50, 20, 0}, {70, 40, 10}};
+	struct raster_map map = {{{10, 0}, {0, 10}}, {0, 0}};
+	struct thumb_acc *from_region, *from_raster;
+	struct raster *r = raster_new(1000, 600);
+	struct pt2 sq[4] = {{geom_mm_to_nm(50), geom_mm_to_nm(20)},
+			    {geom_mm_to_nm(70), geom_mm_to_nm(20)},
+			    {geom_mm_to_nm(70), geom_mm_to_nm(40)},
+			    {geom_mm_to_nm(50), geom_mm_to_nm(40)}};
+	struct buf a, b;
+	struct err e;
+
+	REQUIRE(r);
+	for (int y = 200; y < 400; y++)
+		memset(r->px + (size_t)y * r->stride + 500, 255, 200);
+	REQUIRE_OK(thumb_acc_new(box, &from_region, &e), &e);
+	REQUIRE_OK(thumb_acc_new(box, &from_raster, &e), &e);
+	for (int k = 0; k < 200; k++) {
+		struct layer ly;
+		memset(&ly, 0, sizeof ly);
+		paths_init(&ly.region);
+		ly.index = k;
+		ly.height_mm = 0.05;
+		ly.z_top_mm = (k + 1) * 0.05;
+		REQUIRE(paths_add_pts(&ly.region, sq, 4) == 0);
+		REQUIRE_OK(thumb_acc_layer(from_region, &ly, NULL, &e), &e);
+		paths_fini(&ly.region);
+		ly.raster = r;
+		REQUIRE_OK(thumb_acc_layer(from_raster, &ly, &map, &e), &e);
+	}
+	buf_init(&a);
+	buf_init(&b);
+	REQUIRE_OK(thumb_acc_png(from_region, 200, 120, &a, &e), &e);
+	REQUIRE_OK(thumb_acc_png(from_raster, 200, 120, &b, &e), &e);
+	CHECK_EQ_INT(a.len, b.len);
+	CHECK(a.len == b.len && memcmp(a.data, b.data, a.len) == 0);
+	buf_fini(&a);
+	buf_fini(&b);
+	thumb_acc_free(from_region);
+	thumb_acc_free(from_raster);
+	raster_free(r);
+}
+
 static void test_degenerate_and_failures(void)
 {
 	struct soup s;
@@ -306,6 +340,7 @@ int main(void)
 	RUN(test_cube);
 	RUN(test_view_direction);
 	RUN(test_layers_match_mesh);
+	RUN(test_region_layers);
 	RUN(test_degenerate_and_failures);
 	return harness_report();
 }
