@@ -20,7 +20,7 @@ CC := gcc
 CXX := g++
 NPROC := $(shell nproc 2>/dev/null || echo 2)
 
-PKGS := libpng zlib libarchive jansson libmicrohttpd sqlite3 polyclipping ipopt
+PKGS := libpng zlib libarchive jansson libmicrohttpd sqlite3 nettle polyclipping ipopt
 # Evaluated lazily: pkg-config only runs once the packages are installed.
 PKG_CFLAGS = $(shell pkg-config --cflags $(PKGS) 2>/dev/null)
 PKG_LIBS = $(shell pkg-config --libs $(PKGS) 2>/dev/null) -ltet
@@ -54,43 +54,56 @@ DB_OBJ := $(call obj,$(DB_SRC))
 SERVICE_OBJ := $(call obj,$(SERVICE_SRC))
 TEST_SUPPORT_OBJ := $(call obj,$(TEST_SUPPORT_SRC))
 UNIT_BIN := $(patsubst tests/unit/%.c,$(BUILD)/tests/unit/%,$(UNIT_SRC))
+BENCH_SRC := $(sort $(wildcard tests/bench/bench_*.c))
+BENCH_BIN := $(patsubst tests/bench/%.c,$(BUILD)/tests/bench/%,$(BENCH_SRC))
 
 LIBS := $(BUILD)/libapi.a $(BUILD)/libdb.a $(BUILD)/libengine.a
 BIN := $(BUILD)/infilld
 
-.PHONY: all deps build units run test check test-unit bench bench-large fuzz check-style clean
+.PHONY: all deps build units benches run test check test-unit bench bench-large fuzz check-style clean
 all: build
 
 deps:
 	@deploy/deps.sh
 
-build: $(BIN) $(UNIT_BIN)
+build: $(BIN) $(UNIT_BIN) $(BENCH_BIN)
 
+# V=1 shows the full commands.
+Q := $(if $(filter 1,$(V)),,@)
 $(BUILD)/obj/%.c.o: %.c
 	@mkdir -p $(@D)
-	$(CC) $(CFLAGS) -c $< -o $@
+	@$(if $(Q),echo "  CC      $<")
+	$(Q)$(CC) $(CFLAGS) -c $< -o $@
 
 $(BUILD)/obj/%.cpp.o: %.cpp
 	@mkdir -p $(@D)
-	$(CXX) $(CXXFLAGS) -c $< -o $@
+	@$(if $(Q),echo "  CXX     $<")
+	$(Q)$(CXX) $(CXXFLAGS) -c $< -o $@
 
 $(BUILD)/libengine.a: $(ENGINE_OBJ)
 	@mkdir -p $(@D)
-	rm -f $@ && ar rcs $@ $^
+	$(Q)rm -f $@ && ar rcs $@ $^
 $(BUILD)/libapi.a: $(API_OBJ)
 	@mkdir -p $(@D)
-	rm -f $@ && ar rcs $@ $^
+	$(Q)rm -f $@ && ar rcs $@ $^
 $(BUILD)/libdb.a: $(DB_OBJ)
 	@mkdir -p $(@D)
-	rm -f $@ && ar rcs $@ $^
+	$(Q)rm -f $@ && ar rcs $@ $^
 
 $(BIN): $(SERVICE_OBJ) $(LIBS)
-	$(CXX) $(LDFLAGS) -o $@ $(SERVICE_OBJ) $(LIBS) $(LDLIBS)
+	@$(if $(Q),echo "  LINK    $@")
+	$(Q)$(CXX) $(LDFLAGS) -o $@ $(SERVICE_OBJ) $(LIBS) $(LDLIBS)
 
 $(BUILD)/tests/unit/%: tests/unit/%.c $(TEST_SUPPORT_OBJ) $(LIBS)
 	@mkdir -p $(@D)
+	@$(if $(Q),echo "  TEST    $<")
+	$(Q)$(CC) $(CFLAGS) -Itests -c $< -o $@.o
+	$(Q)$(CXX) $(LDFLAGS) -o $@ $@.o $(TEST_SUPPORT_OBJ) $(LIBS) $(LDLIBS)
+
+$(BUILD)/tests/bench/%: tests/bench/%.c $(LIBS)
+	@mkdir -p $(@D)
 	$(CC) $(CFLAGS) -Itests -c $< -o $@.o
-	$(CXX) $(LDFLAGS) -o $@ $@.o $(TEST_SUPPORT_OBJ) $(LIBS) $(LDLIBS)
+	$(CXX) $(LDFLAGS) -o $@ $@.o $(LIBS) $(LDLIBS)
 
 # The README's two commands.
 run: deps
@@ -104,6 +117,7 @@ test: deps
 
 # Only the unit tests (fast inner loop while developing).
 units: $(UNIT_BIN)
+benches: $(BENCH_BIN)
 test-unit: units
 	@tests/run.sh $(BUILD) $(if $(filter 1,$(SANITIZE)),sanitize) unit
 
