@@ -140,12 +140,7 @@ bench: deps
 	@$(MAKE) --no-print-directory -j$(NPROC) build
 	@tests/bench/run.sh $(BUILD)
 
-# One benchmark program without the suite runner (prints figures).
-BENCH_BIN := $(patsubst tests/bench/%.c,$(BUILD)/tests/bench/%,$(sort $(wildcard tests/bench/bench_*.c)))
-$(BUILD)/tests/bench/%: tests/bench/%.c $(LIBS)
-	@mkdir -p $(@D)
-	$(CC) $(CFLAGS) -Itests -c $< -o $@.o
-	$(CXX) $(LDFLAGS) -o $@ $@.o $(LIBS) $(LDLIBS)
+# The mesh benchmark alone (also run by `make bench` via tests/bench/bench_mesh.sh).
 .PHONY: bench-mesh
 bench-mesh: $(BUILD)/tests/bench/bench_mesh
 	$< $(if $(INFILLD_SHARED),$(INFILLD_SHARED),../shared)
