@@ -1,6 +1,7 @@
 /* repair.c - mesh_repair: weld, drop degenerate faces, orient consistently and outward.
  *
- * 1. exact weld (weld.c); 2. drop zero-area faces (mesh_tri_degenerate);
+ * 1. exact weld (weld.c); 2. zero-area caps removed by splitting their
+ *    neighbour (the surface stays closed), other zero-area faces dropped;
  * 3. breadth-first search over manifold edges: a neighbour across an
  *    edge both faces traverse the same way is flipped; per orientation
  *    component the smaller of the two consistent choices is applied;
@@ -32,6 +33,93 @@ static void flip_face(struct mesh *m, size_t t)
 
 	m->tri[3 * t + 1] = m->tri[3 * t + 2];
 	m->tri[3 * t + 2] = x;
+}
+
+/* Zero-area faces with three distinct corners are caps: one corner m
+ * lies on the segment between the other two (u, w).  Instead of leaving a
+ * zero-area hole, the face across u-w (p, q, x) is split at m into
+ * (p, m, x) and (m, q, x), the cap's slot taking the second half: the
+ * surface stays closed and the triangle count is unchanged.  Only caps
+ * whose long edge is manifold with a sound neighbour are handled; a face
+ * or vertex is touched at most once per pass (the edge table is then
+ * stale); up to three passes.  *fixed = caps removed. */
+static int split_caps(struct mesh *m, size_t *fixed, struct err *e)
+{
+	unsigned char *touched, *vtouched;
+	int pass, rc = 0;
+
+	*fixed = 0;
+	for (pass = 0; pass < 3; pass++) {
+		struct mesh_edges ed;
+		size_t t, done = 0;
+		if ((rc = mesh_edges_build(m, &ed, e)))
+			break;
+		touched = mem_calloc(m->nt ? m->nt : 1, 1);
+		vtouched = mem_calloc(m->nv ? m->nv : 1, 1);
+		if (!touched || !vtouched) {
+			mem_free(touched);
+			mem_free(vtouched);
+			mesh_edges_fini(&ed);
+			rc = ERR_SET(e, ERR_NOMEM, "out of memory repairing %zu triangles", m->nt);
+			break;
+		}
+		for (t = 0; t < m->nt; t++) {
+			uint32_t *c = m->tri + 3 * t, u, w, mid, lo, hi, *g;
+			double best = -1;
+			size_t r, other = SIZE_MAX;
+			int k, j;
+			if (touched[t] || c[0] == c[1] || c[1] == c[2] || c[2] == c[0] ||
+			    !mesh_tri_degenerate(m, t))
+				continue;
+			for (k = 0, u = w = mid = 0; k < 3; k++) { /* longest edge u-w */
+				double l = v3_len2(v3_sub(m->v[c[(k + 1) % 3]], m->v[c[k]]));
+				if (l > best) {
+					best = l;
+					u = c[k];
+					w = c[(k + 1) % 3];
+					mid = c[(k + 2) % 3];
+				}
+			}
+			lo = u < w ? u : w;
+			hi = u < w ? w : u;
+			for (r = ed.off[lo], k = 0; r < ed.off[lo + 1]; r++)
+				if (MESH_EDGE_OTHER(ed.rec[r]) == hi) {
+					k++;
+					if (MESH_EDGE_CORNER(ed.rec[r]) / 3 != t)
+						other = MESH_EDGE_CORNER(ed.rec[r]) / 3;
+				}
+			if (k != 2 || other == SIZE_MAX || touched[other] ||
+			    mesh_tri_degenerate(m, other) || vtouched[u] || vtouched[w] ||
+			    vtouched[mid])
+				continue;
+			g = m->tri + 3 * other;
+			for (j = 0; j < 3; j++)
+				if ((g[j] == u && g[(j + 1) % 3] == w) ||
+				    (g[j] == w && g[(j + 1) % 3] == u))
+					break;
+			{
+				uint32_t p = g[j], q = g[(j + 1) % 3], x = g[(j + 2) % 3];
+				g[0] = p;
+				g[1] = mid;
+				g[2] = x;
+				c[0] = mid;
+				c[1] = q;
+				c[2] = x;
+			}
+			touched[t] = touched[other] = 1;
+			/* edges among these vertices changed: not looked up again
+			 * before the table is rebuilt */
+			vtouched[u] = vtouched[w] = vtouched[mid] = vtouched[m->tri[3 * t + 2]] = 1;
+			done++;
+		}
+		mesh_edges_fini(&ed);
+		mem_free(touched);
+		mem_free(vtouched);
+		*fixed += done;
+		if (done == 0)
+			break;
+	}
+	return rc;
 }
 
 static size_t drop_degenerate(struct mesh *m)
@@ -234,14 +322,14 @@ static size_t make_outward(struct orient *o)
 int mesh_repair(struct mesh *m, struct mesh_report *r, struct err *e)
 {
 	struct orient o;
-	size_t welded = 0, dropped = 0, reoriented = 0, flipped = 0;
+	size_t welded = 0, dropped = 0, reoriented = 0, flipped = 0, caps = 0;
 	int rc;
 
 	memset(&o, 0, sizeof o);
 	o.m = m;
-	if ((rc = mesh_weld(m, 0, &welded, &dropped, e)))
+	if ((rc = mesh_weld(m, 0, &welded, &dropped, e)) || (rc = split_caps(m, &caps, e)))
 		return rc;
-	dropped += drop_degenerate(m);
+	dropped += caps + drop_degenerate(m);
 	if (m->nt) {
 		o.nbr = mem_alloc(3 * m->nt * sizeof *o.nbr);
 		o.order = mem_alloc(m->nt * sizeof *o.order);

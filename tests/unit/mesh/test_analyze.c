@@ -281,6 +281,38 @@ static double up_coord(struct vec3 q, int up)
 	}
 }
 
+/* A closed box whose front face got a vertex m on its bottom edge 0-1
+ * (T-junction) closed by the zero-area cap (0, 1, m): repair must keep it
+ * closed by splitting the bottom face at m, not punch a hole. */
+static void test_repair_cap(void)
+{
+	struct mesh *m = fx_box(4, 2, 3, 0, 0, 0);
+	struct mesh_report r;
+	struct err e;
+	size_t t;
+	uint32_t mid;
+
+	REQUIRE(m);
+	mid = (uint32_t)m->nv;
+	mesh_add_vertex(m, v3(1, 0, 0)); /* on edge (0,0,0)-(4,0,0), off-centre */
+	for (t = 0; t < m->nt; t++) /* front face (0, 1, 5) -> (0, m, 5) + (m, 1, 5) */
+		if (m->tri[3 * t] == 0 && m->tri[3 * t + 1] == 1 && m->tri[3 * t + 2] == 5)
+			m->tri[3 * t + 1] = mid;
+	mesh_add_triangle(m, mid, 1, 5);
+	mesh_add_triangle(m, 0, 1, mid); /* the cap */
+	REQUIRE_OK(mesh_analyze(m, &r, &e), &e);
+	CHECK(r.watertight);
+	CHECK_EQ_INT(r.degenerate_faces, 1);
+	REQUIRE_OK(mesh_repair(m, &r, &e), &e);
+	CHECK_EQ_INT(r.degenerate_faces, 0);
+	CHECK_EQ_INT(r.dropped_triangles, 1);
+	CHECK_EQ_INT(r.triangles, 14);
+	CHECK(r.watertight);
+	CHECK_NEAR(r.volume_mm3, 24, 1e-12);
+	CHECK_NEAR(r.area_mm2, 2 * (8 + 12 + 6), 1e-12);
+	mesh_free(m);
+}
+
 /* P.off is 3 x 5 x 1 (x, y, z); its bowl (the P's loop) is at high y. */
 static void test_place_axes(void)
 {
@@ -383,6 +415,7 @@ int main(void)
 	RUN(test_weld);
 	RUN(test_shared_meshes);
 	RUN(test_repair);
+	RUN(test_repair_cap);
 	RUN(test_place_axes);
 	RUN(test_place_units_height_errors);
 	return harness_report();
