@@ -2,8 +2,8 @@
  *
  * Arrays grow by doubling through mem_grow(), so building a mesh one
  * vertex/triangle at a time is amortised O(1).  Capacities live in a
- * private header block allocated together with nothing else: the public
- * struct stays the plain (v, tri, nv, nt) view readers and engines use.
+ * private wrapper around the public struct, which stays the plain
+ * (v, tri, nv, nt) view readers and engines use.
  */
 #include "engine/mesh/mesh.h"
 
