@@ -2,11 +2,10 @@
  *
  * Arrays grow by doubling through mem_grow(), so building a mesh one
  * vertex/triangle at a time is amortised O(1).  Capacities live in a
- * private header block allocated together with nothing else: the public
- * struct stays the plain (v, tri, nv, nt) view readers and engines use.
+ * private wrapper around the public struct, which stays the plain
+ * (v, tri, nv, nt) view readers and engines use.
  */
 #include "engine/mesh/mesh.h"
-#include "engine/mesh/mesh_int.h"
 
 #include <string.h>
 
@@ -110,19 +109,4 @@ struct mesh *mesh_clone(const struct mesh *m)
 	c->nv = m->nv;
 	c->nt = m->nt;
 	return c;
-}
-
-void mesh_take_arrays(struct mesh *m, struct vec3 *v, size_t nv, size_t vcap, uint32_t *tri,
-		      size_t nt, size_t tcap)
-{
-	struct mesh_box *b = box_of(m);
-
-	mem_free(m->v);
-	mem_free(m->tri);
-	m->v = v;
-	m->nv = nv;
-	b->vcap = vcap;
-	m->tri = tri;
-	m->nt = nt;
-	b->tcap = tcap;
 }

@@ -16,10 +16,6 @@
 
 struct err;
 
-/* Replace m's arrays (m from mesh_new()); the old ones are freed. */
-void mesh_take_arrays(struct mesh *m, struct vec3 *v, size_t nv, size_t vcap, uint32_t *tri,
-		      size_t nt, size_t tcap);
-
 /* A format reader: parse data[0, len) into the empty mesh m (from
  * mesh_new()), fill info.  0 or an err_code with e filled (place set). */
 typedef int mesh_reader_fn(const unsigned char *data, size_t len, struct mesh *m,

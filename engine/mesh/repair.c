@@ -52,6 +52,13 @@ static int split_caps(struct mesh *m, size_t *fixed, struct err *e)
 	for (pass = 0; pass < 3; pass++) {
 		struct mesh_edges ed;
 		size_t t, done = 0;
+		for (t = 0; t < m->nt; t++) { /* any cap at all?  (usually none) */
+			const uint32_t *c = m->tri + 3 * t;
+			if (c[0] != c[1] && c[1] != c[2] && c[2] != c[0] && mesh_tri_degenerate(m, t))
+				break;
+		}
+		if (t == m->nt)
+			break;
 		if ((rc = mesh_edges_build(m, &ed, e)))
 			break;
 		touched = mem_calloc(m->nt ? m->nt : 1, 1);
