@@ -331,3 +331,59 @@ int tp_index_first_hit(struct tp_index *ix, struct pt2 a, struct pt2 b, int64_t 
 	hit->y = a.y + (int64_t)llround(best * dy);
 	return 1;
 }
+
+/* Distance between segments ab and cd, nm: 0 when they meet, else the
+ * smallest of the four endpoint-to-segment distances. */
+static double seg_seg_dist(struct pt2 a, struct pt2 b, struct pt2 c, struct pt2 d)
+{
+	int o1 = orient(a, b, c), o2 = orient(a, b, d), o3 = orient(c, d, a), o4 = orient(c, d, b);
+	double best, qx, qy, t;
+
+	/* A crossing or a touch; four collinear points meet only when their
+	 * extents overlap (else the endpoint distances below are exact). */
+	if (o1 * o2 <= 0 && o3 * o4 <= 0 && (o1 || o2 || o3 || o4))
+		return 0;
+	closest_on_segment(c, d, a, &qx, &qy);
+	best = hypot(qx - (double)a.x, qy - (double)a.y);
+	closest_on_segment(c, d, b, &qx, &qy);
+	t = hypot(qx - (double)b.x, qy - (double)b.y);
+	best = t < best ? t : best;
+	closest_on_segment(a, b, c, &qx, &qy);
+	t = hypot(qx - (double)c.x, qy - (double)c.y);
+	best = t < best ? t : best;
+	closest_on_segment(a, b, d, &qx, &qy);
+	t = hypot(qx - (double)d.x, qy - (double)d.y);
+	return t < best ? t : best;
+}
+
+double tp_index_seg_clearance(struct tp_index *ix, struct pt2 a, struct pt2 b, double max_nm)
+{
+	double best = max_nm;
+	int64_t m = (int64_t)ceil(max_nm);
+	int c0, c1, r0, r1;
+	uint32_t s;
+
+	if (ix->nedges == 0)
+		return max_nm;
+	s = next_query(ix);
+	c0 = tp_cell_of((a.x < b.x ? a.x : b.x) - m, ix->lo.x, ix->cell_nm, ix->nx);
+	c1 = tp_cell_of((a.x < b.x ? b.x : a.x) + m, ix->lo.x, ix->cell_nm, ix->nx);
+	r0 = tp_cell_of((a.y < b.y ? a.y : b.y) - m, ix->lo.y, ix->cell_nm, ix->ny);
+	r1 = tp_cell_of((a.y < b.y ? b.y : a.y) + m, ix->lo.y, ix->cell_nm, ix->ny);
+	for (int r = r0; r <= r1; r++) {
+		for (int c = c0; c <= c1; c++) {
+			size_t cidx = (size_t)r * (size_t)ix->nx + (size_t)c;
+			for (uint32_t t = ix->start[cidx]; t < ix->start[cidx + 1]; t++) {
+				uint32_t id = ix->items[t];
+				double d;
+				if (ix->stamp[id] == s)
+					continue;
+				ix->stamp[id] = s;
+				d = seg_seg_dist(a, b, ix->edges[id].a, ix->edges[id].b);
+				if (d < best)
+					best = d;
+			}
+		}
+	}
+	return best;
+}

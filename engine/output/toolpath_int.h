@@ -102,6 +102,10 @@ int tp_index_segment_inside(struct tp_index *ix, struct pt2 a, struct pt2 b);
 /* Nearest point of the indexed edges to p within max_nm: 1 and *q, or 0
  * when none is that close. */
 int tp_index_nearest(struct tp_index *ix, struct pt2 p, int64_t max_nm, struct pt2 *q);
+/* Distance from segment ab to the nearest indexed edge, nm, or max_nm
+ * when none is nearer (0 when ab meets an edge).  Visits the cells of
+ * ab's bounding box grown by max_nm. */
+double tp_index_seg_clearance(struct tp_index *ix, struct pt2 a, struct pt2 b, double max_nm);
 /* First point where segment ab meets an edge, ignoring meetings closer to
  * a than skip_nm: 1 and *hit, or 0. */
 int tp_index_first_hit(struct tp_index *ix, struct pt2 a, struct pt2 b, int64_t skip_nm,

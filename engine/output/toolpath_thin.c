@@ -107,6 +107,83 @@ static void centre(struct tp_index *ix, struct pt2 p, int64_t max_w, struct pt2 
 	}
 }
 
+/* Append the polyline b (closed: a loop; b->w[k] the width of segment k)
+ * as paths whose beads lie inside the pieces indexed in ix: segment k of
+ * width w must start inside, cross no outline and keep w/2 from every
+ * outline.  A segment nearer than that is narrowed to twice its
+ * clearance (in WIDTH_STEP_NM steps); one that would become narrower than
+ * min_w is left out, splitting the line.  Runs shorter than min_w / 2 are
+ * dropped.  This check, not the centring heuristics, is what the
+ * containment guarantee rests on (docs/gcode.md). */
+static int emit_valid(struct tp_index *ix, struct thin_buf *b, int closed, enum tp_role role,
+		      int64_t min_w, struct tp_plan *items, struct err *e, int *added)
+{
+	size_t n = b->n, nseg = closed ? n : n - 1, bad = SIZE_MAX, m = 0;
+	struct pt2 *rp;
+	int64_t *rw;
+	double len = 0;
+	int rc = 0;
+
+	if (n < 2)
+		return 0;
+	for (size_t k = 0; k < nseg; k++) {
+		struct pt2 a = b->pts[k], c = b->pts[(k + 1) % n];
+		int64_t w = b->w[k];
+		double cl;
+		if (!tp_index_inside(ix, a) || tp_index_crosses(ix, a, c)) {
+			w = -1;
+		} else {
+			cl = tp_index_seg_clearance(ix, a, c, 0.5 * (double)w);
+			if (cl < 0.5 * (double)w) {
+				w = (int64_t)(2 * cl);
+				w -= w % WIDTH_STEP_NM;
+			}
+			if (w < min_w)
+				w = -1;
+		}
+		b->w[k] = w;
+		if (w < 0 && bad == SIZE_MAX)
+			bad = k;
+	}
+	if (bad == SIZE_MAX) {
+		for (size_t k = 0; k < nseg; k++)
+			len += tp_dist_nm(b->pts[k], b->pts[(k + 1) % n]);
+		if (len < (double)min_w / 2 || (closed && n < 3))
+			return 0;
+		*added = 1;
+		return tp_plan_add(items, role, closed, -1, b->w[0], b->pts, n, b->w, e);
+	}
+	rp = mem_alloc((n + 1) * sizeof *rp);
+	rw = mem_alloc((n + 1) * sizeof *rw);
+	if (!rp || !rw) {
+		rc = ERR_SET(e, ERR_NOMEM, "out of memory planning thin walls");
+		goto out;
+	}
+	/* Runs of good segments; a loop is walked from its first bad one. */
+	for (size_t t = 0, k0 = closed ? bad + 1 : 0; !rc && t <= nseg; t++) {
+		size_t k = (k0 + t) % (closed ? nseg : nseg + 1);
+		int good = t < nseg && (closed || k < nseg) && b->w[k] >= 0;
+		if (good) {
+			if (m == 0)
+				rp[m++] = b->pts[k];
+			rw[m - 1] = b->w[k];
+			rp[m++] = b->pts[(k + 1) % n];
+			len += tp_dist_nm(rp[m - 2], rp[m - 1]);
+			continue;
+		}
+		if (m >= 2 && len >= (double)min_w / 2) {
+			*added = 1;
+			rc = tp_plan_add(items, role, 0, -1, rw[0], rp, m, rw, e);
+		}
+		m = 0;
+		len = 0;
+	}
+out:
+	mem_free(rp);
+	mem_free(rw);
+	return rc;
+}
+
 /* Centre the chain pts[0..n) (closed: a loop) and append it as a path. */
 static int emit_chain(struct tp_index *ix, const struct pt2 *pts, size_t n, int closed,
 		      enum tp_role role, int64_t min_w, int64_t max_w, struct thin_buf *b,
@@ -144,8 +221,7 @@ static int emit_chain(struct tp_index *ix, const struct pt2 *pts, size_t n, int 
 		if (w2 < b->w[k])
 			b->w[k] = w2;
 	}
-	*added = 1;
-	return tp_plan_add(items, role, closed, -1, b->w[0], b->pts, b->n, b->w, e);
+	return emit_valid(ix, b, closed, role, min_w, items, e, added);
 }
 
 /* Samples along a polyline at increasing arc lengths. */
@@ -279,8 +355,7 @@ static int emit_strip(struct tp_index *ix, const struct pt2 *l, size_t nl, const
 		k++;
 	}
 	b->n = k;
-	*added = 1;
-	return tp_plan_add(items, role, 0, -1, b->w[0], b->pts, b->n, b->w, e);
+	return emit_valid(ix, b, 0, role, min_w, items, e, added);
 }
 
 /* Vertex farthest from p in path q. */
