@@ -27,7 +27,9 @@ What it checks (each failure is reported with the place and the values):
     that clearance outside it.  Regions are supplied independently of the
     G-code: as analytic shapes in a JSON file (--regions) or by slicing a
     mesh (--mesh, STL or OFF) at each layer's mid height (;Z: - ;HEIGHT:/2)
-    with this file's own triangle/plane intersection and even-odd test.
+    with this file's own triangle/plane intersection, open chains (open
+    meshes) closed nearest end first, and a nonzero winding test (overlapping
+    shells are a union, as in the writer's regions).
 
 Tolerances (defaults, each can be changed on the command line):
   * --tol 0.02 mm for containment: the writer may simplify outlines by a few
@@ -113,12 +115,16 @@ def segments_intersect(ax, ay, bx, by, cx, cy, dx, dy):
 
 
 class EdgeSet:
-    """A region given by its boundary edges, even-odd rule, with a uniform
+    """A region given by its boundary edges (even-odd rule, or nonzero
+    winding for oriented edges: material on their left), with a uniform
     grid for distance and crossing queries."""
 
-    def __init__(self, edges, cell=1.0):
+    def __init__(self, edges, cell=1.0, nonzero=False):
+        self.nonzero = nonzero
         self.edges = [e for e in edges if (e[0], e[1]) != (e[2], e[3])]
         self.cell = cell
+        self._specks = {}
+        self._parts = {}
         self.grid = {}
         for i, (ax, ay, bx, by) in enumerate(self.edges):
             for key in self._cells(min(ax, bx), min(ay, by), max(ax, bx), max(ay, by)):
@@ -135,16 +141,65 @@ class EdgeSet:
             for gy in range(int(math.floor(y0 / c)), int(math.floor(y1 / c)) + 1):
                 yield (gx, gy)
 
-    def inside(self, x, y):
-        """Even-odd parity of a ray towards +x (half-open in y)."""
+    def inside(self, x, y, speck=0.0):
+        """Crossings of a ray towards +x (half-open in y): nonzero winding
+        for oriented edges, else even-odd parity; with speck > 0, pieces
+        narrower than 2 speck (specks()) are left out."""
+        n = self.winding(x, y, self.specks(speck) if speck > 0 else ())
+        return n != 0 if self.nonzero else n % 2 == 1
+
+    def winding(self, x, y, skip=()):
+        """Signed crossings of the +x ray (unsigned without orientation)."""
         n = 0
         for i in self.rows.get(int(math.floor(y / self.cell)), ()):
+            if i in skip:
+                continue
             ax, ay, bx, by = self.edges[i]
             if (ay > y) != (by > y):
                 xc = ax + (y - ay) * (bx - ax) / (by - ay)
                 if xc > x:
-                    n += 1
-        return n % 2 == 1
+                    n += (1 if by > ay else -1) if self.nonzero else 1
+        return n
+
+    def boundary_parts(self, i):
+        """The parts of edge i on the region's outline.  With nonzero
+        winding an edge may lie inside the region (overlapping shells: the
+        winding is 1 on one side and 2 on the other); the edge is cut where
+        other edges meet it and each part is kept when exactly one of its
+        sides (1e-6 mm off its midpoint) has winding 0.  Even-odd: all of
+        it.  Cached per edge."""
+        got = self._parts.get(i)
+        if got is not None:
+            return got
+        e = self.edges[i]
+        if not self.nonzero:
+            self._parts[i] = [e]
+            return self._parts[i]
+        ax, ay, bx, by = e
+        ex, ey = bx - ax, by - ay
+        ln = math.hypot(ex, ey)
+        ts = [0.0, 1.0]
+        for j in self.near_ids(min(ax, bx), min(ay, by), max(ax, bx), max(ay, by)):
+            cx, cy, dx, dy = self.edges[j]
+            fx, fy = dx - cx, dy - cy
+            den = ex * fy - ey * fx
+            if j == i or den == 0:
+                continue
+            t = ((cx - ax) * fy - (cy - ay) * fx) / den
+            u = ((cx - ax) * ey - (cy - ay) * ex) / den
+            if 0 < t < 1 and 0 <= u <= 1:
+                ts.append(t)
+        ts.sort()
+        nx, ny = -ey / ln * 1e-6, ex / ln * 1e-6
+        parts = []
+        for t0, t1 in zip(ts, ts[1:]):
+            if t1 - t0 <= 1e-12:
+                continue
+            mx, my = ax + 0.5 * (t0 + t1) * ex, ay + 0.5 * (t0 + t1) * ey
+            if (self.winding(mx + nx, my + ny) == 0) != (self.winding(mx - nx, my - ny) == 0):
+                parts.append((ax + t0 * ex, ay + t0 * ey, ax + t1 * ex, ay + t1 * ey))
+        self._parts[i] = parts
+        return parts
 
     def near_edges(self, x0, y0, x1, y1):
         seen = set()
@@ -154,16 +209,106 @@ class EdgeSet:
                     seen.add(i)
                     yield self.edges[i]
 
-    def clearance(self, ax, ay, bx, by, limit):
-        """Smallest distance from segment ab to the boundary, looking no
-        farther than limit (returns limit when nothing is nearer)."""
+    def clearance(self, ax, ay, bx, by, limit, speck=0.0, exact=False):
+        """Smallest distance from segment ab to the edges, looking no
+        farther than limit (returns limit when nothing is nearer).  exact:
+        to the outline only (boundary_parts()), and with speck > 0 without
+        the pieces narrower than 2 speck (specks()).  The plain distance is
+        never larger, so it serves as a fast first test."""
         best = limit
-        for (cx, cy, dx, dy) in self.near_edges(min(ax, bx) - limit, min(ay, by) - limit,
-                                                max(ax, bx) + limit, max(ay, by) + limit):
-            d = seg_seg_dist(ax, ay, bx, by, cx, cy, dx, dy)
-            if d < best:
-                best = d
+        skip = self.specks(speck) if speck > 0 else ()
+        for i in self.near_ids(min(ax, bx) - limit, min(ay, by) - limit,
+                               max(ax, bx) + limit, max(ay, by) + limit):
+            if i in skip:
+                continue
+            for (cx, cy, dx, dy) in (self.boundary_parts(i) if exact else (self.edges[i],)):
+                d = seg_seg_dist(ax, ay, bx, by, cx, cy, dx, dy)
+                if d < best:
+                    best = d
         return best
+
+    def near_ids(self, x0, y0, x1, y1):
+        seen = set()
+        for key in self._cells(x0, y0, x1, y1):
+            for i in self.grid.get(key, ()):
+                if i not in seen:
+                    seen.add(i)
+                    yield i
+
+    def specks(self, r):
+        """Ids of the edges of boundary pieces (edges connected through
+        shared endpoints, 1 nm snapping) narrower than 2 r: all their points
+        lie in a band 2 r wide (the minimum width of their convex hull).
+        Such a piece encloses only points within r of its own outline: a
+        hole of it lies inside the region grown by r, an island inside the
+        complement grown by r.  Computed once per radius."""
+        if r in self._specks:
+            return self._specks[r]
+        parent = list(range(len(self.edges)))
+
+        def find(i):
+            while parent[i] != i:
+                parent[i] = parent[parent[i]]
+                i = parent[i]
+            return i
+        owner = {}
+        for i, (ax, ay, bx, by) in enumerate(self.edges):
+            for key in ((round(ax, 6), round(ay, 6)), (round(bx, 6), round(by, 6))):
+                j = owner.setdefault(key, i)
+                if j != i:
+                    parent[find(i)] = find(j)
+        pts = {}
+        for i, (ax, ay, bx, by) in enumerate(self.edges):
+            pts.setdefault(find(i), []).extend(((ax, ay), (bx, by)))
+        small = set(k for k, p in pts.items() if hull_width(p, 2 * r) <= 2 * r)
+        out = frozenset(i for i in range(len(self.edges)) if find(i) in small)
+        self._specks[r] = out
+        return out
+
+
+def convex_hull(pts):
+    """Convex hull (monotone chain), counter-clockwise, no repeated point."""
+    p = sorted(set(pts))
+    if len(p) <= 2:
+        return p
+
+    def half(seq):
+        h = []
+        for q in seq:
+            while len(h) >= 2 and ((h[-1][0] - h[-2][0]) * (q[1] - h[-2][1]) -
+                                   (h[-1][1] - h[-2][1]) * (q[0] - h[-2][0])) <= 0:
+                h.pop()
+            h.append(q)
+        return h
+    lo, hi = half(p), half(reversed(p))
+    return lo[:-1] + hi[:-1]
+
+
+def hull_width(pts, limit):
+    """Minimum width of the point set (the narrowest band holding it: the
+    smallest over hull edges of the farthest hull point from the edge's
+    line), or some value above limit once it is known to exceed it (a
+    convex set of width w has area <= w x perimeter / 2)."""
+    h = convex_hull(pts)
+    if len(h) <= 2:
+        return 0.0
+    n = len(h)
+    area = 0.5 * abs(sum(h[i][0] * h[(i + 1) % n][1] - h[(i + 1) % n][0] * h[i][1]
+                         for i in range(n)))
+    perim = sum(math.hypot(h[(i + 1) % n][0] - h[i][0], h[(i + 1) % n][1] - h[i][1])
+                for i in range(n))
+    if area > limit * perim / 2:
+        return 2 * area / perim
+    best = math.inf
+    for i in range(n):
+        ax, ay = h[i]
+        bx, by = h[(i + 1) % n]
+        ln = math.hypot(bx - ax, by - ay)
+        if ln == 0:
+            continue
+        far = max(abs((bx - ax) * (qy - ay) - (by - ay) * (qx - ax)) for qx, qy in h) / ln
+        best = min(best, far)
+    return best
 
 
 def polygon_edges(pts):
@@ -288,19 +433,42 @@ class MeshRegions:
                                    for a, c in enumerate(p)))
         self.tris.sort(key=lambda t: min(t[2], t[5], t[8]))
         self.cache = {}
+        # Border edges (used by one triangle) grouped into holes: edges
+        # sharing a vertex belong to the same hole.
+        count = {}
+        for t in self.tris:
+            for a, b in ((0, 3), (3, 6), (6, 0)):
+                key = tuple(sorted((t[a:a + 3], t[b:b + 3])))
+                count[key] = count.get(key, 0) + 1
+        border = [k for k, n in count.items() if n == 1]
+        parent = {}
+
+        def find(v):
+            while parent.setdefault(v, v) != v:
+                parent[v] = parent[parent[v]]
+                v = parent[v]
+            return v
+        for a, b in border:
+            parent[find(a)] = find(b)
+        self.hole_of_edge = dict((k, find(k[0])) for k in border)
 
     def region(self, layer, z_mid):
         key = round(z_mid, 6)
         if key not in self.cache:
             self.cache.clear()
-            self.cache[key] = EdgeSet(self.slice(z_mid))
+            self.cache[key] = EdgeSet(self.slice(z_mid), nonzero=True)
         return self.cache[key]
 
     def slice(self, z):
-        """Segments where plane z cuts the triangles.  A vertex exactly on
-        the plane counts as above it, so each triangle yields 0 or 2
-        crossings and horizontal faces none."""
+        """Oriented segments where plane z cuts the triangles, the material
+        on their left (the right-hand rule of each triangle's vertex order
+        gives its outward normal), with the open chains of an open mesh
+        closed (close_chains).  A vertex exactly on the plane counts as above
+        it, so each triangle yields 0 or 2 crossings and horizontal faces
+        none; a crossing is interpolated from the edge's endpoints in a fixed
+        order, so the two triangles of an edge produce the same point."""
         out = []
+        holes = {}
         for t in self.tris:
             if min(t[2], t[5], t[8]) > z:
                 break
@@ -310,11 +478,84 @@ class MeshRegions:
             for a, b in ((0, 3), (3, 6), (6, 0)):
                 za, zb = t[a + 2], t[b + 2]
                 if (za >= z) != (zb >= z):
+                    if t[a:a + 3] > t[b:b + 3]:
+                        a, b = b, a
+                        za, zb = zb, za
                     u = (z - za) / (zb - za)
                     pts.append((t[a] + u * (t[b] - t[a]), t[a + 1] + u * (t[b + 1] - t[a + 1])))
-            if len(pts) == 2:
-                out.append((pts[0][0], pts[0][1], pts[1][0], pts[1][1]))
-        return out
+                    h = self.hole_of_edge.get((t[a:a + 3], t[b:b + 3]))
+                    if h is not None:
+                        holes[pts[-1]] = h
+            if len(pts) != 2 or pts[0] == pts[1]:
+                continue
+            # outward normal, xy part: (p1 - p0) x (p2 - p0)
+            ux, uy, uz = t[3] - t[0], t[4] - t[1], t[5] - t[2]
+            vx, vy, vz = t[6] - t[0], t[7] - t[1], t[8] - t[2]
+            nx, ny = uy * vz - uz * vy, uz * vx - ux * vz
+            dx, dy = pts[1][0] - pts[0][0], pts[1][1] - pts[0][1]
+            # material on the left: the normal points to the right, (dy, -dx)
+            if dy * nx - dx * ny < 0:
+                pts.reverse()
+            out.append((pts[0][0], pts[0][1], pts[1][0], pts[1][1]))
+        return close_chains(out, holes)
+
+
+def close_chains(segs, holes=None):
+    """Join oriented segments into chains by their shared endpoints and
+    close every open chain (an open mesh's section ends where the plane
+    crosses a hole's rim, a border edge of the mesh): repeatedly extend a
+    chain's tail with a straight segment to the nearest head of an open
+    chain (its own included) on the same hole (holes: chain end -> hole
+    id), else to the nearest head of any, until it closes.  The surface
+    missing from a hole spans its rim, so it meets the plane between that
+    hole's crossings: the joins stay across the hole (docs/slicing.md, "open
+    meshes", states the same rule for the slicer).  Another closure would be
+    as valid a reading of an open mesh, which is why open meshes are the
+    uncertain case of the containment check.  Returns the segments plus the
+    closing ones."""
+    holes = holes or {}
+    heads = {}
+    for i, sg in enumerate(segs):
+        heads.setdefault((sg[0], sg[1]), []).append(i)
+    tails = set((sg[2], sg[3]) for sg in segs)
+    used = [False] * len(segs)
+    chains = []
+    # chains start at heads no tail reaches (open), then at what is left
+    starts = [i for i, sg in enumerate(segs) if (sg[0], sg[1]) not in tails]
+    for i in starts + list(range(len(segs))):
+        if used[i]:
+            continue
+        head = (segs[i][0], segs[i][1])
+        j = i
+        while j is not None and not used[j]:
+            used[j] = True
+            end = (segs[j][2], segs[j][3])
+            nxt = [k for k in heads.get(end, ()) if not used[k]]
+            j = nxt[0] if nxt else None
+        if end != head:
+            chains.append((head, end))
+    out = list(segs)
+    alive = dict(enumerate(chains))
+    while alive:
+        c0 = next(iter(alive))
+        head, tail = alive.pop(c0)
+        while True:
+            hole = holes.get(tail)
+            # rank: (not on the tail's hole, distance); own head is key None
+            own = (hole is None or holes.get(head) != hole,
+                   math.hypot(tail[0] - head[0], tail[1] - head[1]))
+            best, bd = None, own
+            for k, (h, _) in alive.items():
+                d = (hole is None or holes.get(h) != hole, math.hypot(tail[0] - h[0], tail[1] - h[1]))
+                if d < bd:
+                    best, bd = k, d
+            if best is None:
+                out.append((tail[0], tail[1], head[0], head[1]))
+                break
+            h, t = alive.pop(best)
+            out.append((tail[0], tail[1], h[0], h[1]))
+            tail = t
+    return out
 
 
 # ----------------------------------------------------------------------------
@@ -634,11 +875,21 @@ def check_extrusion(rep, no, layer, layers, x, y, nx, ny, nz, de, width, role, f
         elif need > 0 and es.clearance(x, y, nx, ny, need) < need:
             rep.fail("skirt", no, "skirt closer than %.3f mm to the part" % need)
         return
+    # A failure of the fast test (distance to every section edge) is
+    # confirmed against the outline proper: edges inside the region
+    # (overlapping shells) do not count, nor outline pieces narrower than
+    # 2 tol (specks: a pin-hole or a mesh sliver where it ends).  Every
+    # point a speck encloses lies within tol of its outline, so dropping it
+    # moves the region by at most tol (Hausdorff), the allowance tol makes
+    # for the writer's outline simplification.
     if not es.inside(x, y) or not es.inside(nx, ny):
-        rep.fail("containment", no, "%s segment (%.3f,%.3f)-(%.3f,%.3f) leaves layer %d's region"
-                 % (role, x, y, nx, ny, layer))
-        return
+        if not es.inside(x, y, tol) or not es.inside(nx, ny, tol):
+            rep.fail("containment", no, "%s segment (%.3f,%.3f)-(%.3f,%.3f) leaves layer %d's "
+                     "region" % (role, x, y, nx, ny, layer))
+            return
     c = es.clearance(x, y, nx, ny, max(need, 1e-9))
+    if c < need or c == 0:
+        c = es.clearance(x, y, nx, ny, max(need, 1e-9), tol, exact=True)
     if c < need or c == 0:
         rep.fail("containment", no, "%s segment (%.3f,%.3f)-(%.3f,%.3f) of width %.3f is %.4f mm "
                  "from layer %d's outline (needs %.4f)" % (role, x, y, nx, ny, width, c, layer,
