@@ -5,8 +5,8 @@
  * A piece P (a thin strip, ring or blob of the region) is shrunk by d, a
  * little under half the narrowest printable width: what survives is a
  * sliver hugging P's medial axis wherever P is at least 2d wide.  A
- * sliver around an open strip is cut at its two mutually farthest
- * vertices into two sides; points sampled along one side are paired
+ * sliver around an open strip is cut at its two ends (where its outline
+ * turns back: strip_ends()) into two sides; points sampled along one side are paired
  * with their nearest points on the other, and the midpoints of the pairs
  * form the centreline, their distance plus 2d the local width (the two
  * walls of a strip run side by side, so this pairs each wall point with
@@ -184,46 +184,6 @@ out:
 	return rc;
 }
 
-/* Centre the chain pts[0..n) (closed: a loop) and append it as a path. */
-static int emit_chain(struct tp_index *ix, const struct pt2 *pts, size_t n, int closed,
-		      enum tp_role role, int64_t min_w, int64_t max_w, struct thin_buf *b,
-		      struct tp_plan *items, struct err *e, int *added)
-{
-	double len = 0;
-
-	b->n = 0;
-	for (size_t i = 0; i < n; i++) {
-		struct pt2 c;
-		int64_t w;
-		centre(ix, pts[i], max_w, &c, &w);
-		if (w > max_w)
-			w = max_w;
-		if (w < min_w)
-			w = min_w;
-		w -= w % WIDTH_STEP_NM;
-		if (b->n && tp_dist_nm(c, b->pts[b->n - 1]) < MIN_STEP_NM) {
-			if (w < b->w[b->n - 1])
-				b->w[b->n - 1] = w;
-			continue;
-		}
-		if (b->n)
-			len += tp_dist_nm(c, b->pts[b->n - 1]);
-		if (push(b, c, w))
-			return ERR_SET(e, ERR_NOMEM, "out of memory planning thin walls");
-	}
-	if (closed && b->n > 2 && tp_dist_nm(b->pts[0], b->pts[b->n - 1]) < MIN_STEP_NM)
-		b->n--;
-	if (b->n < 2 || (closed && b->n < 3) || len < (double)min_w / 2)
-		return 0;
-	/* Segment k takes the narrower of its two end widths. */
-	for (size_t k = 0; k < b->n; k++) {
-		int64_t w2 = closed || k + 1 < b->n ? b->w[(k + 1) % b->n] : b->w[k];
-		if (w2 < b->w[k])
-			b->w[k] = w2;
-	}
-	return emit_valid(ix, b, closed, role, min_w, items, e, added);
-}
-
 /* Samples along a polyline at increasing arc lengths. */
 struct walker {
 	const struct pt2 *p;
@@ -286,31 +246,50 @@ static double poly_len(const struct pt2 *p, size_t n)
 	return l;
 }
 
-/* Centreline of an open strip's sliver from its two sides l and r (both
- * running from the same end to the other), d = the shrink distance. */
-static int emit_strip(struct tp_index *ix, const struct pt2 *l, size_t nl, const struct pt2 *r,
-		      size_t nr, double d, enum tp_role role, int64_t min_w, int64_t max_w, struct thin_buf *b,
-		      struct tp_plan *items, struct err *e, int *added)
+/* One side of a sliver: a polyline (a closed side repeats its first
+ * point at the end). */
+struct side {
+	const struct pt2 *p;
+	size_t n;
+};
+
+/* Centreline of a sliver from its side l and the opposite sides r[0..nr)
+ * (a strip: l and r run from the same end to the other; a ring: l is the
+ * outer loop, closed, and r its holes), d = the shrink distance.  Samples
+ * every STRIP_STEP_NM along l pair with their nearest point on r: the
+ * midpoint is the centre, the distance plus 2d the width. */
+static int emit_paired(struct tp_index *ix, struct side l, int closed, const struct side *r,
+		       size_t nr, double d, enum tp_role role, int64_t min_w, int64_t max_w,
+		       struct thin_buf *b, struct tp_plan *items, struct err *e, int *added)
 {
-	double ll = poly_len(l, nl), total = 0;
-	size_t n = (size_t)ceil(ll / STRIP_STEP_NM) + 1, k = 0;
-	struct walker wl = {l, nl, 0, 0};
+	double ll = poly_len(l.p, l.n), total = 0;
+	size_t n = (size_t)ceil(ll / STRIP_STEP_NM) + (closed ? 0 : 1), k = 0;
+	struct walker wl = {l.p, l.n, 0, 0};
 
 	if (n < 2)
 		n = 2;
 	b->n = 0;
 	for (size_t i = 0; i < n; i++) {
-		double t = (double)i / (double)(n - 1), xl, yl, xr, yr;
+		double t = closed ? (double)i / (double)n : (double)i / (double)(n - 1);
+		double xl, yl, xr = 0, yr = 0, best = INFINITY;
 		struct pt2 c;
 		int64_t w;
 		walk_at(&wl, t * ll, &xl, &yl);
-		nearest_on(r, nr, xl, yl, &xr, &yr);
+		for (size_t j = 0; j < nr; j++) {
+			double qx, qy;
+			nearest_on(r[j].p, r[j].n, xl, yl, &qx, &qy);
+			if (hypot(qx - xl, qy - yl) < best) {
+				best = hypot(qx - xl, qy - yl);
+				xr = qx;
+				yr = qy;
+			}
+		}
 		/* A sample on a sliver tip pairs with itself: not centred, skip. */
-		if (hypot(xl - xr, yl - yr) < 1000 && n > 2)
+		if (best < 1000 && n > 2)
 			continue;
 		c.x = (int64_t)llround(0.5 * (xl + xr));
 		c.y = (int64_t)llround(0.5 * (yl + yr));
-		w = (int64_t)(hypot(xl - xr, yl - yr) + 2 * d);
+		w = (int64_t)(best + 2 * d);
 		{
 			/* Near a strip's ends the pair spans the end wall: the
 			 * clearance at the midpoint bounds the bead there. */
@@ -323,7 +302,7 @@ static int emit_strip(struct tp_index *ix, const struct pt2 *l, size_t nl, const
 		if (w < min_w)
 			w = min_w;
 		w -= w % WIDTH_STEP_NM;
-		if (b->n && tp_dist_nm(c, b->pts[b->n - 1]) < MIN_STEP_NM && i + 1 < n) {
+		if (b->n && tp_dist_nm(c, b->pts[b->n - 1]) < MIN_STEP_NM && (closed || i + 1 < n)) {
 			if (w < b->w[b->n - 1])
 				b->w[b->n - 1] = w;
 			continue;
@@ -333,13 +312,17 @@ static int emit_strip(struct tp_index *ix, const struct pt2 *l, size_t nl, const
 		if (push(b, c, w))
 			return ERR_SET(e, ERR_NOMEM, "out of memory planning thin walls");
 	}
-	if (b->n < 2 || total < (double)min_w / 2)
+	if (closed && b->n > 2 && tp_dist_nm(b->pts[0], b->pts[b->n - 1]) < MIN_STEP_NM)
+		b->n--;
+	if (b->n < 2 || (closed && b->n < 3) || total < (double)min_w / 2)
 		return 0;
 	/* Segment widths: the narrower end; then drop vertices that neither
 	 * bend the line (5 um) nor change the width. */
-	for (size_t i = 0; i + 1 < b->n; i++)
-		if (b->w[i + 1] < b->w[i])
-			b->w[i] = b->w[i + 1];
+	for (size_t i = 0; i < b->n; i++) {
+		int64_t w2 = closed || i + 1 < b->n ? b->w[(i + 1) % b->n] : b->w[i];
+		if (w2 < b->w[i])
+			b->w[i] = w2;
+	}
 	for (size_t i = 0; i < b->n; i++) {
 		if (k >= 1 && i + 1 < b->n && b->w[i] == b->w[k - 1]) {
 			struct pt2 a = b->pts[k - 1], c = b->pts[i + 1], q = b->pts[i];
@@ -355,23 +338,87 @@ static int emit_strip(struct tp_index *ix, const struct pt2 *l, size_t nl, const
 		k++;
 	}
 	b->n = k;
-	return emit_valid(ix, b, 0, role, min_w, items, e, added);
+	return emit_valid(ix, b, closed, role, min_w, items, e, added);
 }
 
-/* Vertex farthest from p in path q. */
-static size_t farthest(const struct path *q, struct pt2 p)
+/* Point at arc length t (mod the perimeter) along closed path q, whose
+ * vertex i sits at arc length at[i] (at[q->n] = perimeter). */
+static struct pt2 point_at(const struct path *q, const double *at, double t)
 {
-	size_t best = 0;
-	double bd = -1;
+	size_t lo = 0, hi = q->n;
+	double per = at[q->n], f;
+	struct pt2 a, b;
 
+	t = fmod(t, per);
+	if (t < 0)
+		t += per;
+	while (hi - lo > 1) { /* at[lo] <= t < at[hi] */
+		size_t mid = (lo + hi) / 2;
+		if (at[mid] <= t)
+			lo = mid;
+		else
+			hi = mid;
+	}
+	a = q->pts[lo];
+	b = q->pts[(lo + 1) % q->n];
+	f = at[lo + 1] > at[lo] ? (t - at[lo]) / (at[lo + 1] - at[lo]) : 0;
+	return (struct pt2){a.x + (int64_t)llround(f * (double)(b.x - a.x)),
+			    a.y + (int64_t)llround(f * (double)(b.y - a.y))};
+}
+
+/* The two ends of the strip sliver q: where its outline turns back.  Near
+ * an end, the outline points an arc length d before and after a vertex
+ * lie on the two sides at the same distance from the end, so their
+ * centres (centre()) coincide; elsewhere they lie d apart along the
+ * centreline.  The first end is the vertex where the two centres are
+ * closest, the second the same among vertices at least a quarter of the
+ * perimeter away (each side of a strip is half of it).  Unlike the two
+ * mutually farthest vertices, this finds the ends of bent strips (a U
+ * has its far corners farther apart than its ends).  O(n log n). */
+static int strip_ends(struct tp_index *ix, const struct path *q, int64_t max_w, size_t *a,
+		      size_t *z)
+{
+	double *at = mem_alloc((q->n + 1) * sizeof *at), *dm, per, d, best = INFINITY;
+
+	if (!at)
+		return ERR_NOMEM;
+	dm = mem_alloc(q->n * sizeof *dm);
+	if (!dm) {
+		mem_free(at);
+		return ERR_NOMEM;
+	}
+	at[0] = 0;
+	for (size_t i = 0; i < q->n; i++)
+		at[i + 1] = at[i] + tp_dist_nm(q->pts[i], q->pts[(i + 1) % q->n]);
+	per = at[q->n];
+	d = per / 8 < (double)max_w ? per / 8 : (double)max_w;
+	*a = *z = 0;
 	for (size_t i = 0; i < q->n; i++) {
-		double d = tp_dist_nm(q->pts[i], p);
-		if (d > bd) {
-			bd = d;
-			best = i;
+		struct pt2 c1, c2;
+		int64_t w;
+		centre(ix, point_at(q, at, at[i] - d), max_w, &c1, &w);
+		centre(ix, point_at(q, at, at[i] + d), max_w, &c2, &w);
+		dm[i] = tp_dist_nm(c1, c2);
+		if (dm[i] < best) {
+			best = dm[i];
+			*a = i;
 		}
 	}
-	return best;
+	best = INFINITY;
+	for (size_t i = 0; i < q->n; i++) {
+		double gap = fabs(at[i] - at[*a]);
+		if (gap > per / 2)
+			gap = per - gap;
+		if (gap >= per / 4 && dm[i] < best) {
+			best = dm[i];
+			*z = i;
+		}
+	}
+	if (*z == *a)
+		*z = (*a + q->n / 2) % q->n;
+	mem_free(at);
+	mem_free(dm);
+	return 0;
 }
 
 int tp_thin(const struct paths *pieces, enum tp_role role, int64_t min_w_nm, int64_t max_w_nm,
@@ -383,6 +430,8 @@ int tp_thin(const struct paths *pieces, enum tp_role role, int64_t min_w_nm, int
 	struct pt2 *chain = NULL;
 	size_t chain_cap = 0;
 	unsigned char *printed = NULL;
+	size_t *owner = NULL, sides_cap = 0;
+	struct side *sides = NULL;
 	/* Pieces below this area are offset noise (corner slivers of the
 	 * mitred coverage), neither printed nor reported. */
 	double noise_mm2 = 0.25 * geom_nm_to_mm(min_w_nm) * geom_nm_to_mm(min_w_nm);
@@ -399,31 +448,71 @@ int tp_thin(const struct paths *pieces, enum tp_role role, int64_t min_w_nm, int
 	if (rc)
 		goto out;
 	printed = mem_calloc(pieces->n, 1);
-	if (!printed) {
+	owner = mem_alloc((sliver.n ? sliver.n : 1) * sizeof *owner);
+	if (!printed || !owner) {
 		rc = ERR_SET(e, ERR_NOMEM, "out of memory planning thin walls");
 		goto out;
 	}
 	for (size_t i = 0; i < sliver.n; i++) {
 		const struct path *o = &sliver.v[i];
-		int ring = 0, added = 0;
+		int added = 0;
+		size_t nh = 0, np = o->n + 1;
 		if (o->n < 3 || path_area2_nm2(o) <= 0)
 			continue; /* holes are handled with their outer loop */
-		for (size_t j = 0; j < sliver.n && !ring; j++)
-			ring = j != i && sliver.v[j].n >= 3 && path_area2_nm2(&sliver.v[j]) < 0 &&
-			       bbox_contains(o, sliver.v[j].pts[0]) &&
-			       path_contains(o, sliver.v[j].pts[0]);
-		if (ring) {
-			rc = emit_chain(&ix, o->pts, o->n, 1, role, min_w_nm, max_w_nm, &b, items, e,
-					&added);
-		} else {
-			/* Sides a -> z and (reversed) z -> a of the sliver. */
-			size_t a = farthest(o, o->pts[0]), z = farthest(o, o->pts[a]), m = 0, ml;
+		/* Its holes (a ring-shaped sliver), each with the smallest outer
+		 * loop around it its owner. */
+		for (size_t j = 0; j < sliver.n; j++) {
+			owner[j] = SIZE_MAX;
+			if (sliver.v[j].n < 3 || path_area2_nm2(&sliver.v[j]) >= 0 ||
+			    !bbox_contains(o, sliver.v[j].pts[0]) || !path_contains(o, sliver.v[j].pts[0]))
+				continue;
+			owner[j] = i;
+			for (size_t t = 0; t < sliver.n; t++)
+				if (t != i && path_area2_nm2(&sliver.v[t]) > 0 &&
+				    path_area2_nm2(&sliver.v[t]) < path_area2_nm2(o) &&
+				    bbox_contains(&sliver.v[t], sliver.v[j].pts[0]) &&
+				    path_contains(&sliver.v[t], sliver.v[j].pts[0]))
+					owner[j] = SIZE_MAX;
+			if (owner[j] == i) {
+				nh++;
+				np += sliver.v[j].n + 1;
+			}
+		}
+		{
 			void *arr = chain;
-			if (mem_grow(&arr, &chain_cap, 2 * o->n + 2, sizeof *chain)) {
+			int bad = mem_grow(&arr, &chain_cap, 2 * np + 2, sizeof *chain);
+			chain = arr;
+			arr = sides;
+			bad = bad || mem_grow(&arr, &sides_cap, nh + 1, sizeof *sides);
+			sides = arr;
+			if (bad) {
 				rc = ERR_SET(e, ERR_NOMEM, "out of memory planning thin walls");
 				goto out;
 			}
-			chain = arr;
+		}
+		if (nh) {
+			/* A ring: its outer loop paired with its holes, closed. */
+			struct side outer = {chain, o->n + 1};
+			size_t m = 0, ns = 0;
+			for (size_t k = 0; k <= o->n; k++)
+				chain[m++] = o->pts[k % o->n];
+			for (size_t j = 0; j < sliver.n; j++) {
+				const struct path *h = &sliver.v[j];
+				if (owner[j] != i)
+					continue;
+				sides[ns++] = (struct side){chain + m, h->n + 1};
+				for (size_t k = 0; k <= h->n; k++)
+					chain[m++] = h->pts[k % h->n];
+			}
+			rc = emit_paired(&ix, outer, 1, sides, ns, SHRINK * (double)min_w_nm, role,
+					 min_w_nm, max_w_nm, &b, items, e, &added);
+		} else {
+			/* A strip: sides a -> z and (reversed) z -> a. */
+			size_t a, z, m = 0, ml;
+			if (strip_ends(&ix, o, max_w_nm, &a, &z)) {
+				rc = ERR_SET(e, ERR_NOMEM, "out of memory planning thin walls");
+				goto out;
+			}
 			for (size_t k = a;; k = (k + 1) % o->n) {
 				chain[m++] = o->pts[k];
 				if (k == z)
@@ -435,8 +524,10 @@ int tp_thin(const struct paths *pieces, enum tp_role role, int64_t min_w_nm, int
 				if (k == z)
 					break;
 			}
-			rc = emit_strip(&ix, chain, ml, chain + ml, m - ml, SHRINK * (double)min_w_nm, role,
-					min_w_nm, max_w_nm, &b, items, e, &added);
+			sides[0] = (struct side){chain + ml, m - ml};
+			rc = emit_paired(&ix, (struct side){chain, ml}, 0, sides, 1,
+					 SHRINK * (double)min_w_nm, role, min_w_nm, max_w_nm, &b, items, e,
+					 &added);
 		}
 		if (rc)
 			goto out;
@@ -452,15 +543,24 @@ int tp_thin(const struct paths *pieces, enum tp_role role, int64_t min_w_nm, int
 			}
 		}
 	}
+	/* Unprinted pieces: their area less their holes'. */
 	for (size_t k = 0; k < pieces->n; k++) {
 		double a = path_area_mm2(&pieces->v[k]);
-		if (!printed[k] && a >= noise_mm2) {
-			items->thin_dropped++;
-			items->thin_dropped_mm2 += a;
+		if (printed[k] || a < noise_mm2)
+			continue;
+		items->thin_dropped++;
+		for (size_t j = 0; j < pieces->n; j++) {
+			const struct path *h = &pieces->v[j];
+			if (h->n >= 3 && path_area2_nm2(h) < 0 && bbox_contains(&pieces->v[k], h->pts[0]) &&
+			    path_contains(&pieces->v[k], h->pts[0]))
+				a += path_area_mm2(h);
 		}
+		items->thin_dropped_mm2 += a > 0 ? a : 0;
 	}
 out:
 	mem_free(printed);
+	mem_free(owner);
+	mem_free(sides);
 	mem_free(chain);
 	mem_free(b.pts);
 	mem_free(b.w);
