@@ -783,7 +783,7 @@ static int put_buf(struct sink *s, const struct buf *b, struct err *e)
 }
 
 static int metrics_out(struct gc_writer *w, struct metrics *m, double total_s,
-		       int64_t prime_units, double bytes, int nthumbs, struct err *e)
+		       int64_t prime_units, uint64_t bytes, int nthumbs, struct err *e)
 {
 	double area = w->gp.filament_area_mm2;
 	int64_t units = prime_units, part_units = 0;
@@ -804,7 +804,7 @@ static int metrics_out(struct gc_writer *w, struct metrics *m, double total_s,
 						     w->f.filament_density_g_cm3);
 	rc |= metrics_num(m, "gcode.print_time_s", total_s);
 	rc |= metrics_int(m, "gcode.layers", w->received);
-	rc |= metrics_num(m, "gcode.part_volume_mm3", (double)part_units / GC_E_PER_MM * area);
+	rc |= metrics_num(m, "gcode.part_material_mm3", (double)part_units / GC_E_PER_MM * area);
 	rc |= metrics_num(m, "gcode.extrusion_mm", w->extrude_mm);
 	rc |= metrics_num(m, "gcode.travel_mm", w->travel_mm);
 	rc |= metrics_int(m, "gcode.retractions", w->retractions);
@@ -812,7 +812,7 @@ static int metrics_out(struct gc_writer *w, struct metrics *m, double total_s,
 	rc |= metrics_int(m, "gcode.thin_dropped", w->thin_dropped);
 	rc |= metrics_num(m, "gcode.thin_dropped_mm2", w->thin_dropped_mm2);
 	rc |= metrics_int(m, "gcode.thumbnails", nthumbs);
-	rc |= metrics_num(m, "gcode.bytes", bytes);
+	rc |= metrics_int(m, "gcode.bytes", (long long)bytes);
 	for (int r = 0; r < TP_ROLE_COUNT; r++) {
 		snprintf(key, sizeof key, "gcode.volume_mm3.%s", tp_role_key((enum tp_role)r));
 		rc |= metrics_num(m, key, (double)w->e_units[r] / GC_E_PER_MM * area);
@@ -878,7 +878,7 @@ static int gc_close(void *state, struct metrics *m, struct err *e)
 	if (!rc)
 		rc = put_buf(w->sink, &head, e);
 	if (!rc && m)
-		rc = metrics_out(w, m, total_s, prime_units, (double)(w->sink->bytes - bytes0),
+		rc = metrics_out(w, m, total_s, prime_units, w->sink->bytes - bytes0,
 				 nthumbs, e);
 	buf_fini(&head);
 	buf_fini(&start);

@@ -110,6 +110,24 @@ static void test_box_with_hole(void)
 	CHECK_NUM(fx_metric(&r.m, "gcode.travel_mm"), >, 0);
 	CHECK_NEAR(fx_metric(&r.m, "gcode.travel_mm"), fx_get(sum, "travel_mm"), 1.0);
 	CHECK_NEAR(fx_metric(&r.m, "gcode.bytes"), (double)r.out.len, 0);
+	CHECK_EQ_INT(metrics_get(&r.m, "gcode.bytes")->type, METRIC_INT);
+	/* part material: what the checker finds in the layers, skirt (and
+	 * the prime line before layer 0) left out */
+	{
+		static const char *const roles[] = {"external_perimeter", "perimeter", "gap_fill",
+						    "internal_infill", "solid_infill",
+						    "top_solid_infill", "bridge_infill"};
+		char key[64];
+		double v = 0;
+		for (size_t i = 0; i < sizeof roles / sizeof roles[0]; i++) {
+			snprintf(key, sizeof key, "volume.%s", roles[i]);
+			v += fx_get0(sum, key);
+		}
+		CHECK_NEAR(fx_metric(&r.m, "gcode.part_material_mm3"), v, 0.02);
+		CHECK_NUM(fx_metric(&r.m, "gcode.part_material_mm3"), <,
+			  fx_metric(&r.m, "material_volume_mm3") -
+				  fx_metric(&r.m, "gcode.volume_mm3.skirt"));
+	}
 	CHECK_EQ_INT(fx_metric(&r.m, "gcode.thin_dropped"), 0);
 	fx_run_fini(&r);
 }
