@@ -14,7 +14,6 @@
 #include "engine/geom/clip.h"
 #include "engine/output/printer.h"
 #include "engine/output/printer_kinds.h"
-#include "engine/output/thumbnail.h"
 #include "engine/output/writer.h"
 
 #include <math.h>
@@ -22,17 +21,6 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/resource.h>
-
-/* The writer calls this only with a mesh; the bench passes none. */
-__attribute__((weak)) int thumbnail_png_from_mesh(const struct mesh *m, int w, int h,
-						  struct buf *png, struct err *e)
-{
-	(void)m;
-	(void)w;
-	(void)h;
-	(void)png;
-	return ERR_SET(e, ERR_UNSUPPORTED, "no thumbnails in the bench");
-}
 
 static struct pt2 P(double x, double y)
 {

@@ -21,6 +21,9 @@ What it checks (each failure is reported with the place and the values):
     rectangle with semicircular sides, (w - h) h + pi (h/2)^2; see --flow);
     retractions are undone by equal unretractions;
   * M73 progress: P never decreases, R never increases;
+  * thumbnails: each '; thumbnail begin WxH LEN' block holds LEN base64
+    characters that decode to a valid PNG (signature, chunk CRCs, IHDR of
+    W x H, IDAT inflating to H filtered rows) ending at '; thumbnail end';
   * containment (when regions are given): every extruding segment's
     centreline keeps at least w/2 - tol from the outline of the layer's
     material region and lies inside it (w from ;WIDTH:); the skirt keeps
@@ -630,6 +633,7 @@ def check_text(text, regions=None, tol=0.02, e_rel=0.005, e_abs=2e-5, flow="stad
               "first_layer_height", "nozzle_diameter", "filament_type"):
         if k not in footer:
             rep.fail("footer", 0, "missing '; %s = '" % k)
+    check_thumbnails(rep, lines)
     if filament_diameter is None:
         filament_diameter = float(footer.get("filament_diameter", "1.75"))
     fil_area = math.pi * filament_diameter ** 2 / 4
@@ -838,6 +842,85 @@ def check_text(text, regions=None, tol=0.02, e_rel=0.005, e_abs=2e-5, flow="stad
     return rep
 
 
+def check_png(data, w, h):
+    """Problems of a PNG file expected to be w x h (empty when none): the
+    signature, every chunk's CRC, IHDR first with those dimensions, IEND
+    last, and the inflated IDAT stream holding exactly h filtered rows."""
+    import zlib
+    if data[:8] != b"\x89PNG\r\n\x1a\n":
+        return ["no PNG signature"]
+    pos, chunks, idat = 8, [], b""
+    while pos + 8 <= len(data):
+        n, kind = struct.unpack_from(">I4s", data, pos)
+        body = data[pos + 8:pos + 8 + n]
+        if len(body) != n or pos + 12 + n > len(data):
+            return ["chunk %r runs past the end" % kind]
+        crc = struct.unpack_from(">I", data, pos + 8 + n)[0]
+        if zlib.crc32(kind + body) & 0xFFFFFFFF != crc:
+            return ["bad CRC in chunk %r" % kind]
+        chunks.append(kind)
+        if kind == b"IHDR":
+            ihdr = struct.unpack(">IIBBBBB", body)
+        elif kind == b"IDAT":
+            idat += body
+        pos += 12 + n
+    if not chunks or chunks[0] != b"IHDR" or chunks[-1] != b"IEND" or pos != len(data):
+        return ["chunks %r (IHDR first, IEND last, nothing after)" % chunks]
+    pw, ph, depth, color = ihdr[:4]
+    if (pw, ph) != (w, h):
+        return ["%dx%d pixels, the block says %dx%d" % (pw, ph, w, h)]
+    channels = {0: 1, 2: 3, 3: 1, 4: 2, 6: 4}.get(color)
+    if channels is None or depth not in (1, 2, 4, 8, 16) or ihdr[6] != 0:
+        return ["colour type %d, depth %d, interlace %d" % (color, depth, ihdr[6])]
+    try:
+        raw = zlib.decompress(idat)
+    except zlib.error as exc:
+        return ["IDAT does not inflate: %s" % exc]
+    row = 1 + (w * channels * depth + 7) // 8
+    if len(raw) != h * row:
+        return ["IDAT inflates to %d bytes, %d rows of %d expected" % (len(raw), h, row)]
+    if any(raw[k * row] > 4 for k in range(h)):
+        return ["row filter type above 4"]
+    return []
+
+
+def check_thumbnails(rep, lines):
+    """'; thumbnail begin WxH LEN' blocks (PrusaSlicer's form): base64 in
+    '; ' lines of LEN characters in all, decoding to a valid W x H PNG."""
+    import base64
+    i, count = 0, 0
+    while i < len(lines):
+        m = re.match(r"^; thumbnail begin (\d+)x(\d+) (\d+)$", lines[i])
+        if not m:
+            i += 1
+            continue
+        start, text = i + 1, []
+        i += 1
+        while i < len(lines) and lines[i] != "; thumbnail end":
+            if not lines[i].startswith("; "):
+                rep.fail("thumbnail", i + 1, "line inside a thumbnail block is not '; <base64>'")
+                break
+            text.append(lines[i][2:])
+            i += 1
+        b64 = "".join(text)
+        w, h, n = int(m.group(1)), int(m.group(2)), int(m.group(3))
+        if i >= len(lines):
+            rep.fail("thumbnail", start, "no '; thumbnail end'")
+            break
+        if len(b64) != n:
+            rep.fail("thumbnail", start, "%d base64 characters, the block says %d" % (len(b64), n))
+        try:
+            data = base64.b64decode(b64, validate=True)
+        except ValueError as exc:
+            rep.fail("thumbnail", start, "base64: %s" % exc)
+            continue
+        for problem in check_png(data, w, h):
+            rep.fail("thumbnail", start, "%dx%d: %s" % (w, h, problem))
+        rep.stats["thumbnail.%dx%d.png_bytes" % (w, h)] = len(data)
+        count += 1
+    rep.stats["thumbnails"] = count
+
+
 def check_extrusion(rep, no, layer, layers, x, y, nx, ny, nz, de, width, role, fil_area, flow,
                     e_rel, e_abs, tol, regions, angle_stats):
     lz, lh = layers[-1][1], layers[-1][2]
@@ -868,6 +951,15 @@ def check_extrusion(rep, no, layer, layers, x, y, nx, ny, nz, de, width, role, f
     if regions is None:
         return
     es = regions.region(layer, lz - lh / 2)
+    if es.nonzero and "layer.%d.region_mm2" % layer not in rep.stats:
+        # The section's area (shoelace of the oriented edges: the integral
+        # of the winding, so overlapping shells count twice) and outline
+        # length, summed over the layers as volume and outline x height.
+        a = sum(ax * by - bx * ay for ax, ay, bx, by in es.edges) / 2
+        ln = sum(math.hypot(bx - ax, by - ay) for ax, ay, bx, by in es.edges)
+        rep.stats["layer.%d.region_mm2" % layer] = a
+        rep.add("region_volume_mm3", a * lh)
+        rep.add("region_outline_mm2", ln * lh)
     need = width / 2 - tol
     if role == "Skirt/Brim":
         if es.inside(x, y) or es.inside(nx, ny):

@@ -17,9 +17,9 @@
 #include "engine/core/metrics.h"
 #include "engine/core/sink.h"
 #include "engine/geom/clip.h"
+#include "engine/mesh/mesh.h"
 #include "engine/output/printer.h"
 #include "engine/output/printer_kinds.h"
-#include "engine/output/thumbnail.h"
 #include "engine/output/writer.h"
 
 #include <math.h>
@@ -32,18 +32,6 @@ size_t __sanitizer_get_current_allocated_bytes(void);
 #else
 #include <malloc.h>
 #endif
-
-/* Until thumbnail.c lands the writer's thumbnail call needs a definition;
- * weak, so the real one wins once it is linked.  Tests pass mesh = NULL. */
-__attribute__((weak)) int thumbnail_png_from_mesh(const struct mesh *m, int w, int h,
-						  struct buf *png, struct err *e)
-{
-	(void)m;
-	(void)w;
-	(void)h;
-	(void)png;
-	return ERR_SET(e, ERR_UNSUPPORTED, "thumbnails not linked");
-}
 
 enum fx_kind { FX_RECT, FX_CIRCLE, FX_POLY };
 
@@ -227,6 +215,7 @@ struct fx_run {
 	int threads;
 	int feed_layers;        /* < layers: stop early and free without close */
 	struct sink *sink;      /* NULL: into out */
+	const struct mesh *mesh; /* the part, for thumbnails (borrowed), or NULL */
 	struct buf out;
 	struct metrics m;
 	struct err e;
@@ -304,6 +293,7 @@ static inline int fx_write(const struct fx_stack *st, const struct printer *pr, 
 	info.job_name = "fixture";
 	info.engine_name = "solid";
 	info.threads = r->threads;
+	info.mesh = r->mesh;
 	info.created = 1700000000; /* 2023-11-14 22:13:20 UTC */
 	rc = gcode_writer_ops.open(&info, s, &state, &r->e);
 	for (int k = 0; !rc && k < n; k++) {

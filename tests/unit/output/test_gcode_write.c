@@ -610,7 +610,8 @@ static void test_header_and_options(void)
 }
 
 /* The checker's mesh mode: the same box given as an OFF mesh it slices
- * itself; shifted by 0.3 mm the check must fail. */
+ * itself; shifted by 0.3 mm the check must fail.  With the mesh the
+ * writer renders thumbnails (thumbnail.c), which the checker decodes. */
 static void test_checker_mesh_mode(void)
 {
 	struct fx_stack st;
@@ -618,6 +619,8 @@ static void test_checker_mesh_mode(void)
 	struct fx_run r;
 	struct fx_range *a;
 	const char *off = fx_tmp("box.off"), *g = fx_tmp("meshbox"), *s = fx_tmp("meshbox.sum");
+	struct mesh *mesh = NULL;
+	struct err e;
 	FILE *f;
 	char extra[700];
 
@@ -632,15 +635,33 @@ static void test_checker_mesh_mode(void)
 		   "120 120 3\n90 120 3\n4 0 3 2 1\n4 4 5 6 7\n4 0 1 5 4\n4 1 2 6 5\n4 2 3 7 6\n"
 		   "4 3 0 4 7\n");
 	fclose(f);
+	REQUIRE_OK(mesh_read_file(off, MESH_FMT_AUTO, &mesh, NULL, &e), &e);
 	fx_run_init(&r, 2);
+	r.mesh = mesh;
 	REQUIRE_OK(fx_write(&st, &pr, &r), &r.e);
 	REQUIRE(fx_save(&r.out, g) == 0);
 	snprintf(extra, sizeof extra, "--mesh '%s' --quiet", off);
 	CHECK_EQ_INT(fx_check(g, NULL, s, extra), 0);
+	CHECK_EQ_INT(fx_metric(&r.m, "gcode.thumbnails"), 2);
+	CHECK_EQ_INT(fx_get(s, "thumbnails"), 2);
+	CHECK_NUM(fx_get(s, "thumbnail.32x32.png_bytes"), >, 100);
+	CHECK_NUM(fx_get(s, "thumbnail.300x300.png_bytes"), >, fx_get(s, "thumbnail.32x32.png_bytes"));
+	/* a corrupted thumbnail is caught (one base64 character changed) */
+	{
+		char *t = strstr((char *)r.out.data, "; thumbnail begin 32x32");
+		REQUIRE(t);
+		t = strchr(t, '\n') + 3;
+		*t = *t == 'A' ? 'B' : 'A';
+		REQUIRE(fx_save(&r.out, g) == 0);
+		snprintf(extra, sizeof extra, "--quiet 2>/dev/null");
+		CHECK_EQ_INT(fx_check(g, NULL, s, extra), 1);
+		CHECK_NUM(fx_get(s, "errors.thumbnail"), >, 0);
+	}
 	snprintf(extra, sizeof extra, "--mesh '%s' --mesh-translate 0.3,0,0 --quiet 2>/dev/null", off);
 	CHECK_EQ_INT(fx_check(g, NULL, s, extra), 1);
 	CHECK_NUM(fx_get(s, "errors.containment"), >, 0);
 	fx_run_fini(&r);
+	mesh_free(mesh);
 }
 
 int main(void)
