@@ -128,7 +128,7 @@ FUZZ_ENGINE_SRC = $(filter-out %.cpp,$(ENGINE_SRC))
 FUZZ_SECONDS ?= 60
 .PHONY: fuzz-build
 fuzz-build: $(FUZZ_BIN)
-build-fuzz/%: tests/fuzz/%.c $(ENGINE_SRC)
+build-fuzz/%: tests/fuzz/%.c $(wildcard tests/fuzz/*.h engine/*/*.h) $(ENGINE_SRC)
 	@mkdir -p $(@D)
 	clang -std=c11 -O1 -g -fsanitize=fuzzer,address,undefined $(DEFS) -I. $(PKG_CFLAGS) \
 		-Wall -Wextra -Werror -o $@ $< $(filter engine/core/% engine/geom/%.c engine/mesh/%,$(FUZZ_ENGINE_SRC)) -lm
@@ -139,6 +139,11 @@ fuzz: deps
 bench: deps
 	@$(MAKE) --no-print-directory -j$(NPROC) build
 	@tests/bench/run.sh $(BUILD)
+
+# The mesh benchmark alone (also run by `make bench` via tests/bench/bench_mesh.sh).
+.PHONY: bench-mesh
+bench-mesh: $(BUILD)/tests/bench/bench_mesh
+	$< $(if $(INFILLD_SHARED),$(INFILLD_SHARED),../shared)
 
 bench-large: deps
 	@$(MAKE) --no-print-directory -j$(NPROC) build
