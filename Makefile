@@ -102,8 +102,9 @@ $(BUILD)/tests/unit/%: tests/unit/%.c $(TEST_SUPPORT_OBJ) $(LIBS)
 
 $(BUILD)/tests/bench/%: tests/bench/%.c $(LIBS)
 	@mkdir -p $(@D)
-	$(CC) $(CFLAGS) -Itests -c $< -o $@.o
-	$(CXX) $(LDFLAGS) -o $@ $@.o $(LIBS) $(LDLIBS)
+	@$(if $(Q),echo "  BENCH   $<")
+	$(Q)$(CC) $(CFLAGS) -Itests -c $< -o $@.o
+	$(Q)$(CXX) $(LDFLAGS) -o $@ $@.o $(LIBS) $(LDLIBS)
 
 # The README's two commands.
 run: deps
