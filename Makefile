@@ -131,7 +131,8 @@ FUZZ_SECONDS ?= 60
 fuzz-build: $(FUZZ_BIN)
 build-fuzz/%: tests/fuzz/%.c $(wildcard tests/fuzz/*.h engine/*/*.h) $(ENGINE_SRC)
 	@mkdir -p $(@D)
-	clang -std=c11 -O1 -g -fsanitize=fuzzer,address,undefined $(DEFS) -I. $(PKG_CFLAGS) \
+	@$(if $(Q),echo "  FUZZ    $<")
+	$(Q)clang -std=c11 -O1 -g -fsanitize=fuzzer,address,undefined $(DEFS) -I. $(PKG_CFLAGS) \
 		-Wall -Wextra -Werror -o $@ $< $(filter engine/core/% engine/geom/%.c engine/mesh/%,$(FUZZ_ENGINE_SRC)) -lm
 fuzz: deps
 	@$(MAKE) --no-print-directory fuzz-build
