@@ -66,31 +66,37 @@ deps:
 
 build: $(BIN) $(UNIT_BIN)
 
+# V=1 shows the full commands.
+Q := $(if $(filter 1,$(V)),,@)
 $(BUILD)/obj/%.c.o: %.c
 	@mkdir -p $(@D)
-	$(CC) $(CFLAGS) -c $< -o $@
+	@$(if $(Q),echo "  CC      $<")
+	$(Q)$(CC) $(CFLAGS) -c $< -o $@
 
 $(BUILD)/obj/%.cpp.o: %.cpp
 	@mkdir -p $(@D)
-	$(CXX) $(CXXFLAGS) -c $< -o $@
+	@$(if $(Q),echo "  CXX     $<")
+	$(Q)$(CXX) $(CXXFLAGS) -c $< -o $@
 
 $(BUILD)/libengine.a: $(ENGINE_OBJ)
 	@mkdir -p $(@D)
-	rm -f $@ && ar rcs $@ $^
+	$(Q)rm -f $@ && ar rcs $@ $^
 $(BUILD)/libapi.a: $(API_OBJ)
 	@mkdir -p $(@D)
-	rm -f $@ && ar rcs $@ $^
+	$(Q)rm -f $@ && ar rcs $@ $^
 $(BUILD)/libdb.a: $(DB_OBJ)
 	@mkdir -p $(@D)
-	rm -f $@ && ar rcs $@ $^
+	$(Q)rm -f $@ && ar rcs $@ $^
 
 $(BIN): $(SERVICE_OBJ) $(LIBS)
-	$(CXX) $(LDFLAGS) -o $@ $(SERVICE_OBJ) $(LIBS) $(LDLIBS)
+	@$(if $(Q),echo "  LINK    $@")
+	$(Q)$(CXX) $(LDFLAGS) -o $@ $(SERVICE_OBJ) $(LIBS) $(LDLIBS)
 
 $(BUILD)/tests/unit/%: tests/unit/%.c $(TEST_SUPPORT_OBJ) $(LIBS)
 	@mkdir -p $(@D)
-	$(CC) $(CFLAGS) -Itests -c $< -o $@.o
-	$(CXX) $(LDFLAGS) -o $@ $@.o $(TEST_SUPPORT_OBJ) $(LIBS) $(LDLIBS)
+	@$(if $(Q),echo "  TEST    $<")
+	$(Q)$(CC) $(CFLAGS) -Itests -c $< -o $@.o
+	$(Q)$(CXX) $(LDFLAGS) -o $@ $@.o $(TEST_SUPPORT_OBJ) $(LIBS) $(LDLIBS)
 
 # The README's two commands.
 run: deps
