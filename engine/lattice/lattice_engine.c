@@ -346,7 +346,7 @@ static int load_file(const struct engine_ctx *ctx, struct lat_state *s, struct e
 }
 
 /* Figures of an in-memory lattice and its sorted strut source. */
-static int stage_in_memory(const struct engine_ctx *ctx, struct lat_state *s, struct err *e)
+static int stage_in_memory(struct lat_state *s, struct err *e)
 {
 	const struct lattice *q = s->q;
 	struct box3 b = lattice_bbox(q);
@@ -464,14 +464,14 @@ static int lat_prepare(const struct engine_ctx *ctx, const void *params, void **
 	if (ctx->mesh) {
 		if ((rc = generate(ctx, s, e)) != 0)
 			goto fail;
-		rc = stage_in_memory(ctx, s, e);
+		rc = stage_in_memory(s, e);
 	} else if (lattice_file_probe(ctx->input_path) == LATTICE_FILE_BINARY &&
 		   ctx->common->up == MESH_UP_Z) {
 		rc = stage_stream(ctx, s, e);
 	} else {
 		if ((rc = load_file(ctx, s, e)) != 0)
 			goto fail;
-		rc = stage_in_memory(ctx, s, e);
+		rc = stage_in_memory(s, e);
 	}
 	if (rc)
 		goto fail;
