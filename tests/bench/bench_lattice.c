@@ -106,9 +106,12 @@ static int cmd_gen(int argc, char **argv)
 		return 1;
 	}
 	printf("gen_nodes %zu\ngen_struts %zu\ngen_seconds %.2f\ngen_density_error_mean %.4f\n"
-	       "gen_density_error_max %.4f\ngen_gamma_so_po %.4f\ngen_rss_mb %.1f\n",
+	       "gen_density_error_max %.4f\ngen_voxels %zu\ngen_gamma_so_po %.4f\n"
+	       "gen_seconds_stages sample %.2f tetgen %.2f po %.2f match %.2f measure %.2f\n"
+	       "gen_rss_mb %.1f\n",
 	       q->nnodes, q->nedges, progress_now_s() - t0, r.density_error_mean,
-	       r.density_error_max, r.gamma_so_po, peak_rss_mb());
+	       r.density_error_max, r.voxels, r.gamma_so_po, r.s_sample, r.s_tetgen, r.s_po,
+	       r.s_match, r.s_measure, peak_rss_mb());
 	lattice_free(q);
 	mesh_free(m);
 	return 0;
