@@ -196,7 +196,7 @@ static int rebuild_struts(struct mstate *m, struct err *e)
 	m->ab = nab;
 	m->ns = u;
 	strut_grid_fini(&m->grid);
-	return strut_grid_init(&m->grid, m->p, m->ab, m->ns, m->R, fmax(m->R, 1.5 * m->r0), e);
+	return strut_grid_init(&m->grid, m->p, m->ab, m->ns, m->R, 0.6 * m->R, e);
 }
 
 /* Strut indices of tet t (its expanded edges), at most cap. */

@@ -11,7 +11,7 @@
 #include <math.h>
 #include <string.h>
 
-#define MEASURE_SAMPLES 4096 /* 16^3 regular points per voxel */
+#define MEASURE_SAMPLES 1728 /* 12^3 regular points per voxel */
 
 /* ---- voxels ---- */
 
@@ -181,7 +181,7 @@ int lattice_measure_density(const struct lattice *q, const struct lattice_domain
 	int rc;
 
 	memset(&g, 0, sizeof g);
-	/* a regular 16^3 grid per voxel (jitter 0): not the matching's samples */
+	/* a regular 12^3 grid per voxel (jitter 0): not the matching's samples */
 	if ((rc = lattice_voxels_init(&v, d, target, voxel_mm, MEASURE_SAMPLES, 0, 0, e)) != 0)
 		goto out;
 	ab = mem_alloc((q->nedges ? q->nedges : 1) * 2 * sizeof *ab);
@@ -196,7 +196,7 @@ int lattice_measure_density(const struct lattice *q, const struct lattice_domain
 		ab[2 * i + 1] = q->edge[i].b;
 		w[i] = lattice_weight_for_radius(q->edge[i].radius_mm, 1.0, R);
 	}
-	if ((rc = strut_grid_init(&g, q->node, ab, q->nedges, R, R, e)) != 0)
+	if ((rc = strut_grid_init(&g, q->node, ab, q->nedges, R, 0.6 * R, e)) != 0)
 		goto out;
 	{
 		struct measure_ctx x = {&v, &g, w, dens};
