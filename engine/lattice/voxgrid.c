@@ -57,6 +57,12 @@ struct vox_setup {
 	int jitter;
 };
 
+#define SUB 4 /* sub-cells per axis for classifying a voxel cut by the surface */
+
+/* Classify the voxel's samples: the voxel as a whole when its centre is
+ * farther from the surface than its half diagonal, else per sub-cell
+ * (SUB^3) the same way, and only samples of sub-cells cut by the surface
+ * get their own inside test (those are the expensive queries). */
 static void vox_setup_one(void *ctx, size_t idx, int tid)
 {
 	struct vox_setup *x = ctx;
@@ -66,13 +72,29 @@ static void vox_setup_one(void *ctx, size_t idx, int tid)
 	double hd = 0.5 * v->h * sqrt(3.0), dist = x->d->distance(x->d->ctx, c);
 	int in_c = x->d->inside(x->d->ctx, c), ns = v->side * v->side * v->side, cnt = 0;
 	uint8_t *bits = v->inside + idx * v->bytes_per;
-	double tsum = 0;
+	signed char sub[SUB * SUB * SUB]; /* 0/1 uniform, -1 cut */
+	double tsum = 0, sh = v->h / SUB;
 
 	(void)tid;
 	memset(bits, 0, v->bytes_per);
+	for (int q = 0; q < SUB * SUB * SUB; q++) {
+		struct vec3 sc;
+		if (dist > hd) {
+			sub[q] = (signed char)in_c;
+			continue;
+		}
+		sc = v3(b.lo.x + (q % SUB + 0.5) * sh, b.lo.y + (q / SUB % SUB + 0.5) * sh,
+			b.lo.z + (q / (SUB * SUB) + 0.5) * sh);
+		sub[q] = x->d->distance(x->d->ctx, sc) > 0.5 * sh * sqrt(3.0)
+				 ? (signed char)x->d->inside(x->d->ctx, sc)
+				 : -1;
+	}
 	for (int s = 0; s < ns; s++) {
 		struct vec3 p = lattice_vox_sample(v, idx, s, x->jitter);
-		int in = dist > hd ? in_c : x->d->inside(x->d->ctx, p);
+		int i = s % v->side, j = s / v->side % v->side, k = s / (v->side * v->side);
+		int q = (i * SUB / v->side) + SUB * (j * SUB / v->side) +
+			SUB * SUB * (k * SUB / v->side);
+		int in = sub[q] >= 0 ? sub[q] : x->d->inside(x->d->ctx, p);
 		if (in) {
 			bits[s >> 3] |= (uint8_t)(1u << (s & 7));
 			cnt++;
