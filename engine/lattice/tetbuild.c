@@ -358,23 +358,38 @@ struct restrict_ctx {
 	uint8_t *keep;
 };
 
+/* Inside the part, by the classification grid where it is certain. */
+static int inside_c(const struct sampler *s, struct vec3 c)
+{
+	int cl = cls_at(s, c);
+	return cl == CELL_MIXED ? s->d->inside(s->d->ctx, decompress(s, c)) : cl == CELL_IN;
+}
+
+/* Keep a tet when its centroid and its edges' midpoints lie inside the
+ * part and no edge is longer than 2.5 target spacings: Delaunay tets whose
+ * centroid is inside may still bridge a concavity with a long edge. */
 static void restrict_one(void *ctx, size_t t, int tid)
 {
+	static const int ev[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
 	struct restrict_ctx *x = ctx;
 	const uint32_t *q = x->tm->tet + 4 * t;
-	struct vec3 c = v3(0, 0, 0);
-	int cl;
+	struct vec3 c = v3(0, 0, 0), p[4];
 
 	(void)tid;
-	for (int i = 0; i < 4; i++)
-		c = v3_add(c, v3(x->tm->xyz[3 * q[i]], x->tm->xyz[3 * q[i] + 1],
-				 x->tm->xyz[3 * q[i] + 2]));
-	c = v3_scale(c, 0.25);
-	cl = cls_at(x->s, c);
-	if (cl == CELL_MIXED)
-		x->keep[t] = (uint8_t)x->s->d->inside(x->s->d->ctx, decompress(x->s, c));
-	else
-		x->keep[t] = cl == CELL_IN;
+	for (int i = 0; i < 4; i++) {
+		p[i] = v3(x->tm->xyz[3 * q[i]], x->tm->xyz[3 * q[i] + 1], x->tm->xyz[3 * q[i] + 2]);
+		c = v3_add(c, v3_scale(p[i], 0.25));
+	}
+	x->keep[t] = 0;
+	if (!inside_c(x->s, c))
+		return;
+	for (int j = 0; j < 6; j++) {
+		struct vec3 m = v3_lerp(p[ev[j][0]], p[ev[j][1]], 0.5);
+		double lim = 2.5 * delta_at(x->s, m) / POISSON_BETA;
+		if (v3_dist(p[ev[j][0]], p[ev[j][1]]) > lim || !inside_c(x->s, m))
+			return;
+	}
+	x->keep[t] = 1;
 }
 
 static int cmp_u64(const void *a, const void *b)
