@@ -42,7 +42,7 @@ if [ "$MODE" != large ]; then
 	echo "   density error per voxel: mean $(json "$j" "'%.4f' % m['lattice']['density_error_mean']"), max $(json "$j" "'%.4f' % m['lattice']['density_error_max']") over $(json "$j" "m['lattice']['density_voxels']") voxels"
 
 	echo "-- bunny lattice, 3648 x 1824 px (paper: 123,610 struts, 26.47 s/slice, 146 MB)"
-	timed bunny_gen "$BENCH" gen "$M/bunny.stl" y 80 0.2 0.09 "$T/bunny.lat" 2
+	timed bunny_gen "$BENCH" gen "$M/bunny.stl" y 80 0.2 0.093 "$T/bunny.lat" 2
 	echo "   generated $(val bunny_gen gen_struts) struts, density error mean $(val bunny_gen gen_density_error_mean) max $(val bunny_gen gen_density_error_max)"
 	for aa in 0 1; do
 		timed bunny_slice_aa$aa "$BENCH" slice "$T/bunny.lat" 3648 1824 100 2 $aa
