@@ -46,6 +46,7 @@ struct lattice_params {
 	double max_nodes_m;
 	double sort_budget_mb;
 	char tmp_dir[256];
+	char export_lattice[512];
 };
 
 static const char *const density_modes[] = {"constant", "gradient", "radial", "file", NULL};
@@ -126,6 +127,10 @@ static const struct param_desc lattice_desc[] = {
 	{.name = "tmp_dir", .type = PARAM_STR, .offset = P(tmp_dir), .max = 255, .str_cap = 256,
 	 .flags = PARAM_F_PATH, .unit = "path",
 	 .help = "Directory for the external sort's spill file; empty = $TMPDIR or /tmp."},
+	{.name = "export_lattice", .type = PARAM_STR, .offset = P(export_lattice), .max = 511,
+	 .str_cap = 512, .flags = PARAM_F_PATH, .unit = "path",
+	 .help = "Also write the generated lattice to this binary lattice file, to slice it "
+		 "again later or elsewhere."},
 };
 #undef P
 
@@ -463,6 +468,9 @@ static int lat_prepare(const struct engine_ctx *ctx, const void *params, void **
 	}
 	if (ctx->mesh) {
 		if ((rc = generate(ctx, s, e)) != 0)
+			goto fail;
+		if (s->p.export_lattice[0] &&
+		    (rc = lattice_write_binary(s->q, s->p.export_lattice, e)) != 0)
 			goto fail;
 		rc = stage_in_memory(s, e);
 	} else if (lattice_file_probe(ctx->input_path) == LATTICE_FILE_BINARY &&
