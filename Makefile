@@ -20,7 +20,7 @@ CC := gcc
 CXX := g++
 NPROC := $(shell nproc 2>/dev/null || echo 2)
 
-PKGS := libpng zlib libarchive jansson libmicrohttpd sqlite3 polyclipping ipopt
+PKGS := libpng zlib libarchive jansson libmicrohttpd sqlite3 nettle polyclipping ipopt
 # Evaluated lazily: pkg-config only runs once the packages are installed.
 PKG_CFLAGS = $(shell pkg-config --cflags $(PKGS) 2>/dev/null)
 PKG_LIBS = $(shell pkg-config --libs $(PKGS) 2>/dev/null) -ltet

@@ -312,7 +312,11 @@ int engine_run(const struct job_spec *js, struct sink *out, const struct progres
 	} else {
 		count = layer_count_for(extent.hi.z, layer_mm);
 		if (count < 1) {
-			rc = ERR_SET(e, ERR_GEOMETRY, "the part has no height to print");
+			rc = extent.hi.z > 0
+				     ? ERR_SET(e, ERR_LIMIT,
+					       "%.2f mm at %g mm layers is more than %d layers",
+					       extent.hi.z, layer_mm, LAYER_MAX_COUNT)
+				     : ERR_SET(e, ERR_GEOMETRY, "the part has no height to print");
 			goto out;
 		}
 		memset(&oi, 0, sizeof oi);
