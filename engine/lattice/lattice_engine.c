@@ -11,6 +11,7 @@
 #include "engine/lattice/lattice_engine.h"
 #include "engine/lattice/generate.h"
 #include "engine/lattice/lattice.h"
+#include "engine/lattice/skin.h"
 #include "engine/lattice/slicer.h"
 #include "engine/lattice/strut.h"
 #include "engine/core/mem.h"
@@ -173,6 +174,8 @@ struct lat_state {
 	double s_load, s_sort, s_layers;
 	int layers;
 	double volume_mm3;
+	struct lattice_skin *skin; /* shell_mm > 0 */
+	double shell_mm, shell_pixel_mm, layer_mm;
 };
 
 static int lat_owns_input(const char *path)
@@ -460,10 +463,12 @@ static int lat_prepare(const struct engine_ctx *ctx, const void *params, void **
 	s->want_raster = ctx->want_raster && ctx->map;
 	s->want_region = ctx->want_region;
 	s->map = ctx->map;
+	s->layer_mm = ctx->layer_mm;
 	s->antialias = ctx->printer->kind == PRINTER_RESIN ? ctx->printer->resin.antialias : 0;
-	if (ctx->common->shell_mm > 0) {
+	if (ctx->common->shell_mm > 0 && !ctx->mesh) {
 		rc = ERR_FIELD(e, "shell_mm",
-			       "a skin (shell_mm > 0) around the lattice is not available yet");
+			       "a skin (shell_mm > 0) needs the part's surface: lattice files have "
+			       "none");
 		goto fail;
 	}
 	if (ctx->mesh) {
@@ -483,6 +488,15 @@ static int lat_prepare(const struct engine_ctx *ctx, const void *params, void **
 	}
 	if (rc)
 		goto fail;
+	if (ctx->common->shell_mm > 0) {
+		const struct box3 *bb = &ctx->report->bbox;
+		s->shell_mm = ctx->common->shell_mm;
+		s->shell_pixel_mm = ctx->map ? sqrt(raster_map_pixel_area_mm2(ctx->map)) : 0.05;
+		if ((rc = lattice_skin_new(ctx->mesh, s->shell_mm, s->shell_pixel_mm, ctx->layer_mm,
+					   s->extent.hi.z, bb->lo.x, bb->lo.y, bb->hi.x, bb->hi.y,
+					   &s->skin, e)) != 0)
+			goto fail;
+	}
 	s->s_load = progress_now_s() - t0;
 	if (s->want_region && (rc = setup_grid(s, e)) != 0)
 		goto fail;
@@ -523,6 +537,9 @@ static int lat_layer(void *state, struct layer *ly, struct err *e)
 						e)) != 0)
 			return rc;
 		ly->raster_ready = 1;
+		if (s->skin && (rc = lattice_skin_raster(s->skin, ly->index, ly->z_mm, s->map,
+							 s->antialias, ly->raster, e)) != 0)
+			return rc;
 		s->volume_mm3 += raster_coverage_px(ly->raster) *
 				 raster_map_pixel_area_mm2(s->map) * ly->height_mm;
 	}
@@ -533,6 +550,9 @@ static int lat_layer(void *state, struct layer *ly, struct err *e)
 		paths_clear(&ly->region);
 		if ((rc = slice_field_contours(s->field, s->gw, s->gh, 1.0f, &s->gmap, &ly->region,
 					       e)) != 0)
+			return rc;
+		if (s->skin &&
+		    (rc = lattice_skin_region(s->skin, ly->index, ly->z_mm, &ly->region, e)) != 0)
 			return rc;
 		if (!s->want_raster)
 			s->volume_mm3 += paths_area_mm2(&ly->region) * ly->height_mm;
@@ -597,6 +617,11 @@ static int lat_metrics(void *state, struct metrics *m, struct err *e)
 	rc |= metrics_num(m, "lattice.seconds_per_slice", s->layers ? s->s_layers / s->layers : 0);
 	rc |= metrics_num(m, "lattice.sliced_volume_mm3", s->volume_mm3);
 	rc |= metrics_num(m, "material_volume_mm3", s->volume_mm3);
+	if (s->skin) {
+		rc |= metrics_num(m, "lattice.shell_mm", s->shell_mm);
+		rc |= metrics_num(m, "lattice.shell_volume_mm3",
+				  lattice_skin_area_mm2(s->skin) * s->layer_mm);
+	}
 	return rc ? ERR_SET(e, ERR_NOMEM, "out of memory recording metrics") : 0;
 }
 
@@ -606,6 +631,7 @@ static void lat_release(void *state)
 
 	if (!s)
 		return;
+	lattice_skin_free(s->skin);
 	lattice_slicer_free(s->slicer);
 	lattice_sorter_free(s->sorter);
 	lattice_stream_free(s->stream);
