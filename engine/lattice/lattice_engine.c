@@ -22,6 +22,7 @@
 #include <string.h>
 
 #define GRID_MAX_PIXELS (64u << 20) /* field grid for G-code regions */
+#define RESIN_MIN_RADIUS_MM 0.25     /* ~10 pixels across on SL1-class printers */
 
 struct lattice_params {
 	double density;
@@ -87,9 +88,10 @@ static const struct param_desc lattice_desc[] = {
 	 .def = 0, .flags = PARAM_F_AUTO, .unit = "mm",
 	 .help = "Voxel edge for density matching and its error metrics; 0 = 1.5 x the strut "
 		 "spacing at the mean density."},
-	{.name = "min_radius_mm", .type = PARAM_NUM, .offset = P(min_radius_mm), .min = 0.01,
-	 .max = 20, .def = 0.25, .unit = "mm",
-	 .help = "Smallest strut radius the printer makes reliably; struts start at twice it."},
+	{.name = "min_radius_mm", .type = PARAM_NUM, .offset = P(min_radius_mm), .min = 0,
+	 .max = 20, .def = 0, .flags = PARAM_F_AUTO, .unit = "mm",
+	 .help = "Smallest strut radius the printer makes reliably; struts start at twice it. "
+		 "0 = 0.25 mm on resin printers, one extrusion width on FDM printers."},
 	{.name = "so_k", .type = PARAM_NUM, .offset = P(so_k), .min = 1, .max = 3, .def = 1.6,
 	 .unit = "",
 	 .help = "Scaling operation: build in a space compressed by 1/k along z (paper: "
@@ -310,7 +312,9 @@ static int generate(const struct engine_ctx *ctx, struct lat_state *s, struct er
 		return rc;
 	memset(&o, 0, sizeof o);
 	o.density = &den;
-	o.min_radius_mm = s->p.min_radius_mm;
+	o.min_radius_mm = s->p.min_radius_mm > 0 ? s->p.min_radius_mm
+			  : ctx->printer->kind == PRINTER_FDM ? ctx->printer->fdm.line_width_mm
+							      : RESIN_MIN_RADIUS_MM;
 	o.so_k = s->p.so_k;
 	o.po = s->p.po;
 	o.po_rounds = s->p.po_rounds;
