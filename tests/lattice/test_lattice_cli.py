@@ -153,9 +153,9 @@ class LatticeCliTest(unittest.TestCase):
         self.assertIn("support", p.stderr)
 
     def test_mesh_generates_self_supporting_lattice(self):
-        out, met = self.path("fem.sl1"), self.path("fem.json")
-        p = run("run", os.path.join(MESHES, "femur.off"), "-o", out, "--engine", "lattice",
-                "--set", "height_mm=40", "--metrics", met, "--quiet")
+        out, met = self.path("camel.sl1"), self.path("camel.json")
+        p = run("run", os.path.join(MESHES, "camel.off"), "-o", out, "--engine", "lattice",
+                "--set", "height_mm=60", "--set", "up=y", "--metrics", met, "--quiet")
         self.assertEqual(p.returncode, 0, p.stderr)
         with open(met) as f:
             m = json.load(f)
