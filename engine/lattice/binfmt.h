@@ -85,6 +85,20 @@ void latbin_header_encode(unsigned char *buf, const struct lattice_file_header *
 int latbin_header_decode(const unsigned char *buf, uint64_t file_size,
 			 struct lattice_file_header *h, struct err *e);
 
+/* Decode radius code q: 0 and *r set when the radius is a finite float
+ * > 0, within the header's largest radius and below its support (if
+ * set); -1 otherwise. */
+static inline int latbin_radius(const struct lattice_file_header *h, uint16_t q, float *r)
+{
+	float v = (float)(q * h->radius_quantum_mm);
+
+	if (!(v > 0) || !(v <= h->max_radius_mm + h->radius_quantum_mm) ||
+	    (h->support_mm > 0 && !(v < h->support_mm)))
+		return -1;
+	*r = v;
+	return 0;
+}
+
 /* Quantise a radius (mm) for the header's quantum: 1..65535. */
 uint16_t latbin_quantise(double radius_mm, double quantum_mm);
 

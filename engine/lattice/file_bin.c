@@ -542,6 +542,7 @@ static int read_body(struct latbin_cursor *c, const struct lattice_file_header *
 		uint64_t at = latbin_cursor_tell(c);
 		uint32_t a, b;
 		uint16_t r;
+		float rad;
 
 		if (!(p = latbin_cursor_take(c, LATBIN_EDGE_BYTES, e))) {
 			rc = e ? e->code : ERR_PARSE;
@@ -550,10 +551,11 @@ static int read_body(struct latbin_cursor *c, const struct lattice_file_header *
 		a = latbin_get_u32(p);
 		b = latbin_get_u32(p + 4);
 		r = latbin_get_u16(p + 8);
-		if (!(a < b) || b >= h->nnodes || r == 0) {
+		if (!(a < b) || b >= h->nnodes || latbin_radius(h, r, &rad) != 0) {
 			rc = ERR_PLACE(e, ERR_PARSE, (long long)at, 0, (long long)i,
 				       "edge %llu: nodes %u, %u / radius code %u invalid "
-				       "(need a < b < %llu, radius > 0)",
+				       "(need a < b < %llu, 0 < radius <= the header's largest, "
+				       "below the support)",
 				       (unsigned long long)i, a, b, r,
 				       (unsigned long long)h->nnodes);
 			goto out;
@@ -567,7 +569,7 @@ static int read_body(struct latbin_cursor *c, const struct lattice_file_header *
 		last_a = a;
 		q->edge[q->nedges].a = a;
 		q->edge[q->nedges].b = b;
-		q->edge[q->nedges].radius_mm = (float)(r * h->radius_quantum_mm);
+		q->edge[q->nedges].radius_mm = rad;
 		q->nedges++;
 	}
 	rc = 0;

@@ -113,6 +113,20 @@ static int parse_doubles(const char *s, double *v, int n)
 	return *s ? -1 : 0;
 }
 
+/* A decimal node index followed by a blank or the end; *end after it. */
+static int parse_index(const char *s, char **end, unsigned long long *out)
+{
+	while (*s == ' ' || *s == '\t')
+		s++;
+	if (*s < '0' || *s > '9')
+		return -1;
+	errno = 0;
+	*out = strtoull(s, end, 10);
+	if (errno || (**end != ' ' && **end != '\t' && **end != 0))
+		return -1;
+	return 0;
+}
+
 /* "key N" with N an unsigned integer <= max. */
 static int parse_count(const char *s, const char *key, unsigned long long max,
 		       unsigned long long *out)
@@ -176,8 +190,10 @@ static int read_text(char *buf, size_t len, struct lattice **out, struct err *e)
 		goto out;
 	}
 	for (unsigned long long i = 0; i < nn; i++) {
-		if (!(s = next_line(&L)) || parse_doubles(s, v, 3)) {
-			rc = TEXT_ERR(&L, (long long)i, "node %llu: expected three finite numbers", i);
+		if (!(s = next_line(&L)) || parse_doubles(s, v, 3) || fabs(v[0]) > 1e9 ||
+		    fabs(v[1]) > 1e9 || fabs(v[2]) > 1e9) {
+			rc = TEXT_ERR(&L, (long long)i,
+				      "node %llu: expected three numbers within +-1e9 mm", i);
 			goto out;
 		}
 		q->node[q->nnodes++] = v3(v[0], v[1], v[2]);
@@ -195,17 +211,15 @@ static int read_text(char *buf, size_t len, struct lattice **out, struct err *e)
 	}
 	for (unsigned long long i = 0; i < ne; i++) {
 		char *end;
-		unsigned long a, b;
+		unsigned long long a, b;
 
 		if (!(s = next_line(&L))) {
 			rc = TEXT_ERR(&L, (long long)i, "edge %llu missing (file ends early)", i);
 			goto out;
 		}
-		errno = 0;
-		a = strtoul(s, &end, 10);
-		b = end != s ? strtoul(end, &end, 10) : 0;
-		if (errno || end == s || parse_doubles(end, v, 1) || a >= nn || b >= nn || a == b ||
-		    !(v[0] > 0)) {
+		if (parse_index(s, &end, &a) || parse_index(end, &end, &b) ||
+		    parse_doubles(end, v, 1) || a >= nn || b >= nn || a == b ||
+		    !((float)v[0] > 0) || !isfinite((float)v[0])) {
 			rc = TEXT_ERR(&L, (long long)i,
 				      "edge %llu: expected 'a b radius_mm' with distinct node "
 				      "indices below %llu and radius > 0",

@@ -178,10 +178,10 @@ static int stream_next(void *ctx, struct lattice_strut *s, struct err *e)
 	a = latbin_get_u32(p);
 	b = latbin_get_u32(p + 4);
 	r = latbin_get_u16(p + 8);
-	if (!(a < b) || b >= st->h.nnodes || r == 0)
+	if (!(a < b) || b >= st->h.nnodes || latbin_radius(&st->h, r, &s->radius_mm) != 0)
 		return ERR_PLACE(e, ERR_PARSE, (long long)at, 0, (long long)i,
 				 "edge %llu: nodes %u, %u / radius code %u invalid (need a < b < "
-				 "%llu, radius > 0)",
+				 "%llu, 0 < radius <= the header's largest, below the support)",
 				 (unsigned long long)i, a, b, r, (unsigned long long)st->h.nnodes);
 	if (a < st->last_a)
 		return ERR_PLACE(e, ERR_PARSE, (long long)at, 0, (long long)i,
@@ -214,7 +214,6 @@ static int stream_next(void *ctx, struct lattice_strut *s, struct err *e)
 	pb = st->win + 3 * (b & (st->cap - 1));
 	memcpy(s->a, pa, sizeof s->a);
 	memcpy(s->b, pb, sizeof s->b);
-	s->radius_mm = (float)(r * st->h.radius_quantum_mm);
 	st->edges_read++;
 	return 1;
 }
