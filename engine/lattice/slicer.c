@@ -449,6 +449,15 @@ static void *worker_main(void *arg)
 	return NULL;
 }
 
+/* Bands whose rows (plus the halo) a strut's rectangle touches. */
+static void band_range(const struct lattice_slicer *s, const struct rect *r, int *b0, int *b1)
+{
+	*b0 = (r->v0 - s->halo) < 0 ? 0 : (r->v0 - s->halo) / BAND_ROWS;
+	*b1 = (r->v1 + s->halo) / BAND_ROWS;
+	if (*b1 >= s->nbands)
+		*b1 = s->nbands - 1;
+}
+
 static int bin_struts(struct lattice_slicer *s, const struct raster_map *m, struct err *e)
 {
 	size_t total = 0;
@@ -469,10 +478,8 @@ static int bin_struts(struct lattice_slicer *s, const struct raster_map *m, stru
 		if (r->u0 > r->u1)
 			continue;
 		{
-			int b0 = (r->v0 - s->halo) < 0 ? 0 : (r->v0 - s->halo) / BAND_ROWS;
-			int b1 = (r->v1 + s->halo) / BAND_ROWS;
-			if (b1 >= nb)
-				b1 = nb - 1;
+			int b0, b1;
+			band_range(s, r, &b0, &b1);
 			for (int b = b0; b <= b1; b++)
 				s->bin_start[b + 1]++;
 			total += (size_t)(b1 - b0 + 1);
@@ -490,10 +497,8 @@ static int bin_struts(struct lattice_slicer *s, const struct raster_map *m, stru
 		if (r->u0 > r->u1)
 			continue;
 		{
-			int b0 = (r->v0 - s->halo) < 0 ? 0 : (r->v0 - s->halo) / BAND_ROWS;
-			int b1 = (r->v1 + s->halo) / BAND_ROWS;
-			if (b1 >= nb)
-				b1 = nb - 1;
+			int b0, b1;
+			band_range(s, r, &b0, &b1);
 			for (int b = b0; b <= b1; b++)
 				s->bin[s->bin_fill[b]++] = (uint32_t)i;
 		}

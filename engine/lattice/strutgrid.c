@@ -30,6 +30,26 @@ static void strut_box(const struct strut_grid *g, size_t i, int *c0, int *c1)
 	cell_of(g, hi, c1);
 }
 
+/* For every cell strut i's capsule box overlaps: without items, count it
+ * in cnt[cell]; with items, store i at items[cnt[cell]++].  Returns the
+ * number of cells. */
+static size_t visit_cells(const struct strut_grid *g, size_t i, uint32_t *cnt, uint32_t *items)
+{
+	int c0[3], c1[3];
+
+	strut_box(g, i, c0, c1);
+	for (int k = c0[2]; k <= c1[2]; k++)
+		for (int j = c0[1]; j <= c1[1]; j++)
+			for (int q = c0[0]; q <= c1[0]; q++) {
+				size_t c = ((size_t)k * g->n[1] + j) * g->n[0] + q;
+				if (items)
+					items[cnt[c]++] = (uint32_t)i;
+				else
+					cnt[c]++;
+			}
+	return (size_t)(c1[0] - c0[0] + 1) * (c1[1] - c0[1] + 1) * (c1[2] - c0[2] + 1);
+}
+
 int strut_grid_init(struct strut_grid *g, const struct vec3 *node, const uint32_t *ab, size_t n,
 		    double R, double cell_mm, struct err *e)
 {
@@ -68,13 +88,7 @@ int strut_grid_init(struct strut_grid *g, const struct vec3 *node, const uint32_
 	if (!g->start || !fill)
 		goto nomem;
 	for (size_t i = 0; i < n; i++) {
-		int c0[3], c1[3];
-		strut_box(g, i, c0, c1);
-		for (int k = c0[2]; k <= c1[2]; k++)
-			for (int j = c0[1]; j <= c1[1]; j++)
-				for (int q = c0[0]; q <= c1[0]; q++)
-					g->start[((size_t)k * g->n[1] + j) * g->n[0] + q + 1]++;
-		total += (size_t)(c1[0] - c0[0] + 1) * (c1[1] - c0[1] + 1) * (c1[2] - c0[2] + 1);
+		total += visit_cells(g, i, g->start + 1, NULL);
 		if (total >= GRID_MAX_ENTRIES) {
 			mem_free(fill);
 			strut_grid_fini(g);
@@ -87,15 +101,8 @@ int strut_grid_init(struct strut_grid *g, const struct vec3 *node, const uint32_
 	if (!g->item)
 		goto nomem;
 	memcpy(fill, g->start, ncells * sizeof *fill);
-	for (size_t i = 0; i < n; i++) {
-		int c0[3], c1[3];
-		strut_box(g, i, c0, c1);
-		for (int k = c0[2]; k <= c1[2]; k++)
-			for (int j = c0[1]; j <= c1[1]; j++)
-				for (int q = c0[0]; q <= c1[0]; q++)
-					g->item[fill[((size_t)k * g->n[1] + j) * g->n[0] + q]++] =
-						(uint32_t)i;
-	}
+	for (size_t i = 0; i < n; i++)
+		visit_cells(g, i, fill, g->item);
 	mem_free(fill);
 	return 0;
 nomem:

@@ -89,50 +89,51 @@ static double edge_theta(struct vec3 a, struct vec3 b, double *len)
 	return l > 0 ? acos(fmin(1, fabs(d.z) / l)) : 0;
 }
 
-static void measure_edges(const struct vec3 *p, const uint32_t *ab, size_t stride_pairs,
-			  size_t n, double alpha, struct lattice_support_metrics *m)
-{
-	double lg = 0, ls = 0, lt = 0;
+/* Length sums of eq. 13-14: total, supported, and weighted by g. */
+struct support_sums {
+	double lt, ls, lg;
+};
 
-	for (size_t i = 0; i < n; i++) {
-		double l, th = edge_theta(p[ab[i * stride_pairs]], p[ab[i * stride_pairs + 1]], &l);
-		lt += l;
-		if (th <= alpha)
-			ls += l;
-		else
-			lg += l * lattice_support_g(th, alpha);
-	}
-	m->gamma = lt > 0 ? lg / lt : 0;
-	m->psi = lt > 0 ? ls / lt : 0;
+static void sums_add(struct support_sums *u, struct vec3 a, struct vec3 b, double alpha)
+{
+	double l, th = edge_theta(a, b, &l);
+
+	u->lt += l;
+	if (th <= alpha)
+		u->ls += l;
+	else
+		u->lg += l * lattice_support_g(th, alpha);
+}
+
+static void sums_finish(const struct support_sums *u, struct lattice_support_metrics *m)
+{
+	m->gamma = u->lt > 0 ? u->lg / u->lt : 0;
+	m->psi = u->lt > 0 ? u->ls / u->lt : 0;
 }
 
 void lattice_support_measure(const struct lattice_tetmesh *t, double alpha,
 			     struct lattice_support_metrics *m)
 {
+	struct support_sums u = {0, 0, 0};
 	uint32_t *ed = NULL;
 	size_t ne = 0;
 
 	memset(m, 0, sizeof *m);
 	if (lattice_tetmesh_edges(t, &ed, &ne, NULL) == 0)
-		measure_edges(t->p, ed, 2, ne, alpha, m);
+		for (size_t i = 0; i < ne; i++)
+			sums_add(&u, t->p[ed[2 * i]], t->p[ed[2 * i + 1]], alpha);
 	mem_free(ed);
+	sums_finish(&u, m);
 }
 
 void lattice_support_measure_lattice(const struct lattice *q, double alpha,
 				     struct lattice_support_metrics *m)
 {
-	double lg = 0, ls = 0, lt = 0;
+	struct support_sums u = {0, 0, 0};
 
-	for (size_t i = 0; i < q->nedges; i++) {
-		double l, th = edge_theta(q->node[q->edge[i].a], q->node[q->edge[i].b], &l);
-		lt += l;
-		if (th <= alpha)
-			ls += l;
-		else
-			lg += l * lattice_support_g(th, alpha);
-	}
-	m->gamma = lt > 0 ? lg / lt : 0;
-	m->psi = lt > 0 ? ls / lt : 0;
+	for (size_t i = 0; i < q->nedges; i++)
+		sums_add(&u, q->node[q->edge[i].a], q->node[q->edge[i].b], alpha);
+	sums_finish(&u, m);
 }
 
 /* ---- PO ---- */
