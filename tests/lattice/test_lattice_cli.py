@@ -20,6 +20,7 @@ import zipfile
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
 sys.path.insert(0, os.path.join(ROOT, "tests", "support"))
+import gcodecheck  # noqa: E402
 import sl1check  # noqa: E402
 
 BIN = os.environ.get("INFILLD_BIN", os.path.join(ROOT, "build", "infilld"))
@@ -136,6 +137,37 @@ class LatticeCliTest(unittest.TestCase):
         m = self.check_grid_print(src, "binary")
         self.assertIn("stream_window_nodes", m["lattice"])
         self.assertLess(m["lattice"]["stream_window_nodes"], len(self.nodes))
+
+    def test_pillars_to_gcode_inside_their_discs(self):
+        # 16 vertical struts 3 mm apart (no blending: R = 0.6 mm): every FDM
+        # layer's material is 16 discs of the strut radius; the independent
+        # G-code checker verifies every extrusion lies inside them
+        src, out, met = self.path("pillars.lat"), self.path("pillars.gcode"), self.path("p.json")
+        r = 0.5
+        with open(src, "w") as f:
+            f.write("infilld-lattice 1\nsupport_mm 0.75\nnodes 32\n")
+            for z in (0, 8):
+                for j in range(4):
+                    for i in range(4):
+                        f.write("%d %d %d\n" % (3 * i, 3 * j, z))
+            f.write("edges 16\n")
+            for k in range(16):
+                f.write("%d %d %r\n" % (k, k + 16, r))
+        p = run("run", src, "-o", out, "--engine", "lattice", "--format", "gcode",
+                "--metrics", met, "--quiet")
+        self.assertEqual(p.returncode, 0, p.stderr)
+        with open(met) as f:
+            m = json.load(f)
+        bb = m["bbox_mm"]
+        cx = 0.5 * (bb["min"]["x"] + bb["max"]["x"]) - 4.5
+        cy = 0.5 * (bb["min"]["y"] + bb["max"]["y"]) - 4.5
+        shapes = [{"kind": "circle", "cx": cx + 3 * i, "cy": cy + 3 * j, "r": r + 0.005,
+                   "op": "add"} for j in range(4) for i in range(4)]
+        rep = gcodecheck.check_file(out, regions={"layers": [{"from": 0, "to": -1,
+                                                              "shapes": shapes}]})
+        self.assertEqual(rep["containment_violations"], 0)
+        self.assertEqual(rep["layers"], m["layers"])
+        self.assertGreater(rep["extruded_volume_mm3"], 0)
 
     def test_bad_lattice_file(self):
         src = self.path("bad.lat")
