@@ -128,6 +128,9 @@ struct mstate {
 	struct strut_grid grid;
 	double R, r0, rcap;
 	struct strut_pairs pairs[MAX_THREADS];
+	/* matched voxel -> struts crossing it (CSR), valid for this strut set */
+	uint32_t *vs_start, *vs_item;
+	int vs_valid;
 };
 
 static const int EV[6][2] = {{0, 1}, {0, 2}, {0, 3}, {1, 2}, {1, 3}, {2, 3}};
@@ -195,8 +198,16 @@ static int rebuild_struts(struct mstate *m, struct err *e)
 	m->r = nr;
 	m->ab = nab;
 	m->ns = u;
+	m->vs_valid = 0;
 	strut_grid_fini(&m->grid);
-	return strut_grid_init(&m->grid, m->p, m->ab, m->ns, m->R, 0.6 * m->R, e);
+	{
+		double len = 0;
+		for (size_t i = 0; i < u; i++)
+			len += v3_dist(m->p[nab[2 * i]], m->p[nab[2 * i + 1]]);
+		/* cells of a quarter strut length: short lists, few cells per strut */
+		return strut_grid_init(&m->grid, m->p, m->ab, m->ns, m->R,
+				       fmax(0.6 * m->R, u ? 0.25 * len / u : m->R), e);
+	}
 }
 
 /* Strut indices of tet t (its expanded edges), at most cap. */
@@ -563,12 +574,47 @@ static int voxel_struts(const struct mstate *m, size_t idx, uint32_t **list, siz
 	return rc;
 }
 
+/* The voxel -> struts lists of the matched voxels (at least half inside). */
+static int build_voxel_struts(struct mstate *m, struct err *e)
+{
+	size_t nv = lattice_vox_count(m->vox), n = 0, cap = 0;
+	uint32_t *items = NULL;
+	uint8_t *mark;
+
+	if (m->vs_valid)
+		return 0;
+	mem_free(m->vs_start);
+	mem_free(m->vs_item);
+	m->vs_item = NULL;
+	m->vs_start = mem_alloc((nv + 1) * sizeof *m->vs_start);
+	mark = mem_calloc(m->ns ? m->ns : 1, 1);
+	if (!m->vs_start || !mark)
+		goto nomem;
+	for (size_t v = 0; v < nv; v++) {
+		m->vs_start[v] = (uint32_t)n;
+		if (m->vox->frac[v] >= 0.5 && voxel_struts(m, v, &items, &n, &cap, mark))
+			goto nomem;
+		if (n > UINT32_MAX / 2) {
+			mem_free(mark);
+			mem_free(items);
+			return ERR_SET(e, ERR_LIMIT, "too many voxel/strut pairs");
+		}
+	}
+	m->vs_start[nv] = (uint32_t)n;
+	m->vs_item = items;
+	m->vs_valid = 1;
+	mem_free(mark);
+	return 0;
+nomem:
+	mem_free(mark);
+	mem_free(items);
+	return ERR_SET(e, ERR_NOMEM, "out of memory for voxel strut lists");
+}
+
 struct vox_ctx {
 	struct mstate *m;
-	double *ratio;             /* per voxel, NAN = skipped */
+	double *ratio; /* per voxel, NAN = skipped */
 	uint8_t *sel[MAX_THREADS];
-	uint32_t *list[MAX_THREADS];
-	size_t cap[MAX_THREADS];
 	int failed;
 };
 
@@ -578,17 +624,12 @@ static void vox_one(void *ctx, size_t idx, int tid)
 	struct mstate *m = x->m;
 	const struct voxels *v = m->vox;
 	struct strut_pairs *pp = &m->pairs[tid];
-	size_t n = 0;
+	const uint32_t *list = m->vs_item + m->vs_start[idx];
+	size_t n = m->vs_start[idx + 1] - m->vs_start[idx];
 	int ns = v->side * v->side * v->side;
 
 	x->ratio[idx] = NAN;
-	if (v->frac[idx] < 0.5)
-		return;
-	if (voxel_struts(m, idx, &x->list[tid], &n, &x->cap[tid], x->sel[tid])) {
-		x->failed = 1;
-		return;
-	}
-	if (n == 0)
+	if (v->frac[idx] < 0.5 || n == 0)
 		return;
 	strut_pairs_reset(pp);
 	for (int s = 0; s < ns; s++)
@@ -598,10 +639,10 @@ static void vox_one(void *ctx, size_t idx, int tid)
 				return;
 			}
 	for (size_t i = 0; i < n; i++)
-		x->sel[tid][x->list[tid][i]] = 1;
+		x->sel[tid][list[i]] = 1;
 	x->ratio[idx] = bisect_scale(m, pp, x->sel[tid], v->target[idx], 0.25, 4.0);
 	for (size_t i = 0; i < n; i++)
-		x->sel[tid][x->list[tid][i]] = 0;
+		x->sel[tid][list[i]] = 0;
 }
 
 /* mode 0: a strut keeps the smallest ratio of its voxels (the paper's
@@ -613,18 +654,17 @@ static int voxel_pass(struct mstate *m, int mode, struct err *e)
 	size_t nv = lattice_vox_count(m->vox);
 	struct vox_ctx x;
 	double *sr = NULL;
-	uint32_t *list = NULL;
-	size_t n, cap = 0;
-	uint8_t *mark = NULL;
 	uint32_t *cnt = NULL;
-	int threads = m->d->threads < MAX_THREADS ? m->d->threads : MAX_THREADS, rc = 0;
+	int threads = m->d->threads < MAX_THREADS ? m->d->threads : MAX_THREADS, rc;
 
+	if ((rc = build_voxel_struts(m, e)) != 0)
+		return rc;
 	memset(&x, 0, sizeof x);
 	x.m = m;
 	x.ratio = mem_alloc(nv * sizeof *x.ratio);
 	sr = mem_alloc((m->ns ? m->ns : 1) * sizeof *sr);
-	mark = mem_calloc(m->ns ? m->ns : 1, 1);
-	if (!x.ratio || !sr || !mark)
+	cnt = mem_calloc(m->ns ? m->ns : 1, sizeof *cnt);
+	if (!x.ratio || !sr || !cnt)
 		goto nomem;
 	for (int t = 0; t < threads; t++)
 		if (!(x.sel[t] = mem_calloc(m->ns ? m->ns : 1, 1)))
@@ -632,42 +672,33 @@ static int voxel_pass(struct mstate *m, int mode, struct err *e)
 	parfor_run(nv, threads, 1, vox_one, &x);
 	if (x.failed)
 		goto nomem;
-	for (size_t s = 0; s < m->ns; s++) {
+	for (size_t s = 0; s < m->ns; s++)
 		sr[s] = mode == 0 ? INFINITY : 0;
-		mark[s] = 0;
-	}
-	if (!(cnt = mem_calloc(m->ns ? m->ns : 1, sizeof *cnt)))
-		goto nomem;
 	for (size_t v = 0; v < nv; v++) {
 		if (isnan(x.ratio[v]))
 			continue;
-		n = 0;
-		if (voxel_struts(m, v, &list, &n, &cap, mark))
-			goto nomem;
-		for (size_t i = 0; i < n; i++) {
+		for (uint32_t i = m->vs_start[v]; i < m->vs_start[v + 1]; i++) {
+			uint32_t j = m->vs_item[i];
 			if (mode == 0)
-				sr[list[i]] = fmin(sr[list[i]], x.ratio[v]);
+				sr[j] = fmin(sr[j], x.ratio[v]);
 			else
-				sr[list[i]] += log(x.ratio[v]);
-			cnt[list[i]]++;
+				sr[j] += log(x.ratio[v]);
+			cnt[j]++;
 		}
 	}
 	for (size_t s = 0; s < m->ns; s++)
 		if (cnt[s])
 			m->r[s] = clamp_r(m, m->r[s] * (mode == 0 ? sr[s] : exp(sr[s] / cnt[s])));
+	rc = 0;
 	goto out;
 nomem:
 	rc = ERR_SET(e, ERR_NOMEM, "out of memory matching voxel densities");
 out:
-	for (int t = 0; t < MAX_THREADS; t++) {
+	for (int t = 0; t < MAX_THREADS; t++)
 		mem_free(x.sel[t]);
-		mem_free(x.list[t]);
-	}
 	mem_free(x.ratio);
 	mem_free(sr);
 	mem_free(cnt);
-	mem_free(list);
-	mem_free(mark);
 	return rc;
 }
 
@@ -675,6 +706,8 @@ out:
 
 static void mstate_fini(struct mstate *m)
 {
+	mem_free(m->vs_start);
+	mem_free(m->vs_item);
 	mem_free(m->p);
 	mem_free(m->tet);
 	mem_free(m->mid.key);

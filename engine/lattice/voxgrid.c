@@ -218,7 +218,10 @@ int lattice_measure_density(const struct lattice *q, const struct lattice_domain
 		ab[2 * i + 1] = q->edge[i].b;
 		w[i] = lattice_weight_for_radius(q->edge[i].radius_mm, 1.0, R);
 	}
-	if ((rc = strut_grid_init(&g, q->node, ab, q->nedges, R, 0.6 * R, e)) != 0)
+	if ((rc = strut_grid_init(&g, q->node, ab, q->nedges, R,
+				  fmax(0.6 * R, q->nedges ? 0.25 * lattice_total_length(q) / q->nedges
+							  : R),
+				  e)) != 0)
 		goto out;
 	{
 		struct measure_ctx x = {&v, &g, w, dens};
