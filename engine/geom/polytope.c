@@ -3,7 +3,8 @@
  * With x = start + y, the problem is: maximise r subject to
  * n_i . y + |n_i| r <= b_i = d_i - n_i . start (b_i > 0) and |y_j| <= box.
  * The free y_j are split as y+ - y-, so x = 0 (all slacks basic) is a
- * feasible start; Bland's rule prevents cycling.
+ * feasible start.  Dantzig's rule for the first pivots, then Bland's rule,
+ * which prevents cycling.
  */
 #include "engine/geom/polytope.h"
 #include "engine/core/mem.h"
@@ -55,11 +56,22 @@ int geom_chebyshev_center(const struct vec3 *n, const double *d, size_t m, struc
 		size_t enter = cols, leave = rows;
 		double best = INFINITY;
 
-		for (size_t j = 0; j + 1 < cols; j++)
-			if (A(rows, j) > 1e-12) {
-				enter = j; /* Bland: lowest index */
-				break;
-			}
+		if (it < 64) {
+			/* Dantzig: the largest reduced cost (few pivots) */
+			double best_c = 1e-12;
+			for (size_t j = 0; j + 1 < cols; j++)
+				if (A(rows, j) > best_c) {
+					best_c = A(rows, j);
+					enter = j;
+				}
+		} else {
+			/* then Bland's lowest index, which cannot cycle */
+			for (size_t j = 0; j + 1 < cols; j++)
+				if (A(rows, j) > 1e-12) {
+					enter = j;
+					break;
+				}
+		}
 		if (enter == cols) {
 			double y[NV] = {0};
 			for (size_t i = 0; i < rows; i++)

@@ -271,6 +271,17 @@ static int star_sphere(const struct lattice_tetmesh *t, const struct csr *vt, ui
 	return geom_chebyshev_center(nrm, dd, m, t->p[v], 2 * span + 1e-9, o, tau);
 }
 
+/* Gamma and Psi over an edge list (pairs into t->p). */
+static void measure_list(const struct lattice_tetmesh *t, const uint32_t *ed, size_t ne,
+			 double alpha, struct lattice_support_metrics *m)
+{
+	struct support_sums u = {0, 0, 0};
+
+	for (size_t i = 0; i < ne; i++)
+		sums_add(&u, t->p[ed[2 * i]], t->p[ed[2 * i + 1]], alpha);
+	sums_finish(&u, m);
+}
+
 int lattice_po_optimize(struct lattice_tetmesh *t, const struct lattice_po_opts *o,
 			struct lattice_po_stats *st, struct err *e)
 {
@@ -286,7 +297,7 @@ int lattice_po_optimize(struct lattice_tetmesh *t, const struct lattice_po_opts 
 	memset(st, 0, sizeof *st);
 	if ((rc = lattice_tetmesh_edges(t, &ed, &ne, e)) != 0)
 		return rc;
-	lattice_support_measure(t, o->alpha, &m);
+	measure_list(t, ed, ne, o->alpha, &m);
 	st->gamma_before = st->gamma_after = m.gamma;
 	order = mem_alloc((t->np ? t->np : 1) * sizeof *order);
 	nrm = mem_alloc(512 * sizeof *nrm);
@@ -337,7 +348,7 @@ int lattice_po_optimize(struct lattice_tetmesh *t, const struct lattice_po_opts 
 				}
 			}
 		}
-		lattice_support_measure(t, o->alpha, &m);
+		measure_list(t, ed, ne, o->alpha, &m);
 		st->rounds = round + 1;
 		st->moves += moved;
 		st->gamma_after = m.gamma;
