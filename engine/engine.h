@@ -109,6 +109,9 @@ struct job_spec {
 	int threads;                       /* 0 = all online CPUs */
 	uint64_t output_limit_bytes;       /* 0 = none */
 	const char *job_name;              /* borrowed; NULL = from input name */
+	const char *scratch_dir;           /* borrowed; where writers may keep unlinked
+					      temporary files (the output's directory);
+					      NULL = the system's */
 	int64_t created_unix;              /* 0 = now; fixed by tests */
 };
 

@@ -202,8 +202,8 @@ int cmd_run(int argc, char **argv)
 	struct sink sink;
 	struct bar bar = {0, 0};
 	struct progress_hooks hooks = {bar_report, is_cancelled, &bar};
-	char tmp[4096];
-	const char *format;
+	char tmp[4096], dir[4096];
+	const char *format, *slash;
 	enum out_format fmt;
 	int fd = -1, rc, to_stdout;
 	struct sigaction sa;
@@ -232,6 +232,15 @@ int cmd_run(int argc, char **argv)
 	}
 	js.input_path = o.input;
 	js.threads = o.threads;
+	/* Writers' temporary files go beside the output, on the same disk. */
+	slash = strrchr(o.output, '/');
+	if (!slash)
+		snprintf(dir, sizeof dir, ".");
+	else if (slash == o.output)
+		snprintf(dir, sizeof dir, "/");
+	else
+		snprintf(dir, sizeof dir, "%.*s", (int)(slash - o.output), o.output);
+	js.scratch_dir = to_stdout ? NULL : dir;
 
 	if (to_stdout) {
 		fd = STDOUT_FILENO;

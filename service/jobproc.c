@@ -171,6 +171,8 @@ void jobproc_main(const struct jobproc_args *a)
 	const struct job_row *j = a->job;
 	struct progress_hooks hooks;
 	struct job_spec js;
+	char scratch[4096];
+	const char *slash;
 	struct metrics m;
 	struct sink sink;
 	struct jp jp;
@@ -216,6 +218,11 @@ void jobproc_main(const struct jobproc_args *a)
 		js.output_limit_bytes = (uint64_t)c->output_limit_mb << 20;
 		js.job_name = j->id;
 		js.created_unix = j->created_ms / 1000;
+		/* Temporary files beside the artifact, inside the data directory. */
+		slash = strrchr(a->out_tmp, '/');
+		snprintf(scratch, sizeof scratch, "%.*s", slash ? (int)(slash - a->out_tmp) : 1,
+			 slash ? a->out_tmp : ".");
+		js.scratch_dir = scratch;
 		rc = job_spec_validate(&js, &e);
 	}
 	if (!rc) {

@@ -330,6 +330,7 @@ int engine_run(const struct job_spec *js, struct sink *out, const struct progres
 		oi.engine_name = ops->name;
 		oi.threads = threads;
 		oi.created = js->created_unix ? (time_t)js->created_unix : time(NULL);
+		oi.scratch_dir = js->scratch_dir;
 		rc = out_open(&oi, out, &w, e);
 		if (rc)
 			goto out;
