@@ -129,7 +129,8 @@ static const struct param_desc lattice_desc[] = {
 	 .help = "Memory for sorting struts by z; larger inputs are sorted out of core."},
 	{.name = "tmp_dir", .type = PARAM_STR, .offset = P(tmp_dir), .max = 255, .str_cap = 256,
 	 .flags = PARAM_F_PATH, .unit = "path",
-	 .help = "Directory for the external sort's spill file; empty = $TMPDIR or /tmp."},
+	 .help = "Directory for the external sort's spill file; empty = the job's scratch "
+		 "directory (beside the output), else $TMPDIR or /tmp."},
 	{.name = "export_lattice", .type = PARAM_STR, .offset = P(export_lattice), .max = 511,
 	 .str_cap = 512, .flags = PARAM_F_PATH, .unit = "path",
 	 .help = "Also write the generated lattice to this binary lattice file, to slice it "
@@ -358,7 +359,7 @@ static int load_file(const struct engine_ctx *ctx, struct lat_state *s, struct e
 }
 
 /* Figures of an in-memory lattice and its sorted strut source. */
-static int stage_in_memory(struct lat_state *s, struct err *e)
+static int stage_in_memory(struct lat_state *s, const char *scratch, struct err *e)
 {
 	const struct lattice *q = s->q;
 	struct box3 b = lattice_bbox(q);
@@ -382,7 +383,7 @@ static int stage_in_memory(struct lat_state *s, struct err *e)
 	s->extent = box3_inflate(b, s->R);
 	s->extent.lo.z = 0;
 	if ((rc = lattice_sorter_new((size_t)(s->p.sort_budget_mb * 1048576.0),
-				     s->p.tmp_dir[0] ? s->p.tmp_dir : NULL, &s->sorter, e)) != 0 ||
+				     s->p.tmp_dir[0] ? s->p.tmp_dir : scratch, &s->sorter, e)) != 0 ||
 	    (rc = lattice_sorter_add_lattice(s->sorter, q, e)) != 0 ||
 	    (rc = lattice_sorter_finish(s->sorter, e)) != 0)
 		return rc;
@@ -481,14 +482,14 @@ static int lat_prepare(const struct engine_ctx *ctx, const void *params, void **
 		if (s->p.export_lattice[0] &&
 		    (rc = lattice_write_binary(s->q, s->p.export_lattice, e)) != 0)
 			goto fail;
-		rc = stage_in_memory(s, e);
+		rc = stage_in_memory(s, ctx->scratch_dir, e);
 	} else if (lattice_file_probe(ctx->input_path) == LATTICE_FILE_BINARY &&
 		   ctx->common->up == MESH_UP_Z) {
 		rc = stage_stream(ctx, s, e);
 	} else {
 		if ((rc = load_file(ctx, s, e)) != 0)
 			goto fail;
-		rc = stage_in_memory(s, e);
+		rc = stage_in_memory(s, ctx->scratch_dir, e);
 	}
 	if (rc)
 		goto fail;
