@@ -138,8 +138,8 @@ static const struct param_desc lattice_desc[] = {
 };
 #undef P
 
-/* Placement of a lattice file: x' = s Rot x + t (Rot a signed permutation
- * taking the file's `up` axis to +z, as mesh_place does). */
+/* Placement of a lattice file: x' = s Rot x + t (Rot a proper rotation
+ * taking the file's `up` axis to +z, from mesh_place()). */
 struct place {
 	double rot[3][3];
 	double s;
@@ -226,46 +226,49 @@ static int placed_next(void *ctx, struct lattice_strut *s, struct err *e)
 	return 1;
 }
 
-static double units_mm(int units)
+/* The placement of a lattice file, exactly as mesh_place() places a mesh:
+ * units, scale or height_mm, the up axis, XY centred on the plate, the
+ * bottom on z = 0.  The part is the skeleton's box grown by the largest
+ * radius r (the solid's extent), handed to mesh_place() as triangles; four
+ * stray probe vertices (which move along without counting for the box)
+ * give the affine map x' = s Rot x + t. */
+static int lattice_placement(const struct common_params *c, const struct printer *pr,
+			     struct box3 b, double r, struct place *pl, struct err *e)
 {
-	switch (units) {
-	case MESH_UNITS_CM: return 10.0;
-	case MESH_UNITS_M: return 1000.0;
-	case MESH_UNITS_IN: return 25.4;
-	default: return 1.0;
-	}
-}
+	struct vec3 v[12];
+	uint32_t tri[9] = {0, 1, 2, 3, 4, 5, 6, 7, 0};
+	struct mesh m = {v, tri, 12, 3};
+	struct mesh_placement mp;
+	int rc;
 
-/* The placement mesh_place() would give a part whose skeleton has bbox b
- * (file frame): units, scale or height, up axis, XY centred on the plate,
- * lowest node on z = 0 (the bottom struts are cut flat there, like the
- * surface struts of a generated lattice). */
-static void lattice_placement(const struct common_params *c, const struct printer *pr,
-			      struct box3 b, struct place *pl)
-{
-	static const double rot[6][3][3] = {
-		[MESH_UP_Z] = {{1, 0, 0}, {0, 1, 0}, {0, 0, 1}},
-		[MESH_UP_NZ] = {{1, 0, 0}, {0, -1, 0}, {0, 0, -1}},
-		[MESH_UP_Y] = {{1, 0, 0}, {0, 0, -1}, {0, 1, 0}},
-		[MESH_UP_NY] = {{1, 0, 0}, {0, 0, 1}, {0, -1, 0}},
-		[MESH_UP_X] = {{0, 0, -1}, {0, 1, 0}, {1, 0, 0}},
-		[MESH_UP_NX] = {{0, 0, 1}, {0, 1, 0}, {-1, 0, 0}},
-	};
-	struct box3 r = box3_empty();
-	double cx, cy;
-
-	memcpy(pl->rot, rot[c->up >= 0 && c->up < 6 ? c->up : 0], sizeof pl->rot);
-	pl->s = 1;
-	pl->t = v3(0, 0, 0);
+	b = box3_inflate(b, r);
 	for (int k = 0; k < 8; k++)
-		box3_add(&r, place_pt(pl, v3((k & 1) ? b.hi.x : b.lo.x, (k & 2) ? b.hi.y : b.lo.y,
-					      (k & 4) ? b.hi.z : b.lo.z)));
-	pl->s = units_mm(c->units) * c->scale;
-	if (c->height_mm > 0 && r.hi.z > r.lo.z)
-		pl->s = c->height_mm / (r.hi.z - r.lo.z);
-	printer_center(pr, &cx, &cy);
-	pl->t = v3(cx - pl->s * 0.5 * (r.lo.x + r.hi.x), cy - pl->s * 0.5 * (r.lo.y + r.hi.y),
-		   -pl->s * r.lo.z);
+		v[k] = v3((k & 1) ? b.hi.x : b.lo.x, (k & 2) ? b.hi.y : b.lo.y,
+			  (k & 4) ? b.hi.z : b.lo.z);
+	v[8] = v3(0, 0, 0);
+	v[9] = v3(1, 0, 0);
+	v[10] = v3(0, 1, 0);
+	v[11] = v3(0, 0, 1);
+	memset(&mp, 0, sizeof mp);
+	mp.units = c->units;
+	mp.scale = c->scale;
+	mp.height_mm = c->height_mm;
+	mp.up = c->up;
+	printer_center(pr, &mp.center_x_mm, &mp.center_y_mm);
+	if ((rc = mesh_place(&m, &mp, e)) != 0)
+		return rc;
+	pl->t = v[8];
+	for (int a = 0; a < 3; a++) {
+		struct vec3 col = v3_sub(v[9 + a], v[8]);
+		pl->rot[0][a] = col.x;
+		pl->rot[1][a] = col.y;
+		pl->rot[2][a] = col.z;
+	}
+	pl->s = v3_len(v3_sub(v[9], v[8]));
+	for (int i = 0; i < 3; i++)
+		for (int a = 0; a < 3; a++)
+			pl->rot[i][a] /= pl->s;
+	return 0;
 }
 
 /* ---- prepare ---- */
@@ -349,7 +352,9 @@ static int load_file(const struct engine_ctx *ctx, struct lat_state *s, struct e
 	if (s->q->nedges == 0)
 		return ERR_SET(e, ERR_GEOMETRY, "the lattice file has no struts");
 	b = lattice_bbox(s->q);
-	lattice_placement(ctx->common, ctx->printer, b, &pl);
+	if ((rc = lattice_placement(ctx->common, ctx->printer, b, lattice_max_radius(s->q), &pl,
+				    e)) != 0)
+		return rc;
 	for (size_t i = 0; i < s->q->nnodes; i++)
 		s->q->node[i] = place_pt(&pl, s->q->node[i]);
 	for (size_t i = 0; i < s->q->nedges; i++)
@@ -406,7 +411,9 @@ static int stage_stream(const struct engine_ctx *ctx, struct lat_state *s, struc
 		return rc;
 	if (s->hdr.nedges == 0)
 		return ERR_SET(e, ERR_GEOMETRY, "the lattice file has no struts");
-	lattice_placement(ctx->common, ctx->printer, s->hdr.bbox, &s->ps.pl);
+	if ((rc = lattice_placement(ctx->common, ctx->printer, s->hdr.bbox, s->hdr.max_radius_mm,
+				    &s->ps.pl, e)) != 0)
+		return rc;
 	s->ps.inner = lattice_stream_source(s->stream);
 	s->nodes = s->hdr.nnodes;
 	s->struts = s->hdr.nedges;

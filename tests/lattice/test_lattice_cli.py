@@ -107,11 +107,13 @@ class LatticeCliTest(unittest.TestCase):
         self.assertEqual(m["lattice"]["struts"], len(self.edges))
         self.assertEqual(m["lattice"]["nodes"], len(self.nodes))
         self.assertAlmostEqual(m["lattice"]["support_mm"], SUPPORT, places=6)
-        top = (N - 1) * SPACING
-        # the lowest node sits on the plate; layers reach the top node + R
+        # placed like a mesh: the solid's bottom (lowest node - radius) on the
+        # plate; layers reach the top node + R (the support bounds the solid)
+        top = (N - 1) * SPACING + RADIUS
         self.assertEqual(m["layers"], math.ceil((top + SUPPORT) / 0.05 - 1e-9))
         sl1check.check_archive(sl1, expect_layers=m["layers"])
-        # z = 1.475 mm (layer 29): farther than R from every node layer, so
+        # z = 1.475 mm (layer 29): nodes at z = 0.4, 3.4, ...: farther than R
+        # from every node layer, so
         # the plane cuts only the 16 vertical struts, far from their ends:
         # 16 discs of radius RADIUS exactly (weight <-> radius map)
         img, count = self.layer_image(sl1, 29)
@@ -120,8 +122,8 @@ class LatticeCliTest(unittest.TestCase):
         area = img.pixel_sum() / 255.0 * px_mm2
         expect = N * N * math.pi * RADIUS ** 2
         self.assertAlmostEqual(area / expect, 1.0, delta=0.01)
-        # a node layer (z = 3.025, layer 60) holds the horizontal struts too
-        img2, _ = self.layer_image(sl1, 60)
+        # near a node layer (z = 3.425, layer 68) the horizontal struts add
+        img2, _ = self.layer_image(sl1, 68)
         self.assertGreater(img2.pixel_sum(), 5 * img.pixel_sum())
         return m
 
