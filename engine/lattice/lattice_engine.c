@@ -363,6 +363,15 @@ static int load_file(const struct engine_ctx *ctx, struct lat_state *s, struct e
 	return 0;
 }
 
+/* The printed extent: the solid lies strictly within R of its skeleton
+ * (the kernel vanishes at R), so the skeleton's box grown by R, less a
+ * nanometre against rounding adding an empty layer; z from the plate. */
+static void set_extent(struct lat_state *s, struct box3 nodes)
+{
+	s->extent = box3_inflate(nodes, s->R - 1e-6);
+	s->extent.lo.z = 0;
+}
+
 /* Figures of an in-memory lattice and its sorted strut source. */
 static int stage_in_memory(struct lat_state *s, const char *scratch, struct err *e)
 {
@@ -385,8 +394,7 @@ static int stage_in_memory(struct lat_state *s, const char *scratch, struct err 
 		return ERR_SET(e, ERR_GEOMETRY,
 			       "the largest strut radius %g mm is not below the support %g mm",
 			       s->rmax, s->R);
-	s->extent = box3_inflate(b, s->R);
-	s->extent.lo.z = 0;
+	set_extent(s, b);
 	if ((rc = lattice_sorter_new((size_t)(s->p.sort_budget_mb * 1048576.0),
 				     s->p.tmp_dir[0] ? s->p.tmp_dir : scratch, &s->sorter, e)) != 0 ||
 	    (rc = lattice_sorter_add_lattice(s->sorter, q, e)) != 0 ||
@@ -427,8 +435,7 @@ static int stage_stream(const struct engine_ctx *ctx, struct lat_state *s, struc
 			       s->rmax, s->R);
 	b.lo = place_pt(&s->ps.pl, s->hdr.bbox.lo);
 	b.hi = place_pt(&s->ps.pl, s->hdr.bbox.hi);
-	s->extent = box3_inflate(b, s->R);
-	s->extent.lo.z = 0;
+	set_extent(s, b);
 	return 0;
 }
 
