@@ -102,8 +102,9 @@ $(BUILD)/tests/unit/%: tests/unit/%.c $(TEST_SUPPORT_OBJ) $(LIBS)
 
 $(BUILD)/tests/bench/%: tests/bench/%.c $(LIBS)
 	@mkdir -p $(@D)
-	$(CC) $(CFLAGS) -Itests -c $< -o $@.o
-	$(CXX) $(LDFLAGS) -o $@ $@.o $(LIBS) $(LDLIBS)
+	@$(if $(Q),echo "  BENCH   $<")
+	$(Q)$(CC) $(CFLAGS) -Itests -c $< -o $@.o
+	$(Q)$(CXX) $(LDFLAGS) -o $@ $@.o $(LIBS) $(LDLIBS)
 
 # The README's two commands.
 run: deps
@@ -131,9 +132,10 @@ FUZZ_LATTICE_SRC := engine/lattice/graph.c engine/lattice/file_bin.c engine/latt
 	engine/lattice/density.c
 .PHONY: fuzz-build
 fuzz-build: $(FUZZ_BIN)
-build-fuzz/%: tests/fuzz/%.c $(ENGINE_SRC)
+build-fuzz/%: tests/fuzz/%.c $(wildcard tests/fuzz/*.h engine/*/*.h) $(ENGINE_SRC)
 	@mkdir -p $(@D)
-	clang -std=c11 -O1 -g -fsanitize=fuzzer,address,undefined $(DEFS) -I. $(PKG_CFLAGS) \
+	@$(if $(Q),echo "  FUZZ    $<")
+	$(Q)clang -std=c11 -O1 -g -fsanitize=fuzzer,address,undefined $(DEFS) -I. $(PKG_CFLAGS) \
 		-Wall -Wextra -Werror -o $@ $< $(filter engine/core/% engine/geom/%.c engine/mesh/% $(FUZZ_LATTICE_SRC),$(FUZZ_ENGINE_SRC)) -lm
 fuzz: deps
 	@$(MAKE) --no-print-directory fuzz-build
@@ -142,6 +144,11 @@ fuzz: deps
 bench: deps
 	@$(MAKE) --no-print-directory -j$(NPROC) build
 	@tests/bench/run.sh $(BUILD)
+
+# The mesh benchmark alone (also run by `make bench` via tests/bench/bench_mesh.sh).
+.PHONY: bench-mesh
+bench-mesh: $(BUILD)/tests/bench/bench_mesh
+	$< $(if $(INFILLD_SHARED),$(INFILLD_SHARED),../shared)
 
 bench-large: deps
 	@$(MAKE) --no-print-directory -j$(NPROC) build
