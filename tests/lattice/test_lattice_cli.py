@@ -189,7 +189,8 @@ class LatticeCliTest(unittest.TestCase):
     def test_mesh_generates_self_supporting_lattice(self):
         out, met = self.path("camel.sl1"), self.path("camel.json")
         p = run("run", os.path.join(MESHES, "camel.off"), "-o", out, "--engine", "lattice",
-                "--set", "height_mm=60", "--set", "up=y", "--metrics", met, "--quiet")
+                "--set", "height_mm=45", "--set", "up=y", "--set", "layer_mm=0.1",
+                "--metrics", met, "--quiet")
         self.assertEqual(p.returncode, 0, p.stderr)
         with open(met) as f:
             m = json.load(f)
