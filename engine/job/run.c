@@ -280,6 +280,7 @@ int engine_run(const struct job_spec *js, struct sink *out, const struct progres
 	ctx.want_region = js->format == OUT_GCODE || !ctx.want_raster;
 	ctx.map = ctx.want_raster ? &map : NULL;
 	ctx.progress = &prog;
+	ctx.scratch_dir = js->scratch_dir;
 	ctx.metrics = m;
 	rc = ops->prepare(&ctx, js->engine_params, &state, e);
 	if (rc) {
