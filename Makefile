@@ -20,7 +20,7 @@ CC := gcc
 CXX := g++
 NPROC := $(shell nproc 2>/dev/null || echo 2)
 
-PKGS := libpng zlib libarchive jansson libmicrohttpd sqlite3 polyclipping ipopt
+PKGS := libpng zlib libarchive jansson libmicrohttpd sqlite3 nettle polyclipping ipopt
 # Evaluated lazily: pkg-config only runs once the packages are installed.
 PKG_CFLAGS = $(shell pkg-config --cflags $(PKGS) 2>/dev/null)
 PKG_LIBS = $(shell pkg-config --libs $(PKGS) 2>/dev/null) -ltet
@@ -66,31 +66,37 @@ deps:
 
 build: $(BIN) $(UNIT_BIN)
 
+# V=1 shows the full commands.
+Q := $(if $(filter 1,$(V)),,@)
 $(BUILD)/obj/%.c.o: %.c
 	@mkdir -p $(@D)
-	$(CC) $(CFLAGS) -c $< -o $@
+	@$(if $(Q),echo "  CC      $<")
+	$(Q)$(CC) $(CFLAGS) -c $< -o $@
 
 $(BUILD)/obj/%.cpp.o: %.cpp
 	@mkdir -p $(@D)
-	$(CXX) $(CXXFLAGS) -c $< -o $@
+	@$(if $(Q),echo "  CXX     $<")
+	$(Q)$(CXX) $(CXXFLAGS) -c $< -o $@
 
 $(BUILD)/libengine.a: $(ENGINE_OBJ)
 	@mkdir -p $(@D)
-	rm -f $@ && ar rcs $@ $^
+	$(Q)rm -f $@ && ar rcs $@ $^
 $(BUILD)/libapi.a: $(API_OBJ)
 	@mkdir -p $(@D)
-	rm -f $@ && ar rcs $@ $^
+	$(Q)rm -f $@ && ar rcs $@ $^
 $(BUILD)/libdb.a: $(DB_OBJ)
 	@mkdir -p $(@D)
-	rm -f $@ && ar rcs $@ $^
+	$(Q)rm -f $@ && ar rcs $@ $^
 
 $(BIN): $(SERVICE_OBJ) $(LIBS)
-	$(CXX) $(LDFLAGS) -o $@ $(SERVICE_OBJ) $(LIBS) $(LDLIBS)
+	@$(if $(Q),echo "  LINK    $@")
+	$(Q)$(CXX) $(LDFLAGS) -o $@ $(SERVICE_OBJ) $(LIBS) $(LDLIBS)
 
 $(BUILD)/tests/unit/%: tests/unit/%.c $(TEST_SUPPORT_OBJ) $(LIBS)
 	@mkdir -p $(@D)
-	$(CC) $(CFLAGS) -Itests -c $< -o $@.o
-	$(CXX) $(LDFLAGS) -o $@ $@.o $(TEST_SUPPORT_OBJ) $(LIBS) $(LDLIBS)
+	@$(if $(Q),echo "  TEST    $<")
+	$(Q)$(CC) $(CFLAGS) -Itests -c $< -o $@.o
+	$(Q)$(CXX) $(LDFLAGS) -o $@ $@.o $(TEST_SUPPORT_OBJ) $(LIBS) $(LDLIBS)
 
 # The README's two commands.
 run: deps

@@ -8,6 +8,7 @@ PKGS=(
 	gcc g++ make pkg-config clang libclang-rt-14-dev python3
 	libmicrohttpd-dev libjansson-dev libpng-dev zlib1g-dev libsqlite3-dev
 	libarchive-dev libpolyclipping-dev libtet1.5-dev coinor-libipopt-dev
+	nettle-dev wrk
 )
 
 missing=()
@@ -21,11 +22,25 @@ for p in "${PKGS[@]}"; do
 	}
 done
 
-[ ${#missing[@]} -eq 0 ] && exit 0
+# Node.js + npm run the OpenAPI linter; use the machine's if it has one
+# (a newer node may come from elsewhere), else Debian's.
+[ "${SKIP_NPM-}" = 1 ] || command -v npm >/dev/null 2>&1 || missing+=(nodejs npm)
 
-SUDO=
-[ "$(id -u)" -eq 0 ] || SUDO=sudo
-echo "deps: installing ${missing[*]}" >&2
-export DEBIAN_FRONTEND=noninteractive
-$SUDO apt-get update -qq
-$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+if [ ${#missing[@]} -gt 0 ]; then
+	SUDO=
+	[ "$(id -u)" -eq 0 ] || SUDO=sudo
+	echo "deps: installing ${missing[*]}" >&2
+	export DEBIAN_FRONTEND=noninteractive
+	$SUDO apt-get update -qq
+	$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
+fi
+
+# npm tools pinned by package-lock.json (OpenAPI linter), into node_modules/.
+# SKIP_NPM=1 (container builds) skips it: only the tests need it.
+ROOT=$(cd "$(dirname "$0")/.." && pwd)
+if [ "${SKIP_NPM-}" != 1 ] && [ -f "$ROOT/package-lock.json" ] &&
+	! cmp -s "$ROOT/package-lock.json" "$ROOT/node_modules/.package-lock-installed" 2>/dev/null; then
+	echo "deps: npm ci" >&2
+	(cd "$ROOT" && npm ci --no-audit --no-fund --loglevel=error >/dev/null) &&
+		cp "$ROOT/package-lock.json" "$ROOT/node_modules/.package-lock-installed"
+fi

@@ -66,6 +66,8 @@ struct engine_ops {
 	struct param_table params; /* the engine's own keys */
 	size_t params_size;        /* sizeof the engine's parameter struct */
 	unsigned flags;
+	double prepare_share;      /* typical fraction of a job spent in prepare()
+				      (progress weighting), 0..0.95 */
 
 	/* ENGINE_F_LATTICE_INPUT: nonzero when the engine reads this input
 	 * file itself (e.g. a lattice file, by magic number or extension);
@@ -121,6 +123,9 @@ void job_spec_fini(struct job_spec *js);
  * printer's.  Unknown key: ERR_PARAM with field = key and a message that
  * says which tables were searched. */
 int job_spec_set(struct job_spec *js, const char *key, const char *value, struct err *e);
+
+/* The description of key in the table job_spec_set() would use, or NULL. */
+const struct param_desc *job_spec_param(const struct job_spec *js, const char *key);
 
 /* Ranges, cross-field rules, engine validate().  Everything that can be
  * known before reading the input. */

@@ -7,5 +7,10 @@
 int cmd_run(int argc, char **argv);     /* cli_run.c */
 int cmd_analyze(int argc, char **argv); /* cli_run.c */
 int cmd_engines(int argc, char **argv); /* cli_run.c */
+int cmd_serve(int argc, char **argv);     /* serve.c */
+int cmd_worker(int argc, char **argv);    /* worker.c (started by serve) */
+int cmd_sandbox(int argc, char **argv);   /* sandbox.c (started by serve) */
+int cmd_tenant(int argc, char **argv);    /* tenant_cmd.c */
+int cmd_admin_key(int argc, char **argv); /* tenant_cmd.c */
 
 #endif

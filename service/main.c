@@ -5,6 +5,7 @@
 
 #include "engine/engine.h"
 #include "service/commands.h"
+#include "service/config.h"
 
 struct command {
 	const char *name;
@@ -19,13 +20,24 @@ static const struct command commands[] = {
 	 "              [--metrics FILE.json] [--threads N] [--quiet]"},
 	{"analyze", cmd_analyze, "analyze MESH [--set KEY=VALUE]...   (JSON report on stdout)"},
 	{"engines", cmd_engines, "engines                              (JSON: engines and parameters)"},
+	{"serve", cmd_serve, NULL}, /* usage from config_usage() */
+	{"tenant", cmd_tenant,
+	 "tenant add NAME [--max-jobs N] [--max-upload-mb N] [--quota-gb N] [--data DIR]\n"
+	 "              tenant list | key-rotate NAME | remove NAME [--data DIR]"},
+	{"admin-key", cmd_admin_key, "admin-key [--data DIR]               (new admin key, shown once)"},
+	/* Internal: started by serve, not listed. */
+	{"worker", cmd_worker, ""},
+	{"sandbox", cmd_sandbox, ""},
 };
 
 static void usage(FILE *f)
 {
 	fprintf(f, "infilld %s - interiors for 3D-printed parts\n\nusage:\n", INFILLD_VERSION);
 	for (size_t i = 0; i < sizeof commands / sizeof commands[0]; i++)
-		fprintf(f, "  infilld %s\n", commands[i].usage);
+		if (!commands[i].usage)
+			fprintf(f, "  infilld %s\n", config_usage());
+		else if (commands[i].usage[0]) /* "" = internal, not listed */
+			fprintf(f, "  infilld %s\n", commands[i].usage);
 	fprintf(f, "\nSee README.md and docs/ for parameters and formats.\n");
 }
 

@@ -32,9 +32,16 @@ struct layer {
 	enum layer_fill fill;
 };
 
-/* Number of layers for a part of this height (>= 1 for height > 0). */
+/* Most layers a job may have (5 m of part at 1 um layers). */
+#define LAYER_MAX_COUNT 5000000
+
+/* Number of layers for a part of this height: ceil(height_mm / layer_mm),
+ * >= 1 for height > 0 (an excess below 1e-9 layer is rounding noise and
+ * does not add a layer).  Returns 0 when either argument is not a
+ * positive finite number or the count would exceed LAYER_MAX_COUNT. */
 int layer_count_for(double height_mm, double layer_mm);
-/* Fill index/z fields of ly for layer k. */
+/* Fill index, count, z_mm, z_top_mm and height_mm of ly for layer k
+ * (other fields untouched). */
 void layer_place(struct layer *ly, int k, int count, double layer_mm);
 
 #endif

@@ -10,10 +10,13 @@
  * Degenerate cases: planes are sampled at mid-layer heights (layer.h); a
  * vertex lying exactly on the plane is treated as lying just above it
  * (symbolic perturbation), so every triangle is cut in 0 or 2 edges and
- * horizontal faces contribute nothing.  Open meshes leave open chains;
- * these are closed (nearest-end joining, then straight closure) and the
- * result is normalised under the nonzero rule; the count of closed chains
- * is reported so callers can say what was repaired.
+ * horizontal faces contribute nothing.  Chaining needs a welded mesh
+ * (shared vertex indices: the driver runs mesh_repair first); an edge
+ * shared by four faces is fine.  Open meshes leave open chains; each is
+ * closed by a straight join to the nearest chain head on the same hole
+ * (border loop), else to the nearest head, and the result is normalised
+ * under the nonzero rule; the count of closed chains is reported so
+ * callers can say what was repaired.
  *
  * Raster: exact-area anti-aliasing (signed-area accumulation per cell)
  * or binary centre sampling, nonzero winding rule.  Nonzero, not
@@ -41,13 +44,17 @@ struct slice_stats {
 };
 
 /* Prepare a sweep over m (borrowed; must outlive the slicer).  Caller
- * frees with slice_free().  O(n log n). */
+ * frees with slice_free() (NULL-safe).  O(n log n).  ERR_GEOMETRY for an
+ * out-of-range index or a non-finite coordinate (e->item names it),
+ * ERR_LIMIT beyond MESH_MAX_*, ERR_NOMEM.  Degenerate triangles are
+ * skipped.  A slicer is used by one thread at a time. */
 int slice_new(const struct mesh *m, struct slicer **out, struct err *e);
 void slice_free(struct slicer *s);
 
-/* Region (normalised, nm) where the plane z = z_mm cuts the solid.
- * Successive calls with non-decreasing z are O(active + new); a lower z
- * restarts the sweep.  stats may be NULL; they accumulate per call. */
+/* Region (normalised, nm, printer frame) where the plane z = z_mm cuts
+ * the solid, replacing *region.  Successive calls with non-decreasing z
+ * are O(active + new); a lower z restarts the sweep.  stats may be NULL;
+ * they accumulate per call.  ERR_PARAM for a non-finite z, ERR_NOMEM. */
 int slice_at(struct slicer *s, double z_mm, struct paths *region, struct slice_stats *stats,
 	     struct err *e);
 
@@ -57,11 +64,22 @@ int slice_at(struct slicer *s, double z_mm, struct paths *region, struct slice_s
 int slice_rasterize(const struct paths *region, const struct raster_map *map, int antialias,
 		    struct raster *r, struct err *e);
 
+/* The exact area coverage (0..1, before 8-bit quantisation) of region in
+ * each pixel of a w x h float image with row stride `stride` floats,
+ * through map; max-ed into cov like slice_rasterize.  For callers that
+ * need unquantised coverage (tests of exactness, thumbnails, volume
+ * estimates).  0, ERR_PARAM (singular map, bad size) or ERR_NOMEM. */
+int slice_coverage(const struct paths *region, const struct raster_map *map, float *cov, int w,
+		   int h, size_t stride, struct err *e);
+
 /* Contours of a scalar field sampled at pixel centres (marching squares
  * with linear interpolation, saddles resolved by the cell centre value):
  * the region where field > iso, mapped to printer nm through map's
- * inverse.  field: w*h floats, row-major, row stride w.  Outside the grid
- * the field counts as below iso, so contours close. */
+ * inverse, replacing *region.  field: w*h floats, row-major, row stride
+ * w; NaN counts as below iso.  Outside the grid the field counts as below
+ * iso (crossings on the image border), so contours close.  The loops are
+ * simple, disjoint and oriented: a normalised region without a union.
+ * O(w h + crossings).  ERR_PARAM (empty grid, singular map), ERR_NOMEM. */
 int slice_field_contours(const float *field, int w, int h, float iso,
 			 const struct raster_map *map, struct paths *region, struct err *e);
 

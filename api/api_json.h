@@ -1,0 +1,32 @@
+/* api_json.h - engine records <-> JSON (jansson), shared by the CLI
+ * (service/cli_run.c) and the HTTP API.  The only place that turns
+ * struct metrics, parameter tables and job parameters into JSON. */
+#ifndef INFILLD_API_JSON_H
+#define INFILLD_API_JSON_H
+
+#include <jansson.h>
+
+#include "engine/engine.h"
+
+/* Nested object from dotted keys ("lattice.gamma_raw" -> {"lattice":
+ * {"gamma_raw": ...}}); NaN numbers become null.  New reference; NULL on
+ * allocation failure. */
+json_t *api_metrics_json(const struct metrics *m);
+
+/* Describe one parameter table; defaults read from base (a struct filled
+ * with the defaults or a printer profile).  New reference. */
+json_t *api_params_json(const struct param_table *t, const void *base);
+
+/* Everything `infilld engines` and GET /v1/engines publish: engines with
+ * their parameters, the common keys, printer profiles with their
+ * settings, output formats.  New reference. */
+json_t *api_engines_json(void);
+
+/* Apply a JSON object of parameters to js with strict types: numbers
+ * for number/int keys, booleans for bool, strings for enum/string,
+ * [x, y, z] for vec3.  allow_paths = 0 refuses file-path parameters
+ * (the HTTP API).  0 or ERR_PARAM with e->field naming the key. */
+int api_params_apply(struct job_spec *js, const json_t *params, int allow_paths,
+		     struct err *e);
+
+#endif

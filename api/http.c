@@ -1,0 +1,125 @@
+/* http.c - response helpers: JSON bodies, timestamps, header and query
+ * access, and parking connections (suspend/resume) so no handler thread
+ * ever waits.
+ */
+#include "api/api_internal.h"
+
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+enum MHD_Result api_queue(struct api_req *r, unsigned status, struct MHD_Response *resp)
+{
+	enum MHD_Result ret;
+
+	if (!resp)
+		return MHD_NO; /* out of memory: MHD closes the connection */
+	MHD_add_response_header(resp, "Cache-Control", "no-store");
+	r->status = status;
+	ret = MHD_queue_response(r->conn, status, resp);
+	MHD_destroy_response(resp);
+	return ret;
+}
+
+struct MHD_Response *api_json_response(json_t *body)
+{
+	struct MHD_Response *resp;
+	char *text;
+
+	if (!body)
+		return NULL;
+	text = json_dumps(body, JSON_COMPACT | JSON_ENSURE_ASCII);
+	json_decref(body);
+	if (!text)
+		return NULL;
+	resp = MHD_create_response_from_buffer_with_free_callback(strlen(text), text, free);
+	if (!resp) {
+		free(text);
+		return NULL;
+	}
+	MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE, "application/json");
+	return resp;
+}
+
+enum MHD_Result api_json(struct api_req *r, unsigned status, json_t *body)
+{
+	struct MHD_Response *resp = api_json_response(body);
+
+	if (!resp) {
+		unsigned st;
+		resp = api_problem_response(PROB_INTERNAL, r->url, NULL, "out of memory", &st);
+		status = st;
+	}
+	return api_queue(r, status, resp);
+}
+
+const char *api_time(int64_t ms, char *buf, size_t len)
+{
+	time_t s = (time_t)(ms / 1000);
+	struct tm tm;
+
+	gmtime_r(&s, &tm);
+	snprintf(buf, len, "%04d-%02d-%02dT%02d:%02d:%02d.%03dZ", tm.tm_year + 1900,
+		 tm.tm_mon + 1, tm.tm_mday, tm.tm_hour, tm.tm_min, tm.tm_sec, (int)(ms % 1000));
+	return buf;
+}
+
+const char *api_header(struct api_req *r, const char *name)
+{
+	return MHD_lookup_connection_value(r->conn, MHD_HEADER_KIND, name);
+}
+
+const char *api_query(struct api_req *r, const char *name)
+{
+	return MHD_lookup_connection_value(r->conn, MHD_GET_ARGUMENT_KIND, name);
+}
+
+static void park_conn(struct api_server *s, struct MHD_Connection *conn)
+{
+	struct api_waiter *w = malloc(sizeof *w);
+
+	/* Registered before suspending, under the lock the ticker takes to
+	 * resume, so a wake-up can never be lost. */
+	pthread_mutex_lock(&s->wait_mu);
+	MHD_suspend_connection(conn);
+	if (w) {
+		w->conn = conn;
+		w->next = s->waiting;
+		s->waiting = w;
+	}
+	pthread_mutex_unlock(&s->wait_mu);
+	if (!w)
+		MHD_resume_connection(conn); /* cannot park: poll again */
+}
+
+void api_park(struct api_req *r)
+{
+	r->suspended = 1;
+	MHD_suspend_connection(r->conn);
+}
+
+void api_park_stream(struct api_server *s, struct MHD_Connection *conn)
+{
+	park_conn(s, conn);
+}
+
+void api_wake(struct api_server *s, struct MHD_Connection *conn)
+{
+	(void)s;
+	MHD_resume_connection(conn);
+}
+
+void api_reject(struct api_req *r, enum problem p, const char *fmt, ...)
+{
+	va_list ap;
+
+	if (r->rejected)
+		return;
+	r->rejected = 1;
+	r->reject_p = p;
+	va_start(ap, fmt);
+	vsnprintf(r->reject_detail, sizeof r->reject_detail, fmt, ap);
+	va_end(ap);
+}

@@ -1,0 +1,215 @@
+/* output.c - GET /v1/jobs/{id}/output: the finished artifact.
+ *
+ * A whole download is a chunked stream read with pread() in 256 KiB
+ * blocks (memory per connection is one block, whatever the file size);
+ * a single "Range: bytes=a-b" gets 206 served from the file descriptor.
+ * ETag is the artifact's SHA-256; Repr-Digest (RFC 9530) carries it too.
+ */
+#include "api/api_internal.h"
+#include "db/queue.h"
+#include "db/store.h"
+#include "engine/engine.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <inttypes.h>
+#include <nettle/base64.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#define OUTPUT_BLOCK (256u * 1024u)
+
+struct dl {
+	struct api_server *srv;
+	int fd;
+	uint64_t size;
+};
+
+static ssize_t dl_read(void *cls, uint64_t pos, char *buf, size_t max)
+{
+	struct dl *d = cls;
+	ssize_t n;
+
+	if (pos >= d->size)
+		return MHD_CONTENT_READER_END_OF_STREAM;
+	if (max > d->size - pos)
+		max = (size_t)(d->size - pos);
+	do
+		n = pread(d->fd, buf, max, (off_t)pos);
+	while (n < 0 && errno == EINTR);
+	if (n <= 0)
+		return MHD_CONTENT_READER_END_WITH_ERROR; /* truncated underneath us */
+	atomic_fetch_add(&d->srv->bytes_out, n);
+	return n;
+}
+
+static void dl_free(void *cls)
+{
+	struct dl *d = cls;
+
+	close(d->fd);
+	free(d);
+}
+
+/* Parse "bytes=a-b", "bytes=a-", "bytes=-n" against size.  1 = range
+ * set, 0 = no usable Range (serve all), -1 = unsatisfiable. */
+static int parse_range(const char *h, uint64_t size, uint64_t *from, uint64_t *to)
+{
+	char *end;
+	unsigned long long a, b;
+
+	if (!h || strncmp(h, "bytes=", 6) != 0 || strchr(h, ','))
+		return 0; /* multiple ranges: serve the whole file (allowed) */
+	h += 6;
+	if (*h == '-') {
+		b = strtoull(h + 1, &end, 10);
+		if (*end || end == h + 1)
+			return 0;
+		if (b == 0 || size == 0)
+			return -1;
+		*from = b >= size ? 0 : size - b;
+		*to = size - 1;
+		return 1;
+	}
+	a = strtoull(h, &end, 10);
+	if (end == h || *end != '-')
+		return 0;
+	h = end + 1;
+	if (*h) {
+		b = strtoull(h, &end, 10);
+		if (*end || b < a)
+			return 0;
+	} else {
+		b = size ? size - 1 : 0;
+	}
+	if (a >= size)
+		return -1;
+	*from = a;
+	*to = b >= size ? size - 1 : b;
+	return 1;
+}
+
+static int etag_match(const char *inm, const char *etag)
+{
+	return inm && (strstr(inm, etag) != NULL || !strcmp(inm, "*"));
+}
+
+enum MHD_Result api_job_output(struct api_req *r)
+{
+	char path[STORE_PATH_MAX], etag[72], digest[64], disp[128], b64[48];
+	struct job_row j;
+	struct MHD_Response *resp;
+	enum MHD_Result ret;
+	enum out_format f;
+	struct stat st;
+	struct err e;
+	uint64_t from, to;
+	int fd, rg;
+
+	if (api_load_job(r, &j, &ret))
+		return ret;
+	if (j.state != JOB_SUCCEEDED) {
+		int waiting = j.state == JOB_QUEUED || j.state == JOB_RUNNING;
+		unsigned status;
+		resp = api_problem_response(PROB_NOT_READY, r->url, NULL,
+					    waiting ? "the job is still running; follow its events"
+						    : "the job did not succeed, so it has no output",
+					    &status);
+		if (resp && waiting)
+			MHD_add_response_header(resp, MHD_HTTP_HEADER_RETRY_AFTER, "2");
+		job_row_fini(&j);
+		return api_queue(r, status, resp);
+	}
+	if (!j.artifact[0]) {
+		job_row_fini(&j);
+		return api_problem(r, PROB_GONE, NULL, "the output of job %s was deleted by retention",
+				   r->arg[0]);
+	}
+	store_artifact_path(r->srv->cfg.data_dir, r->tenant.id, j.artifact, path, sizeof path);
+	fd = open(path, O_RDONLY | O_CLOEXEC);
+	if (fd < 0 || fstat(fd, &st) != 0) {
+		if (fd >= 0)
+			close(fd);
+		job_row_fini(&j);
+		return api_problem(r, PROB_GONE, NULL, "the output file of job %s is missing",
+				   r->arg[0]);
+	}
+	snprintf(etag, sizeof etag, "\"%s\"", j.artifact_sha256);
+	{
+		uint8_t raw[32];
+		for (int i = 0; i < 32; i++)
+			sscanf(j.artifact_sha256 + 2 * i, "%2hhx", &raw[i]);
+		base64_encode_raw((char *)b64, 32, raw);
+		b64[BASE64_ENCODE_RAW_LENGTH(32)] = '\0';
+		snprintf(digest, sizeof digest, "sha-256=:%s:", b64);
+	}
+	if (out_format_parse(j.format, &f, &e) != 0)
+		f = OUT_ZIP;
+	snprintf(disp, sizeof disp, "attachment; filename=\"%s%s\"", j.id, out_format_extension(f));
+	job_row_fini(&j);
+	if (etag_match(api_header(r, MHD_HTTP_HEADER_IF_NONE_MATCH), etag)) {
+		close(fd);
+		resp = MHD_create_response_from_buffer(0, NULL, MHD_RESPMEM_PERSISTENT);
+		if (resp)
+			MHD_add_response_header(resp, MHD_HTTP_HEADER_ETAG, etag);
+		return api_queue(r, MHD_HTTP_NOT_MODIFIED, resp);
+	}
+	rg = parse_range(api_header(r, MHD_HTTP_HEADER_RANGE), (uint64_t)st.st_size, &from, &to);
+	if (rg && api_header(r, MHD_HTTP_HEADER_IF_RANGE) &&
+	    strcmp(api_header(r, MHD_HTTP_HEADER_IF_RANGE), etag) != 0)
+		rg = 0; /* changed representation: send it all */
+	if (rg < 0) {
+		char cr[48];
+		unsigned status;
+		close(fd);
+		resp = api_problem_response(PROB_RANGE, r->url, NULL,
+					    "the range is outside the artifact", &status);
+		snprintf(cr, sizeof cr, "bytes */%lld", (long long)st.st_size);
+		if (resp)
+			MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_RANGE, cr);
+		return api_queue(r, status, resp);
+	}
+	if (rg > 0) {
+		char cr[80];
+		resp = MHD_create_response_from_fd_at_offset64(to - from + 1, fd, from);
+		snprintf(cr, sizeof cr, "bytes %" PRIu64 "-%" PRIu64 "/%lld", from, to,
+			 (long long)st.st_size);
+		if (resp)
+			MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_RANGE, cr);
+		else
+			close(fd);
+		atomic_fetch_add(&r->srv->bytes_out, (long long)(to - from + 1));
+	} else {
+		struct dl *d = calloc(1, sizeof *d);
+		if (!d) {
+			close(fd);
+			return MHD_NO;
+		}
+		d->srv = r->srv;
+		d->fd = fd;
+		d->size = (uint64_t)st.st_size;
+		/* MHD_SIZE_UNKNOWN: chunked transfer encoding, constant memory. */
+		resp = MHD_create_response_from_callback(MHD_SIZE_UNKNOWN, OUTPUT_BLOCK, dl_read, d,
+							 dl_free);
+		if (!resp) {
+			dl_free(d);
+			return MHD_NO;
+		}
+	}
+	if (!resp)
+		return MHD_NO;
+	MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE, out_format_mime(f));
+	MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_DISPOSITION, disp);
+	MHD_add_response_header(resp, MHD_HTTP_HEADER_ETAG, etag);
+	MHD_add_response_header(resp, "Repr-Digest", digest);
+	MHD_add_response_header(resp, MHD_HTTP_HEADER_ACCEPT_RANGES, "bytes");
+	{
+		char len[32];
+		snprintf(len, sizeof len, "%lld", (long long)st.st_size);
+		MHD_add_response_header(resp, "X-Artifact-Length", len);
+	}
+	return api_queue(r, rg > 0 ? MHD_HTTP_PARTIAL_CONTENT : MHD_HTTP_OK, resp);
+}

@@ -1,0 +1,149 @@
+/* store.c - data-directory layout and atomic publication (see store.h). */
+#define _XOPEN_SOURCE 700
+#include "db/store.h"
+#include "engine/core/err.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <ftw.h>
+#include <stdio.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <sys/statvfs.h>
+#include <unistd.h>
+
+static int fmt_ok(int n, size_t len)
+{
+	return n > 0 && (size_t)n < len ? 0 : ERR_LIMIT;
+}
+
+int store_mkdirs(const char *path, struct err *e)
+{
+	char p[STORE_PATH_MAX];
+	size_t n = strlen(path);
+
+	if (n == 0 || n >= sizeof p)
+		return ERR_SET(e, ERR_LIMIT, "path too long: %s", path);
+	memcpy(p, path, n + 1);
+	for (size_t i = 1; i <= n; i++) {
+		if (p[i] != '/' && p[i] != '\0')
+			continue;
+		p[i] = '\0';
+		if (mkdir(p, 0750) != 0 && errno != EEXIST)
+			return ERR_SET(e, ERR_IO, "mkdir %s: %s", p, strerror(errno));
+		p[i] = i == n ? '\0' : '/';
+	}
+	return 0;
+}
+
+int store_init(const char *data_dir, struct err *e)
+{
+	char p[STORE_PATH_MAX];
+	int rc = store_mkdirs(data_dir, e);
+
+	if (rc)
+		return rc;
+	if (fmt_ok(snprintf(p, sizeof p, "%s/tmp", data_dir), sizeof p) ||
+	    (rc = store_mkdirs(p, e)))
+		return rc ? rc : ERR_SET(e, ERR_LIMIT, "data directory path too long");
+	if (fmt_ok(snprintf(p, sizeof p, "%s/tenants", data_dir), sizeof p))
+		return ERR_SET(e, ERR_LIMIT, "data directory path too long");
+	return store_mkdirs(p, e);
+}
+
+int store_db_path(const char *data_dir, char *buf, size_t len)
+{
+	return fmt_ok(snprintf(buf, len, "%s/infilld.db", data_dir), len);
+}
+
+int store_tmp_path(const char *data_dir, const char *name, char *buf, size_t len)
+{
+	return fmt_ok(snprintf(buf, len, "%s/tmp/%s", data_dir, name), len);
+}
+
+int store_tenant_dir(const char *data_dir, int64_t tenant_id, char *buf, size_t len)
+{
+	return fmt_ok(snprintf(buf, len, "%s/tenants/%lld", data_dir, (long long)tenant_id), len);
+}
+
+int store_mesh_path(const char *data_dir, int64_t tenant_id, const char *mesh_id,
+		    const char *format, char *buf, size_t len)
+{
+	return fmt_ok(snprintf(buf, len, "%s/tenants/%lld/meshes/%s.%s", data_dir,
+			       (long long)tenant_id, mesh_id, format),
+		      len);
+}
+
+int store_artifact_dir(const char *data_dir, int64_t tenant_id, char *buf, size_t len)
+{
+	return fmt_ok(snprintf(buf, len, "%s/tenants/%lld/artifacts", data_dir,
+			       (long long)tenant_id),
+		      len);
+}
+
+int store_artifact_path(const char *data_dir, int64_t tenant_id, const char *name, char *buf,
+			size_t len)
+{
+	return fmt_ok(snprintf(buf, len, "%s/tenants/%lld/artifacts/%s", data_dir,
+			       (long long)tenant_id, name),
+		      len);
+}
+
+static int fsync_path(const char *path, int flags, struct err *e)
+{
+	int fd = open(path, flags | O_CLOEXEC);
+	int rc = 0;
+
+	if (fd < 0)
+		return ERR_SET(e, ERR_IO, "open %s: %s", path, strerror(errno));
+	if (fsync(fd) != 0)
+		rc = ERR_SET(e, ERR_IO, "fsync %s: %s", path, strerror(errno));
+	close(fd);
+	return rc;
+}
+
+int store_publish(const char *tmp_path, const char *final_path, struct err *e)
+{
+	char dir[STORE_PATH_MAX];
+	char *slash;
+	int rc;
+
+	if (strlen(final_path) >= sizeof dir)
+		return ERR_SET(e, ERR_LIMIT, "path too long: %s", final_path);
+	strcpy(dir, final_path);
+	slash = strrchr(dir, '/');
+	if (!slash)
+		return ERR_SET(e, ERR_INTERNAL, "not an absolute or relative path: %s", final_path);
+	*slash = '\0';
+	if ((rc = store_mkdirs(dir, e)) || (rc = fsync_path(tmp_path, O_RDONLY, e)))
+		return rc;
+	if (rename(tmp_path, final_path) != 0)
+		return ERR_SET(e, ERR_IO, "rename %s -> %s: %s", tmp_path, final_path,
+			       strerror(errno));
+	return fsync_path(dir, O_RDONLY | O_DIRECTORY, e);
+}
+
+static int rm_one(const char *path, const struct stat *st, int flag, struct FTW *ftw)
+{
+	(void)st;
+	(void)ftw;
+	if (flag == FTW_DP)
+		return rmdir(path) == 0 || errno == ENOENT ? 0 : -1;
+	return unlink(path) == 0 || errno == ENOENT ? 0 : -1;
+}
+
+int store_remove_tree(const char *path, struct err *e)
+{
+	if (nftw(path, rm_one, 16, FTW_DEPTH | FTW_PHYS) != 0 && errno != ENOENT)
+		return ERR_SET(e, ERR_IO, "removing %s: %s", path, strerror(errno));
+	return 0;
+}
+
+int64_t store_free_bytes(const char *data_dir)
+{
+	struct statvfs sv;
+
+	if (statvfs(data_dir, &sv) != 0)
+		return -1;
+	return (int64_t)sv.f_bavail * (int64_t)sv.f_frsize;
+}

@@ -1,0 +1,45 @@
+/* store.h - the data directory's files and how they are published.
+ *
+ *   DATA/infilld.db (+ -wal, -shm)    the database (db.h)
+ *   DATA/serve.lock                   flock()ed by the one `serve` per directory
+ *   DATA/tmp/                         uploads and outputs being written
+ *   DATA/tenants/<tenant id>/meshes/<mesh id>.<format>
+ *   DATA/tenants/<tenant id>/artifacts/<job id>-a<attempt>.<ext>
+ *
+ * A file becomes visible only whole: written under tmp/, fsync()ed,
+ * renamed into place, directory fsync()ed (store_publish).  Artifact names
+ * carry the attempt, so a fenced-out worker never replaces a re-run's.
+ */
+#ifndef INFILLD_DB_STORE_H
+#define INFILLD_DB_STORE_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+struct err;
+
+#define STORE_PATH_MAX 1024
+
+/* Create DATA and its fixed sub-directories (mode 0750). */
+int store_init(const char *data_dir, struct err *e);
+/* mkdir -p with mode 0750. */
+int store_mkdirs(const char *path, struct err *e);
+
+int store_db_path(const char *data_dir, char *buf, size_t len);
+int store_tmp_path(const char *data_dir, const char *name, char *buf, size_t len);
+int store_mesh_path(const char *data_dir, int64_t tenant_id, const char *mesh_id,
+		    const char *format, char *buf, size_t len);
+int store_artifact_dir(const char *data_dir, int64_t tenant_id, char *buf, size_t len);
+int store_artifact_path(const char *data_dir, int64_t tenant_id, const char *name, char *buf,
+			size_t len);
+int store_tenant_dir(const char *data_dir, int64_t tenant_id, char *buf, size_t len);
+
+/* fsync(tmp_path), rename to final_path (creating its directory), fsync
+ * the directory.  On failure tmp_path is left for the caller to unlink. */
+int store_publish(const char *tmp_path, const char *final_path, struct err *e);
+/* rm -r of a tenant's directory (after its rows are gone). */
+int store_remove_tree(const char *path, struct err *e);
+/* Free bytes available to us on the file system of data_dir, -1 on error. */
+int64_t store_free_bytes(const char *data_dir);
+
+#endif

@@ -1,0 +1,186 @@
+/* config.c - command-line options of serve and its workers (config.h). */
+#include "service/config.h"
+
+#include <errno.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <unistd.h>
+
+struct int_opt {
+	const char *name;
+	size_t offset;
+	int min, max;
+};
+
+#define OPT(n, field, lo, hi) {n, offsetof(struct service_config, field), lo, hi}
+static const struct int_opt int_opts[] = {
+	OPT("--workers", workers, 0, 256),
+	OPT("--http-threads", http_threads, 1, 64),
+	OPT("--max-connections", max_connections, 16, 100000),
+	OPT("--per-ip-connections", per_ip_connections, 1, 100000),
+	OPT("--conn-timeout-s", conn_timeout_s, 1, 3600),
+	OPT("--conn-memory-kb", conn_memory_kb, 32, 65536),
+	OPT("--json-max-kb", json_max_kb, 1, 65536),
+	OPT("--lease-s", lease_s, 1, 3600),
+	OPT("--max-attempts", max_attempts, 1, 20),
+	OPT("--drain-s", drain_s, 0, 86400),
+	OPT("--job-timeout-s", job_timeout_s, 1, 7 * 86400),
+	OPT("--job-mem-mb", job_mem_mb, 64, 1 << 24),
+	OPT("--job-cpu-s", job_cpu_s, 1, 30 * 86400),
+	OPT("--output-limit-mb", output_limit_mb, 1, 1 << 24),
+	OPT("--job-threads", job_threads, 0, 256),
+	OPT("--retention-days", retention_days, 0, 36500),
+	OPT("--min-free-mb", min_free_mb, 0, 1 << 30),
+	OPT("--analyze-timeout-s", analyze_timeout_s, 1, 3600),
+	OPT("--analyze-mem-mb", analyze_mem_mb, 64, 1 << 24),
+};
+#undef OPT
+
+const char *config_usage(void)
+{
+	return "serve [--listen HOST:PORT] [--data DIR] [--workers N] [--http-threads N]\n"
+	       "              [--max-connections N] [--per-ip-connections N] [--conn-timeout-s N]\n"
+	       "              [--lease-s N] [--max-attempts N] [--drain-s N] [--job-timeout-s N]\n"
+	       "              [--job-mem-mb N] [--job-cpu-s N] [--output-limit-mb N]\n"
+	       "              [--job-threads N] [--retention-days N] [--min-free-mb N]";
+}
+
+static int parse_listen(struct service_config *c, const char *v)
+{
+	const char *colon = strrchr(v, ':');
+	const char *h = v;
+	size_t hl;
+	char *end;
+	long port;
+
+	if (!colon)
+		return -1;
+	hl = (size_t)(colon - v);
+	if (h[0] == '[' && hl >= 2 && h[hl - 1] == ']') {
+		h++;
+		hl -= 2;
+	}
+	if (hl == 0 || hl >= sizeof c->host)
+		return -1;
+	port = strtol(colon + 1, &end, 10);
+	if (*end || end == colon + 1 || port < 0 || port > 65535)
+		return -1;
+	memcpy(c->host, h, hl);
+	c->host[hl] = '\0';
+	if (!strcmp(c->host, "localhost"))
+		strcpy(c->host, "127.0.0.1");
+	c->port = (int)port;
+	return 0;
+}
+
+static void defaults(struct service_config *c)
+{
+	long cores = sysconf(_SC_NPROCESSORS_ONLN);
+	const char *env;
+	ssize_t n;
+
+	memset(c, 0, sizeof *c);
+	strcpy(c->host, "127.0.0.1");
+	c->port = 8080;
+	snprintf(c->data_dir, sizeof c->data_dir, "%s",
+		 (env = getenv("INFILLD_DATA")) && *env ? env : CONFIG_DEFAULT_DATA);
+	c->workers = cores > 0 ? (int)cores : 2;
+	c->http_threads = 4;
+	c->max_connections = 2048;
+	c->per_ip_connections = 256;
+	c->conn_timeout_s = 30;
+	c->conn_memory_kb = 256;
+	c->json_max_kb = 1024;
+	c->lease_s = 30;
+	c->max_attempts = 3;
+	c->drain_s = 30;
+	c->job_timeout_s = 3600;
+	c->job_mem_mb = 8192;
+	c->job_cpu_s = 4 * 3600;
+	c->output_limit_mb = 4096;
+	c->retention_days = 7;
+	c->min_free_mb = 512;
+	c->analyze_timeout_s = 60;
+	c->analyze_mem_mb = 4096;
+	env = getenv("INFILLD_FAULT_INJECTION");
+	c->fault_injection = env && !strcmp(env, "1");
+	n = readlink("/proc/self/exe", c->self_exe, sizeof c->self_exe - 1);
+	c->self_exe[n > 0 ? n : 0] = '\0';
+}
+
+int config_parse(struct service_config *c, int argc, char **argv, int extra_ok)
+{
+	defaults(c);
+	for (int i = 1; i < argc; i++) {
+		const char *a = argv[i], *v = NULL;
+		const char *eq = strchr(a, '=');
+		char name[64];
+		int found = 0;
+
+		/* --opt VALUE and --opt=VALUE */
+		if (eq && eq - a < (long)sizeof name) {
+			memcpy(name, a, (size_t)(eq - a));
+			name[eq - a] = '\0';
+			v = eq + 1;
+		} else {
+			snprintf(name, sizeof name, "%s", a);
+		}
+		if (strncmp(name, "--", 2) != 0) {
+			fprintf(stderr, "infilld %s: unexpected argument '%s'\n", argv[0], a);
+			return 2;
+		}
+		if (!v) {
+			if (i + 1 >= argc) {
+				fprintf(stderr, "infilld %s: %s needs a value\n", argv[0], name);
+				return 2;
+			}
+			v = argv[++i];
+		}
+		if (!strcmp(name, "--listen")) {
+			if (parse_listen(c, v)) {
+				fprintf(stderr, "infilld %s: --listen wants HOST:PORT, got '%s'\n", argv[0], v);
+				return 2;
+			}
+			continue;
+		}
+		if (!strcmp(name, "--data")) {
+			if (!*v || strlen(v) >= sizeof c->data_dir) {
+				fprintf(stderr, "infilld %s: bad --data '%s'\n", argv[0], v);
+				return 2;
+			}
+			snprintf(c->data_dir, sizeof c->data_dir, "%s", v);
+			continue;
+		}
+		if (extra_ok && !strcmp(name, "--worker-name")) {
+			snprintf(c->worker_name, sizeof c->worker_name, "%s", v);
+			continue;
+		}
+		for (size_t k = 0; k < sizeof int_opts / sizeof int_opts[0]; k++) {
+			char *end;
+			long x;
+			if (strcmp(name, int_opts[k].name))
+				continue;
+			errno = 0;
+			x = strtol(v, &end, 10);
+			if (errno || *end || end == v || x < int_opts[k].min || x > int_opts[k].max) {
+				fprintf(stderr, "infilld %s: %s wants an integer in [%d, %d], got '%s'\n",
+					argv[0], name, int_opts[k].min, int_opts[k].max, v);
+				return 2;
+			}
+			*(int *)((char *)c + int_opts[k].offset) = (int)x;
+			found = 1;
+			break;
+		}
+		if (!found) {
+			fprintf(stderr, "infilld %s: unknown option %s\n", argv[0], name);
+			return 2;
+		}
+	}
+	if (c->job_threads == 0) {
+		long cores = sysconf(_SC_NPROCESSORS_ONLN);
+		int w = c->workers > 0 ? c->workers : 1;
+		c->job_threads = cores > w ? (int)(cores / w) : 1;
+	}
+	return 0;
+}

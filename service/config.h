@@ -1,0 +1,46 @@
+/* config.h - options of `infilld serve` (and of the worker processes it
+ * starts, which receive the same command line).  Defaults and meaning:
+ * docs/operations.md.  Configuration travels in this struct; there are
+ * no configuration globals.
+ */
+#ifndef INFILLD_SERVICE_CONFIG_H
+#define INFILLD_SERVICE_CONFIG_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#define CONFIG_DEFAULT_DATA "var/infilld"
+
+struct service_config {
+	char host[64];
+	int port;
+	char data_dir[512];
+	int workers;             /* job worker processes */
+	int http_threads;
+	int max_connections, per_ip_connections, conn_timeout_s;
+	int conn_memory_kb;
+	int json_max_kb;
+	int lease_s;             /* worker lease; heartbeats every lease/3 */
+	int max_attempts;
+	int drain_s;             /* SIGTERM: how long running jobs may finish */
+	int job_timeout_s;       /* wall clock per attempt */
+	int job_mem_mb;          /* RLIMIT_AS of the job process */
+	int job_cpu_s;           /* RLIMIT_CPU of the job process */
+	int output_limit_mb;     /* engine sink limit and RLIMIT_FSIZE */
+	int job_threads;         /* threads per job, 0 = cores / workers */
+	int retention_days;      /* artifacts; 0 = keep */
+	int min_free_mb;         /* /readyz */
+	int analyze_timeout_s, analyze_mem_mb;
+	int fault_injection;     /* env INFILLD_FAULT_INJECTION=1 (tests only) */
+	char worker_name[32];    /* set for worker processes */
+	char self_exe[512];      /* this binary (re-executed for workers) */
+};
+
+/* Defaults, then argv (argv[0] = command name).  Returns 0, or 2 with a
+ * message on stderr for a usage error.  extra_ok: also accept the
+ * internal --worker-name. */
+int config_parse(struct service_config *c, int argc, char **argv, int extra_ok);
+/* Usage text of the serve options. */
+const char *config_usage(void);
+
+#endif

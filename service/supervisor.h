@@ -1,0 +1,37 @@
+/* supervisor.h - the worker processes of `serve`: start N, restart the
+ * ones that die (with a back-off against crash loops), stop them all.
+ */
+#ifndef INFILLD_SERVICE_SUPERVISOR_H
+#define INFILLD_SERVICE_SUPERVISOR_H
+
+#include <sys/types.h>
+
+struct service_config;
+
+#define SUPERVISOR_MAX_WORKERS 256
+
+struct supervisor {
+	const struct service_config *cfg;
+	int argc;
+	char **argv;                 /* serve's options, passed on to workers */
+	int n;
+	struct {
+		pid_t pid;           /* 0 = not running */
+		char name[32];
+		double started_s, restart_at_s;
+		int quick_deaths;    /* deaths soon after start, for back-off */
+	} w[SUPERVISOR_MAX_WORKERS];
+};
+
+void supervisor_init(struct supervisor *s, const struct service_config *cfg, int argc,
+		     char **argv);
+/* Start every worker that is due (not running, back-off over). */
+void supervisor_start_due(struct supervisor *s);
+/* Reap exited workers; for each, dead(name) is called (to re-queue its
+ * jobs at once).  Returns the number reaped. */
+int supervisor_reap(struct supervisor *s, void (*dead)(void *ctx, const char *name), void *ctx);
+int supervisor_alive(const struct supervisor *s);
+/* SIGTERM all, wait up to wait_s, then SIGKILL what is left. */
+void supervisor_stop(struct supervisor *s, double wait_s);
+
+#endif

@@ -1,0 +1,91 @@
+"""deploy/: the systemd unit's ExecStart line and the container's
+ENTRYPOINT start this very binary (paths mapped to a temp directory,
+port 0), answer /livez and stop cleanly on SIGTERM; deploy/run-dev.sh
+(`make run`) prints the URL and an admin hint and makes a working admin key."""
+import http.client
+import os
+import re
+import shlex
+import shutil
+import signal
+import subprocess
+import sys
+import tempfile
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from svc import BIN, ROOT, check, run  # noqa: E402
+
+
+def start_and_probe(argv, env=None):
+    p = subprocess.Popen(argv, stdout=subprocess.PIPE, stderr=subprocess.DEVNULL, text=True,
+                         env=env)
+    try:
+        lines = []
+        while True:
+            line = p.stdout.readline()
+            check(line, "no 'listening' line; got %r" % lines)
+            lines.append(line)
+            m = re.search(r"listening on http://127\.0\.0\.1:(\d+)", line)
+            if m:
+                break
+        c = http.client.HTTPConnection("127.0.0.1", int(m.group(1)), timeout=10)
+        c.request("GET", "/livez")
+        check(c.getresponse().status == 200, "livez")
+        c.close()
+        return lines
+    finally:
+        p.send_signal(signal.SIGTERM)
+        rc = p.wait(60)
+        p.stdout.close()
+        check(rc == 0, "SIGTERM exit status %d" % rc)
+
+
+def test_systemd_execstart():
+    with open(os.path.join(ROOT, "deploy", "infilld.service")) as f:
+        unit = f.read()
+    line = re.search(r"^ExecStart=(.*)$", unit, re.M).group(1)
+    d = tempfile.mkdtemp(prefix="infilld-unit-")
+    argv = [a.replace("/usr/local/bin/infilld", BIN).replace("/var/lib/infilld", d)
+            .replace("127.0.0.1:8080", "127.0.0.1:0") for a in shlex.split(line)]
+    check(argv[0] == BIN and argv[1] == "serve", "ExecStart runs serve: %s" % line)
+    try:
+        start_and_probe(argv + ["--workers", "1"])
+        check(os.path.exists(os.path.join(d, "infilld.db")), "state in StateDirectory")
+    finally:
+        shutil.rmtree(d, ignore_errors=True)
+    for key in ("NoNewPrivileges=yes", "ProtectSystem=strict", "DynamicUser=yes",
+                "StateDirectory=infilld"):
+        check(key in unit, "unit has %s" % key)
+
+
+def test_container_entrypoint():
+    with open(os.path.join(ROOT, "deploy", "Dockerfile")) as f:
+        df = f.read()
+    ep = re.search(r'^ENTRYPOINT \[(.*)\]$', df, re.M).group(1)
+    argv = [a.strip().strip('"') for a in ep.split(",")]
+    d = tempfile.mkdtemp(prefix="infilld-ctr-")
+    argv = [a.replace("/usr/local/bin/infilld", BIN).replace("/var/lib/infilld", d)
+            .replace("0.0.0.0:8080", "127.0.0.1:0") for a in argv]
+    try:
+        start_and_probe(argv + ["--workers", "1"])
+    finally:
+        shutil.rmtree(d, ignore_errors=True)
+
+
+def test_run_dev():
+    d = tempfile.mkdtemp(prefix="infilld-dev-")
+    env = dict(os.environ, INFILLD_DATA=d, INFILLD_LISTEN="127.0.0.1:0")
+    try:
+        lines = start_and_probe([os.path.join(ROOT, "deploy", "run-dev.sh"), BIN], env)
+        text = "".join(lines)
+        check("admin key" in text and "http://127.0.0.1:0" in text, "hint printed: %s" % text)
+        with open(os.path.join(d, "admin.key")) as f:
+            key = f.read().strip()
+        check(re.fullmatch(r"ifa_[a-z2-7]{12}_[a-z2-7]{32}", key), "admin key saved: %r" % key)
+        check(oct(os.stat(os.path.join(d, "admin.key")).st_mode & 0o777) == "0o600", "mode 600")
+    finally:
+        shutil.rmtree(d, ignore_errors=True)
+
+
+if __name__ == "__main__":
+    run([test_systemd_execstart, test_container_entrypoint, test_run_dev])
