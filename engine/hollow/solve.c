@@ -128,8 +128,8 @@ static void slot_deliver(struct slot *s, struct hl_void *v)
 }
 
 static int solve_forked(struct hl_void *v, size_t n, const size_t *order,
-			const struct hl_nlp_opts *o, int threads, struct progress *prog,
-			struct err *e)
+			const struct hl_nlp_opts *o, int threads, struct progress *prog, double f0,
+			double f1, struct err *e)
 {
 	struct slot *sl = mem_calloc((size_t)threads, sizeof *sl);
 	size_t next = 0, done = 0;
@@ -208,7 +208,7 @@ static int solve_forked(struct hl_void *v, size_t n, const size_t *order,
 			}
 		}
 		if (prog) {
-			rc = progress_update(prog, (double)done / (double)n, e);
+			rc = progress_update(prog, f0 + (f1 - f0) * (double)done / (double)n, e);
 			if (rc)
 				goto out;
 		}
@@ -229,7 +229,7 @@ static int cmp_size_desc(const void *a, const void *b)
 }
 
 int hl_solve_round(struct hl_void *v, size_t n, const struct hl_nlp_opts *o, int threads,
-		   struct progress *prog, struct err *e)
+		   struct progress *prog, double f0, double f1, struct err *e)
 {
 	size_t *order = NULL;
 	int rc = 0;
@@ -250,12 +250,13 @@ int hl_solve_round(struct hl_void *v, size_t n, const struct hl_nlp_opts *o, int
 		if (threads > 64)
 			threads = 64;
 		if (threads > 1 && n > 1 && n < (1u << 20)) {
-			rc = solve_forked(v, n, order, o, threads, prog, e);
+			rc = solve_forked(v, n, order, o, threads, prog, f0, f1, e);
 		} else {
 			for (size_t i = 0; i < n && !rc; i++) {
 				rc = hl_nlp_solve(&v[order[i]], 1, o, e);
 				if (!rc && prog)
-					rc = progress_update(prog, (double)(i + 1) / (double)n, e);
+					rc = progress_update(prog, f0 + (f1 - f0) * (double)(i + 1) / (double)n,
+							     e);
 			}
 		}
 	}

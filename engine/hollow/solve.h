@@ -13,9 +13,10 @@ struct progress;
 /* Optimise v[0..n): lightweight voids each on their own, in up to
  * `threads` worker processes; stability as one problem.  Every void ends
  * with status 0 (optimum), HL_STATUS_FALLBACK, or < 0 (drop it).  prog
- * (may be NULL) gets the fraction of voids done and may cancel.
+ * (may be NULL) moves from stage fraction f0 to f1 as voids finish and
+ * may cancel.
  * Returns 0, ERR_NOMEM, ERR_IO (pipe/poll) or ERR_CANCELLED. */
 int hl_solve_round(struct hl_void *v, size_t n, const struct hl_nlp_opts *o, int threads,
-		   struct progress *prog, struct err *e);
+		   struct progress *prog, double f0, double f1, struct err *e);
 
 #endif
