@@ -54,17 +54,19 @@ DB_OBJ := $(call obj,$(DB_SRC))
 SERVICE_OBJ := $(call obj,$(SERVICE_SRC))
 TEST_SUPPORT_OBJ := $(call obj,$(TEST_SUPPORT_SRC))
 UNIT_BIN := $(patsubst tests/unit/%.c,$(BUILD)/tests/unit/%,$(UNIT_SRC))
+BENCH_SRC := $(sort $(wildcard tests/bench/bench_*.c))
+BENCH_BIN := $(patsubst tests/bench/%.c,$(BUILD)/tests/bench/%,$(BENCH_SRC))
 
 LIBS := $(BUILD)/libapi.a $(BUILD)/libdb.a $(BUILD)/libengine.a
 BIN := $(BUILD)/infilld
 
-.PHONY: all deps build units run test check test-unit bench bench-large fuzz check-style clean
+.PHONY: all deps build units benches run test check test-unit bench bench-large fuzz check-style clean
 all: build
 
 deps:
 	@deploy/deps.sh
 
-build: $(BIN) $(UNIT_BIN)
+build: $(BIN) $(UNIT_BIN) $(BENCH_BIN)
 
 # V=1 shows the full commands.
 Q := $(if $(filter 1,$(V)),,@)
@@ -98,6 +100,11 @@ $(BUILD)/tests/unit/%: tests/unit/%.c $(TEST_SUPPORT_OBJ) $(LIBS)
 	$(Q)$(CC) $(CFLAGS) -Itests -c $< -o $@.o
 	$(Q)$(CXX) $(LDFLAGS) -o $@ $@.o $(TEST_SUPPORT_OBJ) $(LIBS) $(LDLIBS)
 
+$(BUILD)/tests/bench/%: tests/bench/%.c $(LIBS)
+	@mkdir -p $(@D)
+	$(CC) $(CFLAGS) -Itests -c $< -o $@.o
+	$(CXX) $(LDFLAGS) -o $@ $@.o $(LIBS) $(LDLIBS)
+
 # The README's two commands.
 run: deps
 	@$(MAKE) --no-print-directory build
@@ -110,6 +117,7 @@ test: deps
 
 # Only the unit tests (fast inner loop while developing).
 units: $(UNIT_BIN)
+benches: $(BENCH_BIN)
 test-unit: units
 	@tests/run.sh $(BUILD) $(if $(filter 1,$(SANITIZE)),sanitize) unit
 

@@ -62,6 +62,14 @@ nomem:
 	return ERR_SET(e, ERR_NOMEM, "out of memory converting polygons");
 }
 
+bool has_polygon(const Paths &ps)
+{
+	for (const Path &p : ps)
+		if (p.size() >= 3)
+			return true;
+	return false;
+}
+
 ClipperLib::PolyFillType fill_type(enum clip_fill f)
 {
 	switch (f) {
@@ -107,6 +115,10 @@ extern "C" int clip_boolean(enum clip_op op, const struct paths *subj, const str
 		ClipperLib::Clipper cl;
 		to_clipper(subj, s);
 		to_clipper(clip, c);
+		/* Clipper's Execute() reports failure when no input polygon has an
+		 * area to sweep; the result of such a boolean is simply empty. */
+		if (!has_polygon(s) && !has_polygon(c))
+			return from_clipper(r, out, e);
 		cl.AddPaths(s, ClipperLib::ptSubject, true);
 		if (!c.empty())
 			cl.AddPaths(c, ClipperLib::ptClip, true);

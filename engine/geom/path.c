@@ -114,6 +114,8 @@ int paths_append_move(struct paths *dst, struct paths *src)
 {
 	void *arr = dst->v;
 
+	if (src->n == 0)
+		return 0;
 	if (mem_grow(&arr, &dst->cap, dst->n + src->n, sizeof *dst->v))
 		return ERR_NOMEM;
 	dst->v = arr;
@@ -194,24 +196,29 @@ static int on_segment(struct pt2 a, struct pt2 b, struct pt2 q)
 	       q.y >= (a.y < b.y ? a.y : b.y) && q.y <= (a.y > b.y ? a.y : b.y);
 }
 
+int path_edge_winding(struct pt2 a, struct pt2 b, struct pt2 q, int *on_edge)
+{
+	if (on_segment(a, b, q)) {
+		*on_edge = 1;
+		return 0;
+	}
+	if (a.y <= q.y)
+		return b.y > q.y && orient(a, b, q) > 0 ? 1 : 0;
+	return b.y <= q.y && orient(a, b, q) < 0 ? -1 : 0;
+}
+
 int paths_winding(const struct paths *ps, struct pt2 q)
 {
-	int w = 0;
+	int w = 0, on = 0;
 
 	for (size_t k = 0; k < ps->n; k++) {
 		const struct path *p = &ps->v[k];
 		if (p->n < 2)
 			continue;
 		for (size_t i = 0, j = p->n - 1; i < p->n; j = i++) {
-			struct pt2 a = p->pts[j], b = p->pts[i];
-			if (on_segment(a, b, q))
+			w += path_edge_winding(p->pts[j], p->pts[i], q, &on);
+			if (on)
 				return 1;
-			if (a.y <= q.y) {
-				if (b.y > q.y && orient(a, b, q) > 0)
-					w++;
-			} else if (b.y <= q.y && orient(a, b, q) < 0) {
-				w--;
-			}
 		}
 	}
 	return w;

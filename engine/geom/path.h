@@ -73,6 +73,11 @@ double path_length_mm(const struct path *p, int closed);
 
 void path_reverse(struct path *p);
 
+/* Contribution of the directed edge a->b to the winding number around q
+ * (crossings of a ray from q towards +x, half-open in y): +1, -1 or 0.
+ * *on_edge is set to 1 when q lies on the edge (exact integer tests). */
+int path_edge_winding(struct pt2 a, struct pt2 b, struct pt2 q, int *on_edge);
+
 /* Winding number of the closed paths around q (a point on an edge counts
  * as inside: returns 1 for it under CCW, the caller's convention). */
 int paths_winding(const struct paths *ps, struct pt2 q);

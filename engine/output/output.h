@@ -49,6 +49,8 @@ struct out_info {
 	const char *engine_name;
 	int threads;                   /* encoder threads, >= 1 */
 	time_t created;                /* timestamp written into the output */
+	const char *scratch_dir;       /* where a writer may put unlinked temporary
+					  files (G-code body spool); NULL = /tmp */
 };
 
 struct out_writer;

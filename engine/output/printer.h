@@ -19,12 +19,18 @@ struct err;
 
 enum printer_kind { PRINTER_RESIN, PRINTER_FDM };
 
+/* Resin (masked SLA) printer.  Display geometry follows PrusaSlicer's
+ * printer settings; the image orientation it implies is derived in
+ * docs/printers.md and realised by printer_raster_geometry(). */
+enum resin_print_speed { RESIN_SPEED_FAST, RESIN_SPEED_SLOW, RESIN_SPEED_HIGH_VISCOSITY };
+
 struct resin_printer {
 	char model[8];          /* config.ini printerModel: "SL1" / "SL1S" */
 	char variant[16];       /* printerVariant */
+	char profile[48];       /* printerProfile: PrusaSlicer's preset name */
 	int pixels_x, pixels_y; /* display_pixels_x/_y as PrusaSlicer stores them */
-	double display_w_mm;    /* display_width */
-	double display_h_mm;    /* display_height */
+	double display_w_mm;    /* display_width (along display_pixels_x) */
+	double display_h_mm;    /* display_height (along display_pixels_y) */
 	int portrait;           /* display_orientation = portrait */
 	int mirror_x, mirror_y; /* display_mirror_x/_y */
 	double max_z_mm;        /* printable height */
@@ -33,8 +39,10 @@ struct resin_printer {
 	double exposure_first_s;/* expTimeFirst */
 	int fade_layers;        /* numFade */
 	int antialias;          /* 1 = 8-bit coverage, 0 = binary */
+	int print_speed;        /* enum resin_print_speed: expUserProfile, tilt choice */
 	double tilt_fast_s;     /* per-layer overhead, fast tilt (printTime model) */
 	double tilt_slow_s;     /* per-layer overhead, slow tilt */
+	double tilt_hv_s;       /* per-layer overhead, high-viscosity tilt */
 	double slow_area_pct;   /* layers whose area exceeds this % of the display use the slow tilt */
 	char material[48];      /* materialName */
 };
@@ -55,7 +63,21 @@ struct fdm_printer {
 	double min_travel_retract_mm;   /* shorter travels do not retract */
 	char filament_type[16];         /* "PLA" */
 	double filament_density_g_cm3;
+	/* Per-feature speeds (print_speed_mm_s covers gap fill and skirt). */
+	double external_perimeter_speed_mm_s, solid_infill_speed_mm_s;
+	double top_solid_speed_mm_s, bridge_speed_mm_s, z_speed_mm_s;
+	/* Motion model for the time estimate (docs/gcode.md). */
+	double accel_mm_s2, jerk_mm_s;
+	/* Cooling: fan from layer 1 on; slow down layers faster than this. */
+	double fan_pct, min_layer_time_s, min_print_speed_mm_s;
+	int skirt_loops;
+	double skirt_distance_mm;
+	int external_perimeter_first;   /* 0: inner loops first (default) */
+	int seam;                       /* enum fdm_seam */
+	int klipper;                    /* emit SET_PRINT_STATS_INFO */
 };
+
+enum fdm_seam { FDM_SEAM_NEAREST, FDM_SEAM_REAR };
 
 struct printer {
 	char name[32]; /* profile name */
