@@ -108,23 +108,35 @@ struct block_ctx {
 };
 
 /* Loop vertices lie at >= wall - pixel from the surface (they come from
- * the offset), so a triangle of diameter L keeps >= wall - pixel - L and
- * needs no query when that clears min_mm.  Otherwise the distance is
- * sampled on a barycentric grid of step <= wall / 4: every point then
- * lies within wall / 7 of a sample, so a triangle passing this test
- * neither crosses the surface nor comes closer than min_mm - wall / 7. */
+ * the offset), and the distance to the surface is 1-Lipschitz, so every
+ * point of a triangle keeps >= wall - pixel - rho, rho the largest
+ * distance from a point of the triangle to its nearest corner (the
+ * circumradius for an acute triangle, half the longest edge otherwise).
+ * When that clears min_mm no query is needed (the common case: strip
+ * triangles are about h by s).  Otherwise the distance is sampled on a
+ * barycentric grid of step <= wall / 2: every point then lies within
+ * wall / (2 sqrt 3) < 0.29 wall of a sample, so a triangle passing this
+ * test (min_mm = wall / 2) never crosses the surface and keeps > 0.2 wall
+ * from it. */
 static int blocked(void *vctx, struct vec3 a, struct vec3 b, struct vec3 c)
 {
 	const struct block_ctx *x = vctx;
-	double L = fmax(v3_dist(a, b), fmax(v3_dist(b, c), v3_dist(c, a)));
+	double la = v3_dist(b, c), lb = v3_dist(c, a), lc = v3_dist(a, b);
+	double L = fmax(la, fmax(lb, lc)), rho;
+	double area2 = v3_len(v3_cross(v3_sub(b, a), v3_sub(c, a)));
 	int n;
 
-	if (x->wall_mm - x->pixel_mm - L >= x->min_mm)
+	/* acute iff the longest edge's square is below the sum of the others' */
+	if (2 * L * L < la * la + lb * lb + lc * lc && area2 > 0)
+		rho = la * lb * lc / (2 * area2); /* circumradius abc / (4 A) */
+	else
+		rho = 0.5 * L;
+	if (x->wall_mm - x->pixel_mm - rho >= x->min_mm)
 		return 0;
-	n = (int)ceil(L / (0.25 * x->wall_mm));
+	n = (int)ceil(L / (0.5 * x->wall_mm));
 	if (n < 1)
 		n = 1;
-	if (n > 64)
+	if (n > 16)
 		return 1; /* a triangle this long is no part of a sensible strip */
 	for (int i = 0; i <= n; i++)
 		for (int j = 0; i + j <= n; j++) {

@@ -27,6 +27,8 @@ struct strip_in {
 	double za, zb;
 	size_t na, nb, ia0, jb0;
 	const struct hl_block *block;
+	double reach2; /* squared longest cross edge considered (mm^2) */
+	int use_block; /* test clearance inside the DP (second pass only) */
 };
 
 static struct vec3 pa_at(const struct strip_in *s, size_t i)
@@ -45,14 +47,17 @@ static struct vec3 pb_at(const struct strip_in *s, size_t j)
  * triangle has the same area (h * s / 2) and a fan would be as cheap as
  * a zigzag; adding half the layer height times the new cross edge's
  * length prefers short cross edges, which eq. 5 also wants. */
-static double tri_cost(const struct strip_in *s, struct vec3 a, struct vec3 b, struct vec3 c,
-		       struct vec3 n0, struct vec3 n1)
+static double tri_area_cost(const struct strip_in *s, struct vec3 a, struct vec3 b,
+			    struct vec3 c, struct vec3 n0, struct vec3 n1)
 {
-	double area = 0.5 * v3_len(v3_cross(v3_sub(b, a), v3_sub(c, a)));
+	return 0.5 * v3_len(v3_cross(v3_sub(b, a), v3_sub(c, a))) +
+	       0.5 * fabs(s->zb - s->za) * v3_dist(n0, n1);
+}
 
-	if (s->block && s->block->blocked && s->block->blocked(s->block->ctx, a, b, c))
-		return INFINITY;
-	return area + 0.5 * fabs(s->zb - s->za) * v3_dist(n0, n1);
+static int tri_blocked(const struct strip_in *s, struct vec3 a, struct vec3 b, struct vec3 c)
+{
+	return s->use_block && s->block && s->block->blocked &&
+	       s->block->blocked(s->block->ctx, a, b, c);
 }
 
 /* DP within |j - i * nb / na| <= band (band >= max(na, nb): full grid).
@@ -70,20 +75,26 @@ static double run_dp(const struct strip_in *s, size_t band, double *cost, unsign
 		size_t jhi = (size_t)fmin((double)nb, jc + (double)band);
 		for (size_t j = jlo; j <= jhi; j++) {
 			double c = cost[i * W + j];
+			struct vec3 ai = pa_at(s, i), bj = pb_at(s, j);
 			if (!isfinite(c))
 				continue;
+			/* a cross edge this long is never part of a good strip */
+			if ((ai.x - bj.x) * (ai.x - bj.x) + (ai.y - bj.y) * (ai.y - bj.y) > s->reach2)
+				continue;
+			/* the (expensive) clearance test only for a triangle that
+			 * would improve its target cell */
 			if (i < na) { /* triangle (a_i, b_j, a_{i+1}) */
-				double t = c + tri_cost(s, pa_at(s, i), pb_at(s, j), pa_at(s, i + 1),
-							pa_at(s, i + 1), pb_at(s, j));
-				if (t < cost[(i + 1) * W + j]) {
+				struct vec3 A = pa_at(s, i), B = pb_at(s, j), C = pa_at(s, i + 1);
+				double t = c + tri_area_cost(s, A, B, C, C, B);
+				if (t < cost[(i + 1) * W + j] && !tri_blocked(s, A, B, C)) {
 					cost[(i + 1) * W + j] = t;
 					from[(i + 1) * W + j] = 0;
 				}
 			}
 			if (j < nb) { /* triangle (b_j, b_{j+1}, a_i) */
-				double t = c + tri_cost(s, pb_at(s, j), pb_at(s, j + 1), pa_at(s, i),
-							pa_at(s, i), pb_at(s, j + 1));
-				if (t < cost[i * W + j + 1]) {
+				struct vec3 A = pb_at(s, j), B = pb_at(s, j + 1), C = pa_at(s, i);
+				double t = c + tri_area_cost(s, A, B, C, C, B);
+				if (t < cost[i * W + j + 1] && !tri_blocked(s, A, B, C)) {
 					cost[i * W + j + 1] = t;
 					from[i * W + j + 1] = 1;
 				}
@@ -97,7 +108,7 @@ int hl_strip(const double *pa, double za, size_t na, uint32_t ida, const double 
 	     size_t nb, uint32_t idb, const struct hl_block *block, uint32_t **tri, size_t *nt,
 	     size_t *tcap, struct hl_xedge **xe, size_t *nxe, size_t *xcap, struct err *e)
 {
-	struct strip_in s = {pa, pb, za, zb, na, nb, 0, 0, block};
+	struct strip_in s = {pa, pb, za, zb, na, nb, 0, 0, block, 0, 0};
 	size_t W = nb + 1, steps = na + nb, i, j, k;
 	double *cost = NULL, best = INFINITY;
 	unsigned char *from = NULL;
@@ -114,32 +125,65 @@ int hl_strip(const double *pa, double za, size_t na, uint32_t ida, const double 
 			s.jb0 = j;
 		}
 	}
+	{
+		/* longest cross edge considered: a quarter of the larger loop's
+		 * size (rule 2 of the grouping keeps neighbours within a factor
+		 * two in area), at least 3 mm */
+		double lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY}, r;
+		for (i = 0; i < na; i++)
+			for (int a = 0; a < 2; a++) {
+				lo[a] = fmin(lo[a], pa[2 * i + a]);
+				hi[a] = fmax(hi[a], pa[2 * i + a]);
+			}
+		r = fmax(3.0, 0.25 * fmax(hi[0] - lo[0], hi[1] - lo[1]));
+		s.reach2 = r * r;
+	}
 	cost = mem_alloc((na + 1) * (nb + 1) * sizeof *cost);
 	from = mem_alloc((na + 1) * (nb + 1));
 	pi = mem_alloc((steps + 1) * sizeof *pi);
 	pj = mem_alloc((steps + 1) * sizeof *pj);
 	if (!cost || !from || !pi || !pj)
 		goto nomem;
-	{
-		size_t band = (na > nb ? na : nb) / 6 + 8;
+	/* Pass 1 without the clearance test (almost always admissible); the
+	 * triangles of its path are then tested, and only if one is blocked
+	 * does pass 2 run the DP with the test inside (clearance tests cost
+	 * BVH queries; pass 2 needs them on every improving candidate). */
+	for (s.use_block = 0; s.use_block <= 1; s.use_block++) {
+		size_t band = (na > nb ? na : nb) / 8 + 6;
+		int ok = 1;
 		if (!isfinite(run_dp(&s, band, cost, from)) &&
 		    (band >= na && band >= nb ? 1 : !isfinite(run_dp(&s, na + nb, cost, from)))) {
-			rc = 1; /* no admissible strip */
-			goto out;
+			if (s.use_block) {
+				rc = 1; /* no admissible strip */
+				goto out;
+			}
+			continue;
 		}
-	}
-	/* walk back: grid points of the path, last to first */
-	i = na;
-	j = nb;
-	for (k = steps + 1; k-- > 0;) {
-		pi[k] = i;
-		pj[k] = j;
-		if (k == 0)
+		/* walk back: grid points of the path, last to first */
+		i = na;
+		j = nb;
+		for (k = steps + 1; k-- > 0;) {
+			pi[k] = i;
+			pj[k] = j;
+			if (k == 0)
+				break;
+			if (from[i * W + j] == 0)
+				i--;
+			else
+				j--;
+		}
+		if (s.use_block || !block || !block->blocked)
 			break;
-		if (from[i * W + j] == 0)
-			i--;
-		else
-			j--;
+		for (k = 0; k < steps && ok; k++) {
+			if (pi[k + 1] > pi[k])
+				ok = !block->blocked(block->ctx, pa_at(&s, pi[k]), pb_at(&s, pj[k]),
+						     pa_at(&s, pi[k] + 1));
+			else
+				ok = !block->blocked(block->ctx, pb_at(&s, pj[k]), pb_at(&s, pj[k] + 1),
+						     pa_at(&s, pi[k]));
+		}
+		if (ok)
+			break;
 	}
 	/* faces: step k goes from grid point k to k + 1 */
 	arr = *tri;
