@@ -635,7 +635,8 @@ int verify_finish(struct verify *v, struct verify_report *out, struct err *e)
 	v->r.overhang_px = mem_calloc((size_t)v->next + 1, sizeof *v->r.overhang_px);
 	if (!v->r.overhang_px)
 		return ERR_SET(e, ERR_NOMEM, "verify: out of memory");
-	qsort(v->ov.v, v->ov.n, sizeof *v->ov.v, cmp_rec_layer);
+	if (v->ov.n)
+		qsort(v->ov.v, v->ov.n, sizeof *v->ov.v, cmp_rec_layer);
 	for (size_t k = 0; k < v->ov.n; k++) {
 		const struct rec *q = &v->ov.v[k];
 		if (uf_find(v, q->id) == VX_OUT) {
