@@ -95,6 +95,13 @@ static void nlp_fini(struct nlp *P)
 	mem_free(P->vnext);
 }
 
+/* Stability variables: after the nl offsets, per loop (A_k, Mx_k, My_k),
+ * then the globals (w, sx, sy) at gaux(P). */
+static size_t gaux(const struct nlp *P)
+{
+	return P->nl + 3 * P->nloops;
+}
+
 static struct vec3 pos(const struct nlp *P, const double *x, size_t i)
 {
 	return v3(P->px[i] + x[i] * P->rx[i], P->py[i] + x[i] * P->ry[i], P->pz[i]);
@@ -165,7 +172,7 @@ static int build_hess(struct nlp *P)
 			k[n++] = hk(i, loop_next(P, L, i));
 		}
 	if (P->stab) {
-		size_t a = P->nl;
+		size_t a = gaux(P);
 		k[n++] = hk(a, a);
 		k[n++] = hk(a + 1, a);
 		k[n++] = hk(a + 1, a + 1);
@@ -206,7 +213,7 @@ static int build_hess(struct nlp *P)
 			P->vnext[i] = slot_of(P, i, loop_next(P, L, i));
 		}
 	if (P->stab) {
-		size_t a = P->nl;
+		size_t a = gaux(P);
 		/* order: (w,w) (sx,w) (sx,sx) (sy,w) (sy,sx) (sy,sy) */
 		P->aux_slot[0] = slot_of(P, a, a);
 		P->aux_slot[1] = slot_of(P, a + 1, a);
@@ -386,7 +393,7 @@ static Bool cb_f(Index n, Number *x, Bool new_x, Number *obj, UserDataPtr ud)
 	(void)n;
 	(void)new_x;
 	if (P->stab) {
-		*obj = stab_eval(P, x + P->nl, NULL, NULL);
+		*obj = stab_eval(P, x + gaux(P), NULL, NULL);
 		return TRUE;
 	}
 	double s = 0;
@@ -402,7 +409,7 @@ static Bool cb_grad_f(Index n, Number *x, Bool new_x, Number *g, UserDataPtr ud)
 	(void)new_x;
 	memset(g, 0, (size_t)n * sizeof *g);
 	if (P->stab) {
-		stab_eval(P, x + P->nl, g + P->nl, NULL);
+		stab_eval(P, x + gaux(P), g + gaux(P), NULL);
 		return TRUE;
 	}
 	for (size_t L = 0; L < P->nloops; L++)
@@ -425,15 +432,22 @@ static Bool cb_g(Index n, Number *x, Bool new_x, Index m, Number *g, UserDataPtr
 		g[r++] = loop_eval(P, P->ceil_loop[c], x, NULL, 0, NULL, NULL, 0, NULL, NULL) /
 			 P->ceil_a0[c];
 	if (P->stab) {
-		double A = 0, M[2], Mx = 0, My = 0, f = P->o->h_mm / P->o->vol_mm3;
+		/* per loop: A_k = area, M_k = first moments; then the sums (eq. 12) */
+		double A = 0, Mx = 0, My = 0, M[2], f = P->o->h_mm / P->o->vol_mm3;
+		size_t G = gaux(P);
 		for (size_t L = 0; L < P->nloops; L++) {
-			A += loop_eval(P, L, x, M, 0, NULL, NULL, 0, NULL, NULL);
-			Mx += M[0];
-			My += M[1];
+			double a = loop_eval(P, L, x, M, 0, NULL, NULL, 0, NULL, NULL);
+			size_t q = P->nl + 3 * L;
+			g[r++] = x[q] - a;
+			g[r++] = x[q + 1] - M[0];
+			g[r++] = x[q + 2] - M[1];
+			A += x[q];
+			Mx += x[q + 1];
+			My += x[q + 2];
 		}
-		g[r++] = x[P->nl] - f * A;
-		g[r++] = x[P->nl + 1] - f * Mx;
-		g[r++] = x[P->nl + 2] - f * My;
+		g[r++] = x[G] - f * A;
+		g[r++] = x[G + 1] - f * Mx;
+		g[r++] = x[G + 2] - f * My;
 	}
 	return TRUE;
 }
@@ -465,12 +479,25 @@ static Bool cb_jac(Index n, Number *x, Bool new_x, Index m, Index nele, Index *i
 				jCol[k++] = (Index)i;
 			}
 		}
-		if (P->stab)
-			for (int q = 0; q < 3; q++, r++)
-				for (size_t i = 0; i <= P->nl; i++) {
+		if (P->stab) {
+			for (size_t L = 0; L < P->nloops; L++)
+				for (int q = 0; q < 3; q++, r++) {
+					for (size_t i = P->lstart[L]; i < P->lstart[L] + P->llen[L]; i++) {
+						iRow[k] = (Index)r;
+						jCol[k++] = (Index)i;
+					}
 					iRow[k] = (Index)r;
-					jCol[k++] = (Index)(i < P->nl ? i : P->nl + (size_t)q);
+					jCol[k++] = (Index)(P->nl + 3 * L + (size_t)q);
 				}
+			for (int q = 0; q < 3; q++, r++) {
+				for (size_t L = 0; L < P->nloops; L++) {
+					iRow[k] = (Index)r;
+					jCol[k++] = (Index)(P->nl + 3 * L + (size_t)q);
+				}
+				iRow[k] = (Index)r;
+				jCol[k++] = (Index)(gaux(P) + (size_t)q);
+			}
+		}
 		return TRUE;
 	}
 	for (size_t f = 0; f < P->nf; f++) {
@@ -495,15 +522,20 @@ static Bool cb_jac(Index n, Number *x, Bool new_x, Index m, Index nele, Index *i
 		}
 		if (P->stab) {
 			double f = P->o->h_mm / P->o->vol_mm3, M[2];
-			static const double e0[2] = {0, 0}, ex[2] = {1, 0}, ey[2] = {0, 1};
-			const double *sel[3] = {e0, ex, ey};
+			static const double ex[2] = {-1, 0}, ey[2] = {0, -1};
+			for (size_t L = 0; L < P->nloops; L++)
+				for (int q = 0; q < 3; q++) {
+					for (size_t i = P->lstart[L]; i < P->lstart[L] + P->llen[L]; i++)
+						gsc[i] = 0;
+					loop_eval(P, L, x, M, q == 0 ? -1 : 0,
+						  q == 0 ? NULL : q == 1 ? ex : ey, gsc, 0, NULL, NULL);
+					for (size_t i = P->lstart[L]; i < P->lstart[L] + P->llen[L]; i++)
+						val[k++] = gsc[i];
+					val[k++] = 1;
+				}
 			for (int q = 0; q < 3; q++) {
-				double gm[2] = {-f * sel[q][0], -f * sel[q][1]};
-				memset(gsc, 0, P->nl * sizeof *gsc);
 				for (size_t L = 0; L < P->nloops; L++)
-					loop_eval(P, L, x, M, q == 0 ? -f : 0, gm, gsc, 0, NULL, NULL);
-				for (size_t i = 0; i < P->nl; i++)
-					val[k++] = gsc[i];
+					val[k++] = -f;
 				val[k++] = 1;
 			}
 		}
@@ -534,7 +566,7 @@ static Bool cb_h(Index n, Number *x, Bool new_x, Number of, Index m, Number *lam
 	/* objective */
 	if (P->stab) {
 		double h6[6];
-		stab_eval(P, x + P->nl, NULL, h6);
+		stab_eval(P, x + gaux(P), NULL, h6);
 		for (int s = 0; s < 6; s++)
 			val[P->aux_slot[s]] += of * h6[s];
 	} else {
@@ -558,10 +590,12 @@ static Bool cb_h(Index n, Number *x, Bool new_x, Number of, Index m, Number *lam
 		loop_eval(P, P->ceil_loop[c], x, NULL, 0, NULL, NULL, lambda[r] / P->ceil_a0[c], NULL,
 			  val);
 	if (P->stab) {
-		double f = P->o->h_mm / P->o->vol_mm3, M[2];
-		double hm[2] = {-lambda[r + 1] * f, -lambda[r + 2] * f};
-		for (size_t L = 0; L < P->nloops; L++)
-			loop_eval(P, L, x, M, 0, NULL, NULL, -lambda[r] * f, hm, val);
+		/* per-loop definitions; the sums are linear */
+		double M[2];
+		for (size_t L = 0; L < P->nloops; L++, r += 3) {
+			double hm[2] = {-lambda[r + 1], -lambda[r + 2]};
+			loop_eval(P, L, x, M, 0, NULL, NULL, -lambda[r], hm, val);
+		}
 	}
 	return TRUE;
 }
@@ -636,7 +670,7 @@ static int nlp_setup(struct nlp *P, struct hl_void *v, size_t nvoid,
 		ne += v[i].nxe;
 	}
 	P->nl = nl;
-	P->nx = nl + (P->stab ? 3 : 0);
+	P->nx = nl + (P->stab ? 3 * nloops + 3 : 0);
 	P->nloops = nloops;
 	P->nf = nf;
 	P->ne = ne;
@@ -738,10 +772,11 @@ static int nlp_setup(struct nlp *P, struct hl_void *v, size_t nvoid,
 		mem_free(x0);
 	}
 	if (P->stab) {
-		P->lo[nl] = -1e19;
-		P->hi[nl] = 0.999;
-		P->lo[nl + 1] = P->lo[nl + 2] = -1e19;
-		P->hi[nl + 1] = P->hi[nl + 2] = 1e19;
+		for (size_t i = nl; i < P->nx; i++) {
+			P->lo[i] = -1e19;
+			P->hi[i] = 1e19;
+		}
+		P->hi[gaux(P)] = 0.999;
 		P->lenscale = 1;
 		if (o->ntarget >= 3) {
 			double ar = hull_area_mm2(o->target, o->ntarget);
@@ -755,21 +790,27 @@ static int nlp_setup(struct nlp *P, struct hl_void *v, size_t nvoid,
 static void aux_from(struct nlp *P, double *x)
 {
 	double A = 0, Mx = 0, My = 0, M[2], f = P->o->h_mm / P->o->vol_mm3;
+	size_t G = gaux(P);
 
 	for (size_t L = 0; L < P->nloops; L++) {
-		A += loop_eval(P, L, x, M, 0, NULL, NULL, 0, NULL, NULL);
+		size_t q = P->nl + 3 * L;
+		x[q] = loop_eval(P, L, x, M, 0, NULL, NULL, 0, NULL, NULL);
+		x[q + 1] = M[0];
+		x[q + 2] = M[1];
+		A += x[q];
 		Mx += M[0];
 		My += M[1];
 	}
-	x[P->nl] = f * A;
-	x[P->nl + 1] = f * Mx;
-	x[P->nl + 2] = f * My;
+	x[G] = f * A;
+	x[G + 1] = f * Mx;
+	x[G + 2] = f * My;
 }
 
 static int solve_once(struct nlp *P, double *x, int *app_status, struct err *e)
 {
-	size_t m = P->nf + P->nact + P->nceil + (P->stab ? 3 : 0), r = 0;
-	size_t nj = 3 * P->nf + 2 * P->nact + (P->stab ? 3 * (P->nl + 1) : 0);
+	size_t m = P->nf + P->nact + P->nceil + (P->stab ? 3 * P->nloops + 3 : 0), r = 0;
+	size_t nj = 3 * P->nf + 2 * P->nact +
+		    (P->stab ? 3 * (P->nl + P->nloops) + 3 * (P->nloops + 1) : 0);
 	double *gl = mem_alloc((m + 1) * sizeof *gl), *gu = mem_alloc((m + 1) * sizeof *gu);
 	IpoptProblem ip = NULL;
 	int rc = 0;
@@ -792,7 +833,7 @@ static int solve_once(struct nlp *P, double *x, int *app_status, struct err *e)
 		gl[r] = -2e19;
 		gu[r] = P->ceil_eps[c] / P->ceil_a0[c];
 	}
-	for (int k = 0; P->stab && k < 3; k++, r++)
+	for (size_t k = 0; P->stab && k < 3 * P->nloops + 3; k++, r++)
 		gl[r] = gu[r] = 0;
 	if (m > (size_t)INT32_MAX || nj > (size_t)INT32_MAX || P->nh > (size_t)INT32_MAX) {
 		rc = ERR_SET(e, ERR_LIMIT, "hollow: optimisation problem too large (%zu constraints)", m);
