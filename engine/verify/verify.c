@@ -41,6 +41,7 @@
 
 struct crop {
 	int x0, y0, w, h; /* w == 0: empty */
+	int sx0, sy0, sx1, sy1; /* bounding box of the layer's solid; sx1 < 0: none */
 	size_t cap;
 	uint8_t *solid;   /* 1 = solid */
 	uint32_t *lab;    /* void component id, 0 on solid */
@@ -435,11 +436,16 @@ int verify_layer(struct verify *v, const struct raster *r, struct err *e)
 				y1 = y > y1 ? y : y1;
 			}
 	}
-	if (pc->w) {
-		x0 = pc->x0 < x0 ? pc->x0 : x0;
-		y0 = pc->y0 < y0 ? pc->y0 : y0;
-		x1 = pc->x0 + pc->w - 1 > x1 ? pc->x0 + pc->w - 1 : x1;
-		y1 = pc->y0 + pc->h - 1 > y1 ? pc->y0 + pc->h - 1 : y1;
+	c->sx0 = x0;
+	c->sy0 = y0;
+	c->sx1 = x1;
+	c->sy1 = y1;
+	/* grow by the previous layer's solid (not its crop: crops would creep) */
+	if (pc->w && pc->sx1 >= 0) {
+		x0 = pc->sx0 < x0 ? pc->sx0 : x0;
+		y0 = pc->sy0 < y0 ? pc->sy0 : y0;
+		x1 = pc->sx1 > x1 ? pc->sx1 : x1;
+		y1 = pc->sy1 > y1 ? pc->sy1 : y1;
 	}
 	if (x1 < 0) {
 		c->w = c->h = 0; /* nothing on this layer or the previous one */
