@@ -155,7 +155,7 @@ bench-large: deps
 	@tests/bench/run.sh $(BUILD) large
 
 check-style:
-	@tests/check-style.sh
+	@tests/check-style.sh $(BUILD)
 
 clean:
 	rm -rf build build-san build-fuzz
