@@ -102,8 +102,9 @@ $(BUILD)/tests/unit/%: tests/unit/%.c $(TEST_SUPPORT_OBJ) $(LIBS)
 
 $(BUILD)/tests/bench/%: tests/bench/%.c $(LIBS)
 	@mkdir -p $(@D)
-	$(CC) $(CFLAGS) -Itests -c $< -o $@.o
-	$(CXX) $(LDFLAGS) -o $@ $@.o $(LIBS) $(LDLIBS)
+	@$(if $(Q),echo "  BENCH   $<")
+	$(Q)$(CC) $(CFLAGS) -Itests -c $< -o $@.o
+	$(Q)$(CXX) $(LDFLAGS) -o $@ $@.o $(LIBS) $(LDLIBS)
 
 # The README's two commands.
 run: deps
@@ -126,12 +127,16 @@ FUZZ_SRC := $(sort $(wildcard tests/fuzz/fuzz_*.c))
 FUZZ_BIN := $(patsubst tests/fuzz/%.c,build-fuzz/%,$(FUZZ_SRC))
 FUZZ_ENGINE_SRC = $(filter-out %.cpp,$(ENGINE_SRC))
 FUZZ_SECONDS ?= 60
+# The lattice engine's parsers (lattice files, NRRD density grids) and what they need.
+FUZZ_LATTICE_SRC := engine/lattice/graph.c engine/lattice/file_bin.c engine/lattice/file_text.c \
+	engine/lattice/density.c
 .PHONY: fuzz-build
 fuzz-build: $(FUZZ_BIN)
 build-fuzz/%: tests/fuzz/%.c $(wildcard tests/fuzz/*.h engine/*/*.h) $(ENGINE_SRC)
 	@mkdir -p $(@D)
-	clang -std=c11 -O1 -g -fsanitize=fuzzer,address,undefined $(DEFS) -I. $(PKG_CFLAGS) \
-		-Wall -Wextra -Werror -o $@ $< $(filter engine/core/% engine/geom/%.c engine/mesh/%,$(FUZZ_ENGINE_SRC)) -lm
+	@$(if $(Q),echo "  FUZZ    $<")
+	$(Q)clang -std=c11 -O1 -g -fsanitize=fuzzer,address,undefined $(DEFS) -I. $(PKG_CFLAGS) \
+		-Wall -Wextra -Werror -o $@ $< $(filter engine/core/% engine/geom/%.c engine/mesh/% $(FUZZ_LATTICE_SRC),$(FUZZ_ENGINE_SRC)) -lm
 fuzz: deps
 	@$(MAKE) --no-print-directory fuzz-build
 	@tests/fuzz/run.sh $(FUZZ_SECONDS)
@@ -150,7 +155,7 @@ bench-large: deps
 	@tests/bench/run.sh $(BUILD) large
 
 check-style:
-	@tests/check-style.sh
+	@tests/check-style.sh $(BUILD)
 
 clean:
 	rm -rf build build-san build-fuzz

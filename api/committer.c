@@ -81,7 +81,7 @@ static void answer(struct api_server *s, struct db *db, struct submit_task *t,
 	if (res->rc == 0 && queue_get_seq(db, res->seq, &j, &e) == 0) {
 		r->pending = api_submit_response(&j, res->replayed);
 		r->pending_status = MHD_HTTP_ACCEPTED;
-		job_row_fini(&j);
+		queue_job_row_fini(&j);
 	} else if (res->rc == ERR_PARAM) {
 		r->pending = api_problem_response(PROB_IDEMPOTENCY, r->url, "Idempotency-Key",
 						  res->err.msg, &r->pending_status);

@@ -64,14 +64,14 @@ static int sse_fill(struct sse *s)
 		}
 		s->last_n = ev[i].n;
 	}
-	job_events_free(ev, n);
+	queue_events_free(ev, n);
 	if (!rc && n == 0) {
 		/* Nothing new: is the job over? (Its final event was sent.) */
 		if (queue_get_seq(db, s->job_seq, &j, &e) != 0) {
 			s->final = 1; /* removed with its tenant */
 		} else {
 			s->final = j.state >= JOB_SUCCEEDED && s->last_n >= j.event_seq;
-			job_row_fini(&j);
+			queue_job_row_fini(&j);
 		}
 	}
 	db_pool_put(s->srv->pool, db);
@@ -123,13 +123,13 @@ enum MHD_Result api_job_events(struct api_req *r)
 	if (api_load_job(r, &j, &ret))
 		return ret;
 	if (!(s = calloc(1, sizeof *s))) {
-		job_row_fini(&j);
+		queue_job_row_fini(&j);
 		return MHD_NO;
 	}
 	s->srv = r->srv;
 	s->conn = r->conn;
 	s->job_seq = j.seq;
-	job_row_fini(&j);
+	queue_job_row_fini(&j);
 	s->last_n = last ? atoll(last) : after ? atoll(after) : 0;
 	if (s->last_n < 0)
 		s->last_n = 0;

@@ -262,7 +262,7 @@ enum MHD_Result api_job_get(struct api_req *r)
 	if (load_job(r, &j, &ret))
 		return ret;
 	o = api_job_json(&j);
-	job_row_fini(&j);
+	queue_job_row_fini(&j);
 	return api_json(r, MHD_HTTP_OK, o);
 }
 
@@ -309,7 +309,7 @@ enum MHD_Result api_job_list(struct api_req *r)
 	} else {
 		json_object_set_new(o, "next_cursor", json_null());
 	}
-	job_rows_free(v, n);
+	queue_job_rows_free(v, n);
 	return api_json(r, MHD_HTTP_OK, o);
 }
 
@@ -323,20 +323,20 @@ enum MHD_Result api_job_cancel(struct api_req *r)
 
 	if (load_job(r, &j, &ret))
 		return ret;
-	job_row_fini(&j);
+	queue_job_row_fini(&j);
 	db = db_pool_get(r->srv->pool);
 	rc = queue_cancel(db, r->tenant.id, r->arg[0], &j, &e);
 	db_pool_put(r->srv->pool, db);
 	if (rc)
 		return api_problem(r, PROB_UNAVAILABLE, NULL, "%s", e.msg);
 	if (j.state == JOB_SUCCEEDED || j.state == JOB_FAILED) {
-		job_row_fini(&j);
+		queue_job_row_fini(&j);
 		return api_problem(r, PROB_CONFLICT, NULL, "job %s already %s", r->arg[0],
 				   queue_state_name(j.state));
 	}
 	{
 		json_t *o = api_job_json(&j);
-		job_row_fini(&j);
+		queue_job_row_fini(&j);
 		return api_json(r, MHD_HTTP_OK, o);
 	}
 }

@@ -442,7 +442,7 @@ enum MHD_Result api_mesh_get(struct api_req *r)
 		return api_problem(r, PROB_UNAVAILABLE, NULL, "%s", e.msg);
 	{
 		json_t *j = api_mesh_json(&m);
-		mesh_rec_fini(&m);
+		db_mesh_rec_fini(&m);
 		return api_json(r, MHD_HTTP_OK, j);
 	}
 }
@@ -484,7 +484,7 @@ enum MHD_Result api_mesh_list(struct api_req *r)
 	} else {
 		json_object_set_new(o, "next_cursor", json_null());
 	}
-	mesh_recs_free(v, n);
+	db_mesh_recs_free(v, n);
 	return api_json(r, MHD_HTTP_OK, o);
 }
 
@@ -509,7 +509,7 @@ enum MHD_Result api_mesh_delete(struct api_req *r)
 		return api_problem(r, PROB_UNAVAILABLE, NULL, "%s", e.msg);
 	store_mesh_path(r->srv->cfg.data_dir, r->tenant.id, m.id, m.format, path, sizeof path);
 	unlink(path);
-	mesh_rec_fini(&m);
+	db_mesh_rec_fini(&m);
 	return api_queue(r, MHD_HTTP_NO_CONTENT,
 			 MHD_create_response_from_buffer(0, NULL, MHD_RESPMEM_PERSISTENT));
 }

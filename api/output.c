@@ -120,11 +120,11 @@ enum MHD_Result api_job_output(struct api_req *r)
 					    &status);
 		if (resp && waiting)
 			MHD_add_response_header(resp, MHD_HTTP_HEADER_RETRY_AFTER, "2");
-		job_row_fini(&j);
+		queue_job_row_fini(&j);
 		return api_queue(r, status, resp);
 	}
 	if (!j.artifact[0]) {
-		job_row_fini(&j);
+		queue_job_row_fini(&j);
 		return api_problem(r, PROB_GONE, NULL, "the output of job %s was deleted by retention",
 				   r->arg[0]);
 	}
@@ -133,7 +133,7 @@ enum MHD_Result api_job_output(struct api_req *r)
 	if (fd < 0 || fstat(fd, &st) != 0) {
 		if (fd >= 0)
 			close(fd);
-		job_row_fini(&j);
+		queue_job_row_fini(&j);
 		return api_problem(r, PROB_GONE, NULL, "the output file of job %s is missing",
 				   r->arg[0]);
 	}
@@ -149,7 +149,7 @@ enum MHD_Result api_job_output(struct api_req *r)
 	if (out_format_parse(j.format, &f, &e) != 0)
 		f = OUT_ZIP;
 	snprintf(disp, sizeof disp, "attachment; filename=\"%s%s\"", j.id, out_format_extension(f));
-	job_row_fini(&j);
+	queue_job_row_fini(&j);
 	if (etag_match(api_header(r, MHD_HTTP_HEADER_IF_NONE_MATCH), etag)) {
 		close(fd);
 		resp = MHD_create_response_from_buffer(0, NULL, MHD_RESPMEM_PERSISTENT);

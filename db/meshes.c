@@ -7,7 +7,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-void mesh_rec_fini(struct mesh_rec *m)
+void db_mesh_rec_fini(struct mesh_rec *m)
 {
 	if (m) {
 		free(m->analysis);
@@ -15,10 +15,10 @@ void mesh_rec_fini(struct mesh_rec *m)
 	}
 }
 
-void mesh_recs_free(struct mesh_rec *v, int n)
+void db_mesh_recs_free(struct mesh_rec *v, int n)
 {
 	for (int i = 0; v && i < n; i++)
-		mesh_rec_fini(&v[i]);
+		db_mesh_rec_fini(&v[i]);
 	free(v);
 }
 
@@ -116,12 +116,12 @@ int db_mesh_list(struct db *db, int64_t tenant_id, int64_t before_ms, const char
 		read_mesh(st, &a[cnt++]);
 	sqlite3_reset(st);
 	if (rc != SQLITE_DONE) {
-		mesh_recs_free(a, cnt);
+		db_mesh_recs_free(a, cnt);
 		return db_fail(db, e, "listing meshes");
 	}
 	*more = cnt > limit;
 	if (*more)
-		mesh_rec_fini(&a[--cnt]);
+		db_mesh_rec_fini(&a[--cnt]);
 	*v = a;
 	*n = cnt;
 	return 0;
@@ -167,7 +167,7 @@ int db_mesh_delete(struct db *db, int64_t tenant_id, const char *id, struct mesh
 		return 0;
 	}
 out_m:
-	mesh_rec_fini(&m);
+	db_mesh_rec_fini(&m);
 out:
 	db_rollback(db);
 	return rc;

@@ -21,8 +21,8 @@ struct mesh_rec {
 	int64_t created_ms;
 };
 
-void mesh_rec_fini(struct mesh_rec *m);
-void mesh_recs_free(struct mesh_rec *v, int n);
+void db_mesh_rec_fini(struct mesh_rec *m);
+void db_mesh_recs_free(struct mesh_rec *v, int n);
 
 /* Record an uploaded mesh (id made by the caller with db_make_id("m_")),
  * adding its size to the tenant's usage. */

@@ -30,7 +30,7 @@ int queue_state_parse(const char *name)
 	return -1;
 }
 
-void job_row_fini(struct job_row *j)
+void queue_job_row_fini(struct job_row *j)
 {
 	if (!j)
 		return;
@@ -40,10 +40,10 @@ void job_row_fini(struct job_row *j)
 	j->params = j->error = j->metrics = NULL;
 }
 
-void job_rows_free(struct job_row *v, int n)
+void queue_job_rows_free(struct job_row *v, int n)
 {
 	for (int i = 0; v && i < n; i++)
-		job_row_fini(&v[i]);
+		queue_job_row_fini(&v[i]);
 	free(v);
 }
 
@@ -358,12 +358,12 @@ int queue_list(struct db *db, int64_t tenant_id, int state, int64_t before_seq, 
 		read_job(st, &a[cnt++]);
 	sqlite3_reset(st);
 	if (rc != SQLITE_DONE) {
-		job_rows_free(a, cnt);
+		queue_job_rows_free(a, cnt);
 		return db_fail(db, e, "listing jobs");
 	}
 	*more = cnt > limit;
 	if (*more)
-		job_row_fini(&a[--cnt]);
+		queue_job_row_fini(&a[--cnt]);
 	*v = a;
 	*n = cnt;
 	return 0;
@@ -728,7 +728,7 @@ int queue_rescue(struct db *db, const char *worker, int *n, struct err *e)
 	return 0;
 }
 
-void job_events_free(struct job_event *v, int n)
+void queue_events_free(struct job_event *v, int n)
 {
 	for (int i = 0; v && i < n; i++)
 		free(v[i].data);
@@ -766,7 +766,7 @@ int queue_events(struct db *db, int64_t seq, int64_t after, int limit, struct jo
 	}
 	sqlite3_reset(st);
 	if (rc != SQLITE_DONE) {
-		job_events_free(a, cnt);
+		queue_events_free(a, cnt);
 		return db_fail(db, e, "reading events");
 	}
 	*v = a;

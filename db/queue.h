@@ -49,9 +49,9 @@ struct job_row {
 	int64_t event_seq;        /* last event number */
 };
 
-void job_row_fini(struct job_row *j);
+void queue_job_row_fini(struct job_row *j);
 /* Free an array from queue_list(). */
-void job_rows_free(struct job_row *v, int n);
+void queue_job_rows_free(struct job_row *v, int n);
 
 struct job_new {
 	int64_t tenant_id;
@@ -91,7 +91,7 @@ int queue_get_seq(struct db *db, int64_t seq, struct job_row *out, struct err *e
 
 /* Newest first: jobs with seq < before_seq (0 = from the newest), state
  * filter (-1 = any), at most limit (1..1000).  *more = 1 when further
- * rows exist.  Caller frees with job_rows_free(). */
+ * rows exist.  Caller frees with queue_job_rows_free(). */
 int queue_list(struct db *db, int64_t tenant_id, int state, int64_t before_seq, int limit,
 	       struct job_row **v, int *n, int *more, struct err *e);
 
@@ -152,7 +152,7 @@ struct job_event {
 	char type[16];            /* "progress" or "state" */
 	char *data;               /* JSON text, owned */
 };
-void job_events_free(struct job_event *v, int n);
+void queue_events_free(struct job_event *v, int n);
 /* Events of job seq with number > after, oldest first, at most limit. */
 int queue_events(struct db *db, int64_t seq, int64_t after, int limit, struct job_event **v,
 		 int *n, struct err *e);

@@ -53,6 +53,8 @@ struct engine_ctx {
 	int want_region;                   /* output consumes polygons */
 	const struct raster_map *map;      /* pixel map when want_raster */
 	struct progress *progress;         /* stage already set to "prepare" */
+	const char *scratch_dir;           /* where engines may keep unlinked temporary
+					      files (job_spec.scratch_dir); NULL = system's */
 	struct metrics *metrics;           /* engines may record as they go */
 };
 

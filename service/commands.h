@@ -7,6 +7,7 @@
 int cmd_run(int argc, char **argv);     /* cli_run.c */
 int cmd_analyze(int argc, char **argv); /* cli_run.c */
 int cmd_engines(int argc, char **argv); /* cli_run.c */
+int cmd_verify(int argc, char **argv);  /* cli_verify.c */
 int cmd_serve(int argc, char **argv);     /* serve.c */
 int cmd_worker(int argc, char **argv);    /* worker.c (started by serve) */
 int cmd_sandbox(int argc, char **argv);   /* sandbox.c (started by serve) */

@@ -6,6 +6,7 @@
 #include "db/tenants.h"
 #include "engine/engine.h"
 #include "service/config.h"
+#include "service/rlimits.h"
 
 #include <errno.h>
 #include <fcntl.h>
@@ -109,15 +110,6 @@ static void send_result(int fd, const struct err *e, uint64_t bytes, const char 
 		_exit(3);
 }
 
-/* Soft limit v; the hard limit leaves room for the soft one's signal
- * (SIGXCPU) to be seen before the kernel's SIGKILL at the hard limit. */
-static void set_limit(int res, uint64_t v, uint64_t slack)
-{
-	struct rlimit rl = {(rlim_t)v, (rlim_t)(v + slack)};
-
-	setrlimit(res, &rl);
-}
-
 /* Test-only failure modes, honoured only with INFILLD_FAULT_INJECTION=1
  * (the API refuses the field otherwise).  Each imitates what a broken
  * engine or a hostile mesh could do. */
@@ -190,10 +182,10 @@ void jobproc_main(const struct jobproc_args *a)
 	signal(SIGINT, SIG_IGN);
 	signal(SIGXFSZ, SIG_IGN);
 	signal(SIGPIPE, SIG_IGN);
-	set_limit(RLIMIT_AS, (uint64_t)c->job_mem_mb << 20, 0);
-	set_limit(RLIMIT_CPU, (uint64_t)c->job_cpu_s, 5);
-	set_limit(RLIMIT_FSIZE, ((uint64_t)c->output_limit_mb << 20) + (1u << 20), 0);
-	set_limit(RLIMIT_CORE, 0, 0);
+	rlimit_set(RLIMIT_AS, (uint64_t)c->job_mem_mb << 20, 0);
+	rlimit_set(RLIMIT_CPU, (uint64_t)c->job_cpu_s, 5);
+	rlimit_set(RLIMIT_FSIZE, ((uint64_t)c->output_limit_mb << 20) + (1u << 20), 0);
+	rlimit_set(RLIMIT_CORE, 0, 0);
 	memset(&jp, 0, sizeof jp);
 	jp.fd = a->fd;
 	fcntl(jp.fd, F_SETFL, fcntl(jp.fd, F_GETFL) | O_NONBLOCK);

@@ -20,6 +20,9 @@ static const struct command commands[] = {
 	 "              [--metrics FILE.json] [--threads N] [--quiet]"},
 	{"analyze", cmd_analyze, "analyze MESH [--set KEY=VALUE]...   (JSON report on stdout)"},
 	{"engines", cmd_engines, "engines                              (JSON: engines and parameters)"},
+	{"verify", cmd_verify,
+	 "verify ARCHIVE [--alpha-deg A] [--layer-mm H] [--pixel-mm P] [--strict]\n"
+	 "              (JSON: interior overhangs, floating islands, walls of an SL1/zip stack)"},
 	{"serve", cmd_serve, NULL}, /* usage from config_usage() */
 	{"tenant", cmd_tenant,
 	 "tenant add NAME [--max-jobs N] [--max-upload-mb N] [--quota-gb N] [--data DIR]\n"

@@ -5,6 +5,7 @@
  */
 #define _GNU_SOURCE /* prctl */
 #include "service/commands.h"
+#include "service/rlimits.h"
 
 #include <signal.h>
 #include <stdio.h>
@@ -12,13 +13,6 @@
 #include <string.h>
 #include <sys/prctl.h>
 #include <sys/resource.h>
-
-static void limit(int res, unsigned long long v)
-{
-	struct rlimit rl = {(rlim_t)v, (rlim_t)v};
-
-	setrlimit(res, &rl);
-}
 
 int cmd_sandbox(int argc, char **argv)
 {
@@ -41,10 +35,10 @@ int cmd_sandbox(int argc, char **argv)
 	}
 	prctl(PR_SET_PDEATHSIG, SIGKILL);
 	if (as_mb)
-		limit(RLIMIT_AS, as_mb << 20);
+		rlimit_set(RLIMIT_AS, as_mb << 20, 0);
 	if (cpu_s)
-		limit(RLIMIT_CPU, cpu_s);
-	limit(RLIMIT_CORE, 0);
-	limit(RLIMIT_FSIZE, 0); /* analysis writes no files */
+		rlimit_set(RLIMIT_CPU, cpu_s, 0);
+	rlimit_set(RLIMIT_CORE, 0, 0);
+	rlimit_set(RLIMIT_FSIZE, 0, 0); /* analysis writes no files */
 	return cmd_analyze(argc - i - 1, argv + i + 1);
 }

@@ -304,7 +304,7 @@ static void run_attempt(const struct service_config *c, struct db *db, struct jo
 		return;
 	}
 	store_mesh_path(c->data_dir, j->tenant_id, m.id, m.format, mesh_path, sizeof mesh_path);
-	mesh_rec_fini(&m);
+	db_mesh_rec_fini(&m);
 	store_tmp_path(c->data_dir, "", tmp, sizeof tmp);
 	snprintf(tmp + strlen(tmp), sizeof tmp - strlen(tmp), "%s-a%d.part", j->id, j->attempt);
 	if (pipe2(p, O_CLOEXEC) != 0) {
@@ -378,7 +378,7 @@ int cmd_worker(int argc, char **argv)
 		}
 		if (got) {
 			run_attempt(&c, db, &j);
-			job_row_fini(&j);
+			queue_job_row_fini(&j);
 			continue;
 		}
 		{

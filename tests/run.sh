@@ -61,7 +61,8 @@ run_one() {
 	esac
 	rc=$?
 	printf '%s %-55s %6.1fs\n' "$([ $rc -eq 0 ] && echo PASS || echo "FAIL($rc)")" "$name" \
-		"$(awk -v a="$(date +%s.%N)" -v b="$start" 'BEGIN { print a - b }')"
+		"$(awk -v a="$(date +%s.%N)" -v b="$start" 'BEGIN { print a - b }')" |
+		tee -a "$LOGS/results.txt"
 	[ $rc -eq 0 ] || { echo "---- $log (tail)"; tail -n 40 "$log"; echo "----"; }
 	return $rc
 }
@@ -71,7 +72,8 @@ export LOGS TIMEOUT
 [ ${#list[@]} -gt 0 ] || { echo "run.sh: no tests found" >&2; exit 2; }
 start=$(date +%s)
 printf '%s\n' "${list[@]}" | xargs -P "$JOBS" -I{} bash -c 'run_one "$@"' _ {} | tee "$LOGS/summary.txt"
-fails=$(grep -c '^FAIL' "$LOGS/summary.txt")
-total=$(grep -cE '^(PASS|FAIL)' "$LOGS/summary.txt")
+fails=$(grep -c '^FAIL(' "$LOGS/results.txt")
+total=$(grep -cE '^(PASS|FAIL\()' "$LOGS/results.txt")
+[ "$fails" -eq 0 ] || { echo "== failed:"; grep '^FAIL(' "$LOGS/results.txt"; }
 echo "== $((total - fails))/$total test programs passed in $(( $(date +%s) - start ))s (logs: $LOGS)"
 [ "$fails" -eq 0 ]

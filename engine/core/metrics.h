@@ -34,7 +34,8 @@ int metrics_int(struct metrics *m, const char *key, long long v);
 int metrics_bool(struct metrics *m, const char *key, int v);
 int metrics_str(struct metrics *m, const char *key, const char *v);
 
-/* The entry for key, or NULL. */
+/* The entry for key, or NULL.  Borrowed: valid until the next metrics_*
+ * call that adds a key (the array may move). */
 const struct metric *metrics_get(const struct metrics *m, const char *key);
 
 #endif

@@ -1,12 +1,16 @@
 /* registry.c - the list of engines.  Each engine folder has a header
  * declaring its `const struct engine_ops <name>_engine`. */
 #include "engine/engine.h"
+#include "engine/hollow/hollow.h"
+#include "engine/lattice/lattice_engine.h"
 #include "engine/solid/solid.h"
 
 #include <string.h>
 
 static const struct engine_ops *const engines[] = {
 	&solid_engine,
+	&lattice_engine,
+	&hollow_engine,
 	NULL,
 };
 

@@ -234,6 +234,7 @@ int engine_run(const struct job_spec *js, struct sink *out, const struct progres
 	double layer_mm, share, part_volume = 0;
 	int threads, count = 0, img_w = 0, img_h = 0, rc;
 	const struct metric *mv;
+	double material = 0;
 
 	rc = job_spec_validate(js, e);
 	if (rc)
@@ -279,6 +280,7 @@ int engine_run(const struct job_spec *js, struct sink *out, const struct progres
 	ctx.want_region = js->format == OUT_GCODE || !ctx.want_raster;
 	ctx.map = ctx.want_raster ? &map : NULL;
 	ctx.progress = &prog;
+	ctx.scratch_dir = js->scratch_dir;
 	ctx.metrics = m;
 	rc = ops->prepare(&ctx, js->engine_params, &state, e);
 	if (rc) {
@@ -351,14 +353,16 @@ int engine_run(const struct job_spec *js, struct sink *out, const struct progres
 	}
 	if (!mesh)
 		part_volume = 0; /* engines without a mesh report their own volumes */
+	/* Copy the value: recording more metrics may move the array. */
 	mv = metrics_get(m, "material_volume_mm3");
+	material = mv ? mv->num : 0;
 	if (metrics_str(m, "engine", ops->name) ||
 	    metrics_str(m, "format", out_format_name(js->format)) ||
 	    metrics_str(m, "printer", js->printer.name) || metrics_int(m, "layers", count) ||
 	    metrics_num(m, "layer_mm", layer_mm) || job_record_bbox(m, "bbox_mm", &extent) ||
 	    (mesh && metrics_num(m, "part_volume_mm3", part_volume)) ||
 	    (mesh && mv && part_volume > 0 &&
-	     metrics_num(m, "material_fraction", mv->num / part_volume)) ||
+	     metrics_num(m, "material_fraction", material / part_volume)) ||
 	    metrics_num(m, "elapsed_s", progress_now_s() - t0) ||
 	    metrics_num(m, "seconds.read", t_read - t0) ||
 	    metrics_num(m, "seconds.prepare", t_prep - t_read) ||

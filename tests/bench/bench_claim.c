@@ -82,7 +82,7 @@ int main(int argc, char **argv)
 		}
 		lat[i] = now_s() - t0;
 		queue_succeed(db, j.seq, j.attempt, &a, "{}", &e);
-		job_row_fini(&j);
+		queue_job_row_fini(&j);
 	}
 	qsort(lat, CLAIMS, sizeof lat[0], cmp);
 	printf("claim latency with %ld queued jobs (10 tenants, synchronous=FULL): "

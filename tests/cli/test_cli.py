@@ -22,6 +22,11 @@ SHARED = os.environ.get("INFILLD_SHARED", os.path.join(ROOT, "..", "shared"))
 MESHES = os.path.join(SHARED, "meshes")
 
 
+def load(path):
+    with open(path) as f:
+        return json.load(f)
+
+
 def run(*args, check=False):
     p = subprocess.run([BIN, *args], capture_output=True, text=True, timeout=600)
     if check and p.returncode != 0:
@@ -94,7 +99,7 @@ class CliTest(unittest.TestCase):
         out, met = self.path("femur.sl1"), self.path("femur-sl1.json")
         run("run", os.path.join(MESHES, "femur.off"), "-o", out, "--set", "height_mm=50",
             "--metrics", met, "--quiet", check=True)
-        m = json.load(open(met))
+        m = load(met)
         self.assertEqual(m["layers"], math.ceil(50 / 0.05))
         self.assertEqual(m["engine"], "solid")
         for k in ("layers", "layer_mm", "bbox_mm", "part_volume_mm3", "material_volume_mm3",
@@ -113,7 +118,7 @@ class CliTest(unittest.TestCase):
             run("run", os.path.join(MESHES, "misc", "cube.bin.stl"), "-o",
                 self.path(f"c{layer}.zip"), "--set", "height_mm=10", "--set",
                 f"layer_mm={layer}", "--metrics", met, "--quiet", check=True)
-            self.assertEqual(json.load(open(met))["layers"], math.ceil(10 / float(layer) - 1e-9))
+            self.assertEqual(load(met)["layers"], math.ceil(10 / float(layer) - 1e-9))
 
     # ---- run: FDM -------------------------------------------------------------
     def test_run_gcode_femur_contained(self):
@@ -122,7 +127,7 @@ class CliTest(unittest.TestCase):
             "--printer", "generic-fdm", "--quiet", check=True)
         out, met = self.path("femur.gcode"), self.path("femur-gc.json")
         run("run", placed, "-o", out, "--metrics", met, "--quiet", check=True)
-        m = json.load(open(met))
+        m = load(met)
         self.assertEqual(m["layers"], math.ceil(50 / 0.2))
         rep = gcodecheck.check_file(out, mesh=placed)
         self.assertEqual(rep["layers"], m["layers"])
@@ -178,7 +183,7 @@ class CliTest(unittest.TestCase):
         met = self.path("pf.json")
         run("run", os.path.join(MESHES, "femur.off"), "-o", self.path("pf.sl1"), "--params", pf,
             "--metrics", met, "--quiet", check=True)
-        self.assertAlmostEqual(json.load(open(met))["bbox_mm"]["max"]["z"], 5.0, places=6)
+        self.assertAlmostEqual(load(met)["bbox_mm"]["max"]["z"], 5.0, places=6)
         with open(pf, "w") as f:
             json.dump({"height_mm": "five"}, f)
         self.assert_one_line_error(run("run", os.path.join(MESHES, "femur.off"), "-o",

@@ -172,7 +172,7 @@ static void test_meshes(void)
 	CHECK_EQ_INT(t.used_bytes, 1000);
 	REQUIRE_OK(db_mesh_get(db, a, mid, &m, &e), &e);
 	CHECK_STR(m.format, "stl");
-	mesh_rec_fini(&m);
+	db_mesh_rec_fini(&m);
 	CHECK_EQ_INT(db_mesh_get(db, b, mid, &m, &e), ERR_NOTFOUND);
 	for (int i = 0; i < 4; i++)
 		add_mesh(db, a, mid + 0 * i);
@@ -183,21 +183,21 @@ static void test_meshes(void)
 		int64_t ms = v[2].created_ms;
 		char last[DB_ID_MAX];
 		strcpy(last, v[2].id);
-		mesh_recs_free(v, n);
+		db_mesh_recs_free(v, n);
 		REQUIRE_OK(db_mesh_list(db, a, ms, last, 3, &v, &n, &more, &e), &e);
 		CHECK_EQ_INT(n, 2);
 		CHECK_EQ_INT(more, 0);
-		mesh_recs_free(v, n);
+		db_mesh_recs_free(v, n);
 	}
 	/* A mesh used by a queued job cannot be deleted; once done it can. */
 	REQUIRE_OK(submit(db, a, mid, NULL, NULL, &j, &rp), &e);
 	CHECK_EQ_INT(db_mesh_delete(db, a, mid, &m, &e), ERR_LIMIT);
 	CHECK_EQ_INT(db_mesh_delete(db, b, mid, &m, &e), ERR_NOTFOUND);
-	job_row_fini(&j);
+	queue_job_row_fini(&j);
 	REQUIRE_OK(queue_cancel(db, a, j.id, &j, &e), &e);
-	job_row_fini(&j);
+	queue_job_row_fini(&j);
 	REQUIRE_OK(db_mesh_delete(db, a, mid, &m, &e), &e);
-	mesh_rec_fini(&m);
+	db_mesh_rec_fini(&m);
 	REQUIRE_OK(db_tenant_get_id(db, a, &t, &e), &e);
 	CHECK_EQ_INT(t.used_bytes, 4000);
 	db_close(db);
@@ -222,11 +222,11 @@ static void test_submit_idempotency(void)
 	REQUIRE_OK(submit(db, a, mid, "k1", "h1", &j2, &rp), &e);
 	CHECK_EQ_INT(rp, 1);
 	CHECK_STR(j2.id, j1.id);
-	job_row_fini(&j2);
+	queue_job_row_fini(&j2);
 	CHECK_EQ_INT(submit(db, a, mid, "k1", "h2", &j2, &rp), ERR_PARAM);
 	/* Unknown mesh. */
 	CHECK_EQ_INT(submit(db, a, "m_aaaaaaaaaaaaaaaaaaaa", NULL, NULL, &j2, &rp), ERR_NOTFOUND);
-	job_row_fini(&j1);
+	queue_job_row_fini(&j1);
 	db_close(db);
 }
 
@@ -248,11 +248,11 @@ static void test_fair_claim(void)
 	add_mesh(db, b, mb);
 	for (int i = 0; i < 200; i++) {
 		REQUIRE_OK(submit(db, a, ma, NULL, NULL, &j, &rp), &e);
-		job_row_fini(&j);
+		queue_job_row_fini(&j);
 	}
 	REQUIRE_OK(submit(db, b, mb, NULL, NULL, &j, &rp), &e);
 	strcpy(bid, j.id);
-	job_row_fini(&j);
+	queue_job_row_fini(&j);
 	for (int i = 0; i < 4; i++) {
 		REQUIRE_OK(queue_claim(db, "w1", 30000, &j, &got, &e), &e);
 		if (!got)
@@ -261,7 +261,7 @@ static void test_fair_claim(void)
 			pos = i;
 		CHECK_EQ_INT(j.state, JOB_RUNNING);
 		CHECK_EQ_INT(j.attempt, 1);
-		job_row_fini(&j);
+		queue_job_row_fini(&j);
 	}
 	CHECK(pos >= 0 && pos <= 1);
 	/* a has 3 running (cap), b has none queued: nothing runnable. */
@@ -286,7 +286,7 @@ static void test_fencing_and_rescue(void)
 	a = add_tenant(db, "a", 2, NULL);
 	add_mesh(db, a, mid);
 	REQUIRE_OK(submit(db, a, mid, NULL, NULL, &j, &rp), &e);
-	job_row_fini(&j);
+	queue_job_row_fini(&j);
 	REQUIRE_OK(queue_claim(db, "w1", 30000, &j, &got, &e), &e);
 	REQUIRE(got);
 	CHECK_EQ_INT(queue_progress(db, j.seq, 1, &p, 30000, &e), 1);
@@ -294,7 +294,7 @@ static void test_fencing_and_rescue(void)
 	CHECK_EQ_INT(queue_progress(db, j.seq, 1, &p, 30000, &e), 1);
 	REQUIRE_OK(queue_get_seq(db, j.seq, &k, &e), &e);
 	CHECK_NEAR(k.progress, 0.5, 1e-12);
-	job_row_fini(&k);
+	queue_job_row_fini(&k);
 	/* Worker w1 dies: its job is re-queued with backoff (attempt 2 later). */
 	REQUIRE_OK(queue_rescue(db, "w1", &n, &e), &e);
 	CHECK_EQ_INT(n, 1);
@@ -302,7 +302,7 @@ static void test_fencing_and_rescue(void)
 	CHECK_EQ_INT(k.state, JOB_QUEUED);
 	CHECK_STR(k.error_type, "lost");
 	CHECK(k.run_after_ms > db_now_ms() + 500);
-	job_row_fini(&k);
+	queue_job_row_fini(&k);
 	/* The zombie's writes are fenced out. */
 	CHECK_EQ_INT(queue_heartbeat(db, j.seq, 1, 30000, &e), 0);
 	CHECK_EQ_INT(queue_progress(db, j.seq, 1, &p, 30000, &e), 0);
@@ -321,7 +321,7 @@ static void test_fencing_and_rescue(void)
 	CHECK_EQ_INT(k.attempt, 2);
 	/* A retryable failure on attempt 2 re-queues; then the lease path. */
 	CHECK_EQ_INT(queue_fail(db, k.seq, 2, &lost, &e), 1);
-	job_row_fini(&k);
+	queue_job_row_fini(&k);
 	{
 		sqlite3 *sq;
 		sqlite3_open(path, &sq);
@@ -331,15 +331,15 @@ static void test_fencing_and_rescue(void)
 	REQUIRE_OK(queue_claim(db, "w3", -1, &k, &got, &e), &e); /* lease already expired */
 	REQUIRE(got);
 	CHECK_EQ_INT(k.attempt, 3);
-	job_row_fini(&k);
+	queue_job_row_fini(&k);
 	REQUIRE_OK(queue_rescue(db, NULL, &n, &e), &e);
 	CHECK_EQ_INT(n, 1);
 	REQUIRE_OK(queue_get_seq(db, j.seq, &k, &e), &e);
 	CHECK_EQ_INT(k.state, JOB_FAILED); /* 3 of 3 attempts used */
 	CHECK_STR(k.error_type, "lost");
 	CHECK(k.finished_ms > 0);
-	job_row_fini(&k);
-	job_row_fini(&j);
+	queue_job_row_fini(&k);
+	queue_job_row_fini(&j);
 	CHECK_EQ_INT(queue_backoff_ms(1), 1000);
 	CHECK_EQ_INT(queue_backoff_ms(3), 4000);
 	CHECK_EQ_INT(queue_backoff_ms(30), 60000);
@@ -365,7 +365,7 @@ static void test_succeed_cancel_events(void)
 	add_mesh(db, a, mid);
 	for (int i = 0; i < 3; i++) {
 		REQUIRE_OK(submit(db, a, mid, NULL, NULL, &j, &rp), &e);
-		job_row_fini(&j);
+		queue_job_row_fini(&j);
 	}
 	REQUIRE_OK(queue_claim(db, "w", 30000, &j, &got, &e), &e);
 	CHECK_EQ_INT(queue_succeed(db, j.seq, j.attempt, &art, "{\"layers\":3}", &e), 1);
@@ -374,7 +374,7 @@ static void test_succeed_cancel_events(void)
 	CHECK_NEAR(k.progress, 1.0, 0);
 	CHECK_STR(k.metrics, "{\"layers\":3}");
 	CHECK_EQ_INT(k.artifact_bytes, 4242);
-	job_row_fini(&k);
+	queue_job_row_fini(&k);
 	REQUIRE_OK(db_tenant_get_id(db, a, &t, &e), &e);
 	CHECK_EQ_INT(t.used_bytes, 1000 + 4242);
 	/* Events: queued, running, succeeded. */
@@ -385,30 +385,30 @@ static void test_succeed_cancel_events(void)
 		CHECK_CONTAINS(ev[2].data, "\"state\":\"succeeded\"");
 		CHECK_EQ_INT(ev[2].n, 3);
 	}
-	job_events_free(ev, n);
+	queue_events_free(ev, n);
 	REQUIRE_OK(queue_events(db, j.seq, 2, 100, &ev, &n, &e), &e);
 	CHECK_EQ_INT(n, 1); /* Last-Event-ID resume */
-	job_events_free(ev, n);
+	queue_events_free(ev, n);
 	/* Cancelling a finished job changes nothing. */
 	REQUIRE_OK(queue_cancel(db, a, j.id, &k, &e), &e);
 	CHECK_EQ_INT(k.state, JOB_SUCCEEDED);
-	job_row_fini(&k);
-	job_row_fini(&j);
+	queue_job_row_fini(&k);
+	queue_job_row_fini(&j);
 	/* A non-retryable failure fails at once. */
 	REQUIRE_OK(queue_claim(db, "w", 30000, &j, &got, &e), &e);
 	CHECK_EQ_INT(queue_fail(db, j.seq, j.attempt, &bad, &e), 1);
 	REQUIRE_OK(queue_get(db, a, j.id, &k, &e), &e);
 	CHECK_EQ_INT(k.state, JOB_FAILED);
 	CHECK_STR(k.error, "facet 3: NaN");
-	job_row_fini(&k);
-	job_row_fini(&j);
+	queue_job_row_fini(&k);
+	queue_job_row_fini(&j);
 	/* Cancel a running job: its worker's writes now fail. */
 	REQUIRE_OK(queue_claim(db, "w", 30000, &j, &got, &e), &e);
 	REQUIRE_OK(queue_cancel(db, a, j.id, &k, &e), &e);
 	CHECK_EQ_INT(k.state, JOB_CANCELLED);
 	CHECK_EQ_INT(queue_heartbeat(db, j.seq, j.attempt, 30000, &e), 0);
-	job_row_fini(&k);
-	job_row_fini(&j);
+	queue_job_row_fini(&k);
+	queue_job_row_fini(&j);
 	REQUIRE_OK(queue_counts(db, counts, &e), &e);
 	CHECK_EQ_INT(counts[JOB_SUCCEEDED], 1);
 	CHECK_EQ_INT(counts[JOB_FAILED], 1);
@@ -433,7 +433,7 @@ static void test_list_paging(void)
 	add_mesh(db, a, mid);
 	for (int i = 0; i < 25; i++) {
 		REQUIRE_OK(submit(db, a, mid, NULL, NULL, &j, &rp), &e);
-		job_row_fini(&j);
+		queue_job_row_fini(&j);
 	}
 	do {
 		REQUIRE_OK(queue_list(db, a, -1, cursor, 10, &v, &n, &more, &e), &e);
@@ -443,16 +443,16 @@ static void test_list_paging(void)
 		pages++;
 		if (n)
 			cursor = v[n - 1].seq;
-		job_rows_free(v, n);
+		queue_job_rows_free(v, n);
 	} while (more);
 	CHECK_EQ_INT(total, 25);
 	CHECK_EQ_INT(pages, 3);
 	REQUIRE_OK(queue_list(db, a, JOB_RUNNING, 0, 10, &v, &n, &more, &e), &e);
 	CHECK_EQ_INT(n, 0);
-	job_rows_free(v, n);
+	queue_job_rows_free(v, n);
 	REQUIRE_OK(queue_list(db, a + 1, -1, 0, 10, &v, &n, &more, &e), &e);
 	CHECK_EQ_INT(n, 0);
-	job_rows_free(v, n);
+	queue_job_rows_free(v, n);
 	db_close(db);
 }
 

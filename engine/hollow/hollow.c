@@ -1,0 +1,385 @@
+/* hollow.c - the `hollow` engine: support-free hollowing (paper 004,
+ * Wang et al., TVCG 2018), lightweight or standing objective, repeated
+ * rounds.  The pipeline is rounds.c; this file holds the parameters, the
+ * layer output (slices of the hollowed mesh, checked by engine/verify as
+ * they stream out) and the metrics.  Design: docs/hollow.md.
+ */
+#include "engine/hollow/hollow.h"
+
+#include <math.h>
+#include <stddef.h>
+#include <string.h>
+
+#include "engine/core/mem.h"
+#include "engine/hollow/rounds.h"
+#include "engine/mesh/mesh.h"
+#include "engine/slice/slice.h"
+#include "engine/verify/verify.h"
+
+struct hollow_params {
+	double wall_mm;
+	double wall_next_mm;
+	double opt_layer_mm;
+	int objective;
+	int rounds;
+	double min_void_mm3;
+	double pixel_mm;
+	double stack_layer_mm;
+	double sample_mm;
+	double margin_deg;
+};
+
+static const char *const objective_names[] = {"lightweight", "stability", NULL};
+
+static const struct param_desc hollow_desc[] = {
+	{.name = "wall_mm", .type = PARAM_NUM, .offset = offsetof(struct hollow_params, wall_mm),
+	 .min = 0.1, .max = 20, .def = 1.0, .unit = "mm",
+	 .help = "Wall to the outside: the first, uniform offset t (paper: 1.0). A common shell_mm "
+		 "> 0 replaces it."},
+	{.name = "wall_next_mm", .type = PARAM_NUM,
+	 .offset = offsetof(struct hollow_params, wall_next_mm), .min = 0.1, .max = 20, .def = 0.8,
+	 .unit = "mm", .help = "Walls between voids of successive rounds (paper: 0.8)."},
+	{.name = "opt_layer_mm", .type = PARAM_NUM,
+	 .offset = offsetof(struct hollow_params, opt_layer_mm), .min = 0.05, .max = 5, .def = 0.5,
+	 .unit = "mm",
+	 .help = "Slice spacing h of the optimisation (constraints eq. 3-6); rounded to a multiple "
+		 "of the offset stack's layer. Independent of the print layer_mm."},
+	{.name = "objective", .type = PARAM_ENUM,
+	 .offset = offsetof(struct hollow_params, objective), .def = 0, .choices = objective_names,
+	 .unit = "",
+	 .help = "lightweight: largest support-free voids (eq. 11); stability: move the centre of "
+		 "mass over the contact area (eq. 12-14)."},
+	{.name = "rounds", .type = PARAM_INT, .offset = offsetof(struct hollow_params, rounds),
+	 .min = 1, .max = 50, .def = 8, .unit = "",
+	 .help = "Most hollowing rounds (section 7.2); stops earlier when a round adds no void."},
+	{.name = "min_void_mm3", .type = PARAM_NUM,
+	 .offset = offsetof(struct hollow_params, min_void_mm3), .min = 0, .max = 1e9, .def = 8,
+	 .unit = "mm3", .help = "Voids smaller than this are not made (paper: 8 mm3)."},
+	{.name = "pixel_mm", .type = PARAM_NUM, .offset = offsetof(struct hollow_params, pixel_mm),
+	 .min = 0, .max = 1, .def = 0, .flags = PARAM_F_AUTO, .unit = "mm",
+	 .help = "Grid of the exact 3D offset; 0 = the resin printer's pixel, or 0.05 mm."},
+	{.name = "stack_layer_mm", .type = PARAM_NUM,
+	 .offset = offsetof(struct hollow_params, stack_layer_mm), .min = 0, .max = 1, .def = 0,
+	 .flags = PARAM_F_AUTO, .unit = "mm",
+	 .help = "Layer height of the offset stack; 0 = the print layer, at most 0.1 mm."},
+	{.name = "sample_mm", .type = PARAM_NUM, .offset = offsetof(struct hollow_params, sample_mm),
+	 .min = 0, .max = 5, .def = 0, .flags = PARAM_F_AUTO, .unit = "mm",
+	 .help = "Vertex spacing along the contours; 0 = half of opt_layer_mm * tan(alpha) "
+		 "(0.1..0.5 mm), so zigzag strip edges can meet eq. 5."},
+	{.name = "margin_deg", .type = PARAM_NUM,
+	 .offset = offsetof(struct hollow_params, margin_deg), .min = 0, .max = 10, .def = 0.5,
+	 .unit = "deg", .help = "Safety taken off alpha in the optimisation's constraints."},
+};
+
+/* stability: weight of the lightweight term once the part stands */
+#define HOLLOW_LIGHT_WEIGHT 0.05
+/* verification grid for outputs without pixels (G-code, meshes) */
+#define HOLLOW_VERIFY_PIXEL_MM 0.05
+
+struct hollow_state {
+	struct hl_outcome out;
+	struct slicer *slicer;       /* on out.mesh, for the layers */
+	struct verify *ver;
+	struct verify_report rep;
+	int verified;                /* rep is filled */
+	int layers_seen;
+	const struct raster_map *map; /* the driver's, when it wants pixels */
+	int antialias;
+	struct raster *own;          /* verification raster when the output has none */
+	struct raster_map own_map;
+	double layer_mm, alpha_deg, t_prepare, t_verify;
+	double min_wall_3d_mm;       /* void vertices to the outer surface */
+	struct hl_config cfg;
+	int objective;
+};
+
+static int hollow_validate(const void *params, const struct common_params *common,
+			   const struct printer *printer, struct err *e)
+{
+	const struct hollow_params *p = params;
+
+	(void)printer;
+	if (common->alpha_deg <= 0 || common->alpha_deg >= 90)
+		return ERR_FIELD(e, "alpha_deg", "hollow needs 0 < alpha_deg < 90 (got %g)",
+				 common->alpha_deg);
+	if (p->stack_layer_mm > 0 && p->opt_layer_mm < p->stack_layer_mm)
+		return ERR_FIELD(e, "opt_layer_mm",
+				 "opt_layer_mm (%g) must be at least stack_layer_mm (%g)",
+				 p->opt_layer_mm, p->stack_layer_mm);
+	return 0;
+}
+
+/* Pitch (mm) of one pixel step along image columns and rows of map m. */
+static void map_pitch(const struct raster_map *m, double *px, double *py)
+{
+	double det = m->a[0][0] * m->a[1][1] - m->a[0][1] * m->a[1][0];
+	/* columns of the inverse: mm per unit u and per unit v */
+	*px = hypot(m->a[1][1], m->a[1][0]) / fabs(det);
+	*py = hypot(m->a[0][1], m->a[0][0]) / fabs(det);
+}
+
+static int start_verify(struct hollow_state *s, const struct mesh *m, struct err *e)
+{
+	struct verify_params vp;
+	struct box3 bb = box3_empty();
+
+	memset(&vp, 0, sizeof vp);
+	vp.layer_mm = s->layer_mm;
+	vp.alpha_deg = s->alpha_deg;
+	if (s->map) {
+		map_pitch(s->map, &vp.pixel_x_mm, &vp.pixel_y_mm);
+	} else {
+		double p = HOLLOW_VERIFY_PIXEL_MM;
+		int w, h;
+		for (size_t i = 0; i < m->nv; i++)
+			box3_add(&bb, m->v[i]);
+		w = (int)ceil((bb.hi.x - bb.lo.x) / p) + 8;
+		h = (int)ceil((bb.hi.y - bb.lo.y) / p) + 8;
+		if (w > 65535 || h > 65535)
+			return ERR_SET(e, ERR_LIMIT, "hollow: part too wide to verify at %g mm", p);
+		s->own = raster_new(w, h);
+		if (!s->own)
+			return ERR_SET(e, ERR_NOMEM, "hollow: out of memory");
+		memset(&s->own_map, 0, sizeof s->own_map);
+		s->own_map.a[0][0] = 1 / p;
+		s->own_map.a[1][1] = 1 / p;
+		s->own_map.b[0] = -(bb.lo.x - 4 * p) / p;
+		s->own_map.b[1] = -(bb.lo.y - 4 * p) / p;
+		vp.pixel_x_mm = vp.pixel_y_mm = p;
+	}
+	return verify_new(&vp, &s->ver, e);
+}
+
+/* Smallest distance (mm) from any void vertex to the part's outer surface:
+ * an independent 3D measure of the wall to the outside. */
+static int min_wall_3d(const struct mesh *part, const struct mesh *res, double *out,
+		       struct err *e)
+{
+	struct mesh_bvh *b = NULL;
+	double d = INFINITY;
+	int rc = mesh_bvh_new(part, &b, e);
+
+	if (rc)
+		return rc;
+	for (size_t i = part->nv; i < res->nv; i++)
+		d = fmin(d, mesh_bvh_closest(b, res->v[i], NULL, NULL));
+	mesh_bvh_free(b);
+	*out = d;
+	return 0;
+}
+
+static void hollow_release(void *state);
+
+static int hollow_prepare(const struct engine_ctx *ctx, const void *params, void **out,
+			  struct err *e)
+{
+	const struct hollow_params *p = params;
+	struct hollow_state *s;
+	struct hl_config *c;
+	double t0 = progress_now_s(), h;
+	int rc;
+
+	if (!ctx->mesh)
+		return ERR_SET(e, ERR_INTERNAL, "the hollow engine needs a mesh");
+	s = mem_calloc(1, sizeof *s);
+	if (!s)
+		return ERR_SET(e, ERR_NOMEM, "out of memory");
+	s->layer_mm = ctx->layer_mm;
+	s->alpha_deg = ctx->common->alpha_deg;
+	s->map = ctx->want_raster ? ctx->map : NULL;
+	s->antialias = ctx->printer && ctx->printer->kind == PRINTER_RESIN ? ctx->printer->resin.antialias : 1;
+	s->objective = p->objective;
+	c = &s->cfg;
+	c->wall_mm = ctx->common->shell_mm > 0 ? ctx->common->shell_mm : p->wall_mm;
+	c->wall_next_mm = p->wall_next_mm;
+	c->stack_layer_mm = p->stack_layer_mm > 0 ? p->stack_layer_mm : fmin(ctx->layer_mm, 0.1);
+	c->opt_layer_mm = fmax(p->opt_layer_mm, c->stack_layer_mm);
+	c->pixel_mm = p->pixel_mm > 0 ? p->pixel_mm
+		      : ctx->map     ? sqrt(raster_map_pixel_area_mm2(ctx->map))
+				     : HOLLOW_VERIFY_PIXEL_MM;
+	c->alpha_rad = s->alpha_deg * M_PI / 180;
+	c->margin_rad = p->margin_deg * M_PI / 180;
+	if (c->margin_rad >= 0.5 * c->alpha_rad)
+		c->margin_rad = 0.5 * c->alpha_rad;
+	h = lround(c->opt_layer_mm / c->stack_layer_mm) * c->stack_layer_mm;
+	c->sample_mm = p->sample_mm > 0 ? p->sample_mm
+					: fmin(0.5, fmax(0.1, 0.5 * h * tan(c->alpha_rad - c->margin_rad)));
+	c->min_void_mm3 = p->min_void_mm3;
+	c->rounds = p->rounds;
+	c->threads = ctx->threads > 0 ? ctx->threads : 1;
+	c->objective = p->objective == 1 ? HL_OBJ_STABILITY : HL_OBJ_LIGHTWEIGHT;
+	c->light_weight = HOLLOW_LIGHT_WEIGHT;
+	c->print_layer_mm = ctx->layer_mm;
+	rc = hl_run(ctx->mesh, c, ctx->progress, &s->out, e);
+	if (!rc)
+		rc = min_wall_3d(ctx->mesh, s->out.mesh, &s->min_wall_3d_mm, e);
+	if (!rc)
+		rc = slice_new(s->out.mesh, &s->slicer, e);
+	if (!rc)
+		rc = start_verify(s, s->out.mesh, e);
+	if (rc) {
+		hollow_release(s);
+		return rc;
+	}
+	s->t_prepare = progress_now_s() - t0;
+	*out = s;
+	return 0;
+}
+
+static int hollow_layer(void *state, struct layer *ly, struct err *e)
+{
+	struct hollow_state *s = state;
+	double t0;
+	int rc;
+
+	rc = slice_at(s->slicer, ly->z_mm, &ly->region, NULL, e);
+	if (rc)
+		return rc;
+	/* the material left is designed: deposit all of it */
+	ly->fill = s->out.voids ? LAYER_FILL_SOLID : LAYER_FILL_PART;
+	t0 = progress_now_s();
+	if (ly->raster && s->map) {
+		/* render it here, as the writer would, so the check sees the
+		 * very pixels that are written */
+		rc = slice_rasterize(&ly->region, s->map, s->antialias, ly->raster, e);
+		if (rc)
+			return rc;
+		ly->raster_ready = 1;
+		rc = verify_layer(s->ver, ly->raster, e);
+	} else {
+		raster_clear(s->own);
+		rc = slice_rasterize(&ly->region, &s->own_map, 0, s->own, e);
+		if (!rc)
+			rc = verify_layer(s->ver, s->own, e);
+	}
+	s->layers_seen++;
+	s->t_verify += progress_now_s() - t0;
+	return rc;
+}
+
+/* Mesh outputs produce no layers: check the mesh's own print layers. */
+static int verify_offline(struct hollow_state *s, struct err *e)
+{
+	struct box3 bb = box3_empty();
+	int n, rc = 0;
+
+	for (size_t i = 0; i < s->out.mesh->nv; i++)
+		box3_add(&bb, s->out.mesh->v[i]);
+	n = layer_count_for(bb.hi.z, s->layer_mm);
+	for (int k = 0; k < n && !rc; k++) {
+		struct layer ly;
+		memset(&ly, 0, sizeof ly);
+		paths_init(&ly.region);
+		layer_place(&ly, k, n, s->layer_mm);
+		rc = hollow_layer(s, &ly, e);
+		paths_fini(&ly.region);
+	}
+	return rc;
+}
+
+static int hollow_metrics(void *state, struct metrics *m, struct err *e)
+{
+	struct hollow_state *s = state;
+	const struct hl_outcome *o = &s->out;
+	int rc = 0;
+
+	if (!s->verified) {
+		if (s->layers_seen == 0) {
+			/* the layer pass ran on a pixel map of the driver's: a mesh
+			 * output had none, so use the own grid */
+			if (s->map) {
+				verify_free(s->ver);
+				s->ver = NULL;
+				s->map = NULL;
+				rc = start_verify(s, o->mesh, e);
+				if (rc)
+					return rc;
+			}
+			rc = verify_offline(s, e);
+			if (rc)
+				return rc;
+		}
+		rc = verify_finish(s->ver, &s->rep, e);
+		if (rc)
+			return rc;
+		s->verified = 1;
+	}
+	rc |= metrics_int(m, "hollow.voids", (long long)o->voids);
+	rc |= metrics_int(m, "hollow.rounds", o->rounds);
+	rc |= metrics_num(m, "hollow.volume_reduction",
+			  o->part_volume_mm3 > 0 ? o->void_volume_mm3 / o->part_volume_mm3 : 0);
+	rc |= metrics_num(m, "hollow.void_volume_mm3", o->void_volume_mm3);
+	rc |= metrics_num(m, "hollow.part_volume_mm3", o->part_volume_mm3);
+	rc |= metrics_num(m, "hollow.interior_overhang_mm2", s->rep.interior_overhang_mm2);
+	rc |= metrics_num(m, "hollow.min_wall_mm", fmin(s->rep.min_wall_mm, s->min_wall_3d_mm));
+	rc |= metrics_num(m, "hollow.min_wall_3d_mm", s->min_wall_3d_mm);
+	rc |= metrics_num(m, "hollow.wall_mm", s->cfg.wall_mm);
+	rc |= metrics_num(m, "hollow.wall_next_mm", s->cfg.wall_next_mm);
+	rc |= metrics_num(m, "hollow.alpha_deg", s->alpha_deg);
+	rc |= metrics_num(m, "hollow.opt_layer_mm", o->opt_layer_mm);
+	rc |= metrics_num(m, "hollow.sample_mm", o->sample_mm);
+	rc |= metrics_str(m, "hollow.objective", objective_names[s->objective]);
+	rc |= metrics_int(m, "hollow.solver_iterations", o->iterations);
+	rc |= metrics_int(m, "hollow.voids_fallback", (long long)o->voids_fallback);
+	rc |= metrics_int(m, "hollow.groups_failed", (long long)o->groups_failed);
+	rc |= metrics_int(m, "hollow.groups_small", (long long)o->groups_small);
+	rc |= metrics_num(m, "hollow.seconds.offset", o->s_offset);
+	rc |= metrics_num(m, "hollow.seconds.groups", o->s_groups);
+	rc |= metrics_num(m, "hollow.seconds.optimise", o->s_solve);
+	rc |= metrics_num(m, "hollow.seconds.mesh", o->s_mesh);
+	rc |= metrics_num(m, "hollow.seconds.prepare", s->t_prepare);
+	rc |= metrics_num(m, "hollow.seconds.verify", s->t_verify);
+	if (o->note[0])
+		rc |= metrics_str(m, "hollow.note", o->note);
+	if (o->has_com) {
+		rc |= metrics_num(m, "hollow.com_before_mm", o->com_before_mm);
+		rc |= metrics_num(m, "hollow.com_after_mm", o->com_after_mm);
+		rc |= metrics_bool(m, "hollow.stands_before", o->stands_before);
+		rc |= metrics_bool(m, "hollow.com_inside_hull", o->com_inside);
+		rc |= metrics_num(m, "hollow.hull_offset_mm", o->hull_offset_mm);
+	}
+	if (rc)
+		return ERR_SET(e, ERR_NOMEM, "out of memory recording metrics");
+	return verify_report_metrics(&s->rep, "hollow.verify", m, e);
+}
+
+static int hollow_result_mesh(void *state, const struct mesh **out, struct err *e)
+{
+	struct hollow_state *s = state;
+
+	(void)e;
+	*out = s->out.mesh;
+	return 0;
+}
+
+static void hollow_release(void *state)
+{
+	struct hollow_state *s = state;
+
+	if (!s)
+		return;
+	hl_outcome_fini(&s->out);
+	slice_free(s->slicer);
+	verify_free(s->ver);
+	verify_report_fini(&s->rep);
+	raster_free(s->own);
+	mem_free(s);
+}
+
+const struct engine_ops hollow_engine = {
+	.name = "hollow",
+	.summary = "Support-free hollowing: voids that print without inner supports, for weight "
+		   "or for standing.",
+	.paper = "W. Wang, Y.-J. Liu, J. Wu, S. Tian, C. C. L. Wang, L. Liu, X. Liu: Support-Free "
+		 "Hollowing. IEEE TVCG 24(10), 2018.",
+	.params = {"hollow", hollow_desc, sizeof hollow_desc / sizeof hollow_desc[0]},
+	.params_size = sizeof(struct hollow_params),
+	.flags = ENGINE_F_MESH_OUTPUT,
+	.prepare_share = 0.8,
+	.validate = hollow_validate,
+	.prepare = hollow_prepare,
+	.layer = hollow_layer,
+	.metrics = hollow_metrics,
+	.result_mesh = hollow_result_mesh,
+	.release = hollow_release,
+};

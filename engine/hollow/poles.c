@@ -1,0 +1,136 @@
+/* poles.c - shifting directions and upper bounds from Voronoi poles
+ * (paper 004, section 6, eq. 8-10; derivation in docs/hollow.md).
+ *
+ * The samples of a loop are triangulated (Delaunay, exact predicates); the
+ * Voronoi cell of sample v has the circumcentres of v's triangles as its
+ * corners.  The inner pole is the farthest corner that lies inside the
+ * loop: for a dense sample it approximates the centre of the largest
+ * empty disc touching v (the medial axis).  r = (pole - v) / |pole - v|
+ * points into the void region; the ray from v along r leaves the convex
+ * cell exactly at the pole, so l^U = |pole - v| (eq. 9).  Staying inside
+ * its own cell keeps every shifted vertex apart from the others, which is
+ * what makes the shrunk loop free of self-intersections.  The truncated
+ * Laplacian pass (eq. 10) is hl_bounds_smooth(): the caller skips it for a
+ * void's top loop, which must be able to collapse onto its medial axis.
+ * Cost: O(n log n) triangulation plus O(n * n) point-in-loop tests for the
+ * ~2n circumcentres (n = a loop's samples, a few hundred).
+ */
+#include <math.h>
+#include <string.h>
+
+#include "engine/core/err.h"
+#include "engine/core/mem.h"
+#include "engine/geom/delaunay.h"
+#include "engine/hollow/hollow_int.h"
+
+/* Crossing-number point-in-polygon for the loop xy (n vertices). */
+static int inside_loop(const double *xy, size_t n, double x, double y)
+{
+	int in = 0;
+
+	for (size_t i = 0, j = n - 1; i < n; j = i++) {
+		double xi = xy[2 * i], yi = xy[2 * i + 1], xj = xy[2 * j], yj = xy[2 * j + 1];
+		if ((yi > y) != (yj > y) && x < (xj - xi) * (y - yi) / (yj - yi) + xi)
+			in = !in;
+	}
+	return in;
+}
+
+/* Inward unit normal at vertex j from its two edges (fallback direction). */
+static void bisector_in(const double *xy, size_t n, size_t j, double *rx, double *ry)
+{
+	size_t a = (j + n - 1) % n, b = (j + 1) % n;
+	double e1x = xy[2 * j] - xy[2 * a], e1y = xy[2 * j + 1] - xy[2 * a + 1];
+	double e2x = xy[2 * b] - xy[2 * j], e2y = xy[2 * b + 1] - xy[2 * j + 1];
+	double l1 = hypot(e1x, e1y), l2 = hypot(e2x, e2y);
+	/* left normal of a counter-clockwise edge points into the loop */
+	double nx = (l1 > 0 ? -e1y / l1 : 0) + (l2 > 0 ? -e2y / l2 : 0);
+	double ny = (l1 > 0 ? e1x / l1 : 0) + (l2 > 0 ? e2x / l2 : 0);
+	double l = hypot(nx, ny);
+
+	*rx = l > 0 ? nx / l : 0;
+	*ry = l > 0 ? ny / l : 0;
+}
+
+int hl_poles(const double *xy, size_t n, double *dir, double *ub, struct err *e)
+{
+	struct delaunay dt;
+	struct pt2 *pts = NULL;
+	double *cc = NULL, *raw = NULL;
+	signed char *cin = NULL;
+	uint32_t fan[512];
+	int rc = 0;
+
+	delaunay_init(&dt);
+	pts = mem_alloc(n * sizeof *pts);
+	raw = mem_alloc(n * sizeof *raw);
+	if (!pts || !raw)
+		goto nomem;
+	for (size_t j = 0; j < n; j++) {
+		pts[j].x = geom_mm_to_nm(xy[2 * j]);
+		pts[j].y = geom_mm_to_nm(xy[2 * j + 1]);
+	}
+	rc = delaunay_build(pts, n, &dt, e);
+	if (rc)
+		goto out;
+	cc = mem_alloc((dt.nt ? dt.nt : 1) * 2 * sizeof *cc);
+	cin = mem_alloc(dt.nt ? dt.nt : 1);
+	if (!cc || !cin)
+		goto nomem;
+	memset(cin, -1, dt.nt ? dt.nt : 1); /* -1 = not yet classified */
+	for (size_t j = 0; j < n; j++) {
+		int closed;
+		uint32_t v = dt.dup[j];
+		size_t nf = delaunay_fan(&dt, v, fan, sizeof fan / sizeof fan[0], &closed);
+		double best = -1, bx = 0, by = 0;
+
+		for (size_t k = 0; k < nf; k++) {
+			uint32_t t = fan[k];
+			double d;
+			if (cin[t] < 0) {
+				delaunay_circumcenter_mm(&dt, pts, t, &cc[2 * t], &cc[2 * t + 1]);
+				cin[t] = (signed char)inside_loop(xy, n, cc[2 * t], cc[2 * t + 1]);
+			}
+			if (!cin[t])
+				continue;
+			d = hypot(cc[2 * t] - xy[2 * j], cc[2 * t + 1] - xy[2 * j + 1]);
+			if (d > best) {
+				best = d;
+				bx = cc[2 * t];
+				by = cc[2 * t + 1];
+			}
+		}
+		if (best > 0 && v == j) {
+			dir[2 * j] = (bx - xy[2 * j]) / best;
+			dir[2 * j + 1] = (by - xy[2 * j + 1]) / best;
+			raw[j] = best;
+		} else {
+			/* no inner Voronoi corner (or a repeated sample): keep the
+			 * vertex fixed, pointing along the inward bisector */
+			bisector_in(xy, n, j, &dir[2 * j], &dir[2 * j + 1]);
+			raw[j] = 0;
+		}
+	}
+	memcpy(ub, raw, n * sizeof *ub);
+	goto out;
+nomem:
+	rc = ERR_SET(e, ERR_NOMEM, "voronoi poles of %zu samples: out of memory", n);
+out:
+	delaunay_fini(&dt);
+	mem_free(pts);
+	mem_free(cc);
+	mem_free(cin);
+	mem_free(raw);
+	return rc;
+}
+
+void hl_bounds_smooth(double *ub, size_t n, double *tmp)
+{
+	/* eq. 10, one Jacobi pass: l^U_j = min(l^U_j, (l^U_{j-1} + l^U_{j+1}) / 2).
+	 * Repeating it would converge to the loop's minimum bound. */
+	memcpy(tmp, ub, n * sizeof *tmp);
+	for (size_t j = 0; j < n; j++) {
+		double avg = 0.5 * (tmp[(j + n - 1) % n] + tmp[(j + 1) % n]);
+		ub[j] = tmp[j] < avg ? tmp[j] : avg;
+	}
+}

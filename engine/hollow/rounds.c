@@ -1,0 +1,574 @@
+/* rounds.c - repeated support-free hollowing (paper 004, sections 3 and
+ * 7.2; docs/hollow.md "Pipeline").
+ *
+ * Round r works on the solid S_r (the part, then the part minus the voids
+ * of earlier rounds, as one mesh: outer surface + void surfaces):
+ *  1. uniform offset: S_r eroded by a ball of radius t_r (t_1 = wall_mm,
+ *     later wall_next_mm) with the exact 3D eroder of slice/erode.h; in
+ *     later rounds intersected with round 1's offset, so the shell to the
+ *     outside never gets thinner than wall_mm;
+ *  2. the offset sampled at optimisation slices (every m-th layer of the
+ *     eroded stack) and turned into loops (contour.c);
+ *  3. loops grouped into chains (group.c) and chains into voids with
+ *     strips that keep clear of S_r (void.c, strip.c; a triangle closer
+ *     than t_r / 2 to S_r's surface is refused);
+ *  4. every void optimised (solve.c, nlp.c); voids under min_void_mm3
+ *     dropped;
+ *  5. the kept voids appended to the result mesh, which is S_{r+1}.
+ * Stop when a round keeps no void or after `rounds` rounds.
+ */
+#include "engine/hollow/rounds.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+
+#include "engine/core/err.h"
+#include "engine/core/mem.h"
+#include "engine/core/progress.h"
+#include "engine/geom/clip.h"
+#include "engine/geom/polytri.h"
+#include "engine/hollow/hollow_int.h"
+#include "engine/hollow/solve.h"
+#include "engine/hollow/void.h"
+#include "engine/mesh/mesh.h"
+#include "engine/slice/erode.h"
+#include "engine/slice/layer.h"
+#include "engine/slice/slice.h"
+
+void hl_outcome_fini(struct hl_outcome *o)
+{
+	mesh_free(o->mesh);
+	memset(o, 0, sizeof *o);
+}
+
+void hl_mesh_mass(const struct mesh *m, double *vol, double com[3])
+{
+	double V = 0, M[3] = {0, 0, 0};
+
+	for (size_t t = 0; t < m->nt; t++) {
+		struct vec3 a = m->v[m->tri[3 * t]], b = m->v[m->tri[3 * t + 1]],
+			    c = m->v[m->tri[3 * t + 2]];
+		/* signed tetrahedron (origin, a, b, c): volume and centroid */
+		double v6 = v3_dot(a, v3_cross(b, c));
+		V += v6 / 6;
+		M[0] += v6 / 6 * (a.x + b.x + c.x) / 4;
+		M[1] += v6 / 6 * (a.y + b.y + c.y) / 4;
+		M[2] += v6 / 6 * (a.z + b.z + c.z) / 4;
+	}
+	*vol = V;
+	for (int i = 0; i < 3; i++)
+		com[i] = V != 0 ? M[i] / V : 0;
+}
+
+int hl_contact_hull(const struct mesh *part, double layer_mm, struct hull_pt **h, size_t *n,
+		    struct err *e)
+{
+	struct slicer *s = NULL;
+	struct paths reg;
+	struct pt2 *pts = NULL;
+	size_t np, k = 0;
+	int rc;
+
+	*h = NULL;
+	*n = 0;
+	paths_init(&reg);
+	rc = slice_new(part, &s, e);
+	if (!rc)
+		rc = slice_at(s, 0.5 * layer_mm, &reg, NULL, e);
+	if (rc)
+		goto out;
+	np = paths_point_count(&reg);
+	pts = mem_alloc((np ? np : 1) * sizeof *pts);
+	if (!pts) {
+		rc = ERR_SET(e, ERR_NOMEM, "hollow: out of memory");
+		goto out;
+	}
+	for (size_t i = 0; i < reg.n; i++)
+		for (size_t j = 0; j < reg.v[i].n; j++)
+			pts[k++] = reg.v[i].pts[j];
+	rc = hull_convex(pts, k, h, n, e);
+	if (!rc && *n < 3) {
+		mem_free(*h);
+		*h = NULL;
+		*n = 0;
+	}
+out:
+	slice_free(s);
+	paths_fini(&reg);
+	mem_free(pts);
+	return rc;
+}
+
+/* ---- strip triangles must keep clear of the current solid's surface ---- */
+
+struct block_ctx {
+	const struct mesh_bvh *bvh;
+	double wall_mm, pixel_mm, min_mm;
+};
+
+/* Loop vertices lie at >= wall - pixel from the surface (they come from
+ * the offset), and the distance to the surface is 1-Lipschitz, so every
+ * point of a triangle keeps >= wall - pixel - rho, rho the largest
+ * distance from a point of the triangle to its nearest corner (the
+ * circumradius for an acute triangle, half the longest edge otherwise).
+ * When that clears min_mm no query is needed (the common case: strip
+ * triangles are about h by s).  Otherwise the distance is sampled on a
+ * barycentric grid of step <= wall / 2: every point then lies within
+ * wall / (2 sqrt 3) < 0.29 wall of a sample, so a triangle passing this
+ * test (min_mm = wall / 2) never crosses the surface and keeps > 0.2 wall
+ * from it. */
+static int blocked(void *vctx, struct vec3 a, struct vec3 b, struct vec3 c)
+{
+	const struct block_ctx *x = vctx;
+	double la = v3_dist(b, c), lb = v3_dist(c, a), lc = v3_dist(a, b);
+	double L = fmax(la, fmax(lb, lc)), rho;
+	double area2 = v3_len(v3_cross(v3_sub(b, a), v3_sub(c, a)));
+	int n;
+
+	/* acute iff the longest edge's square is below the sum of the others' */
+	if (2 * L * L < la * la + lb * lb + lc * lc && area2 > 0)
+		rho = la * lb * lc / (2 * area2); /* circumradius abc / (4 A) */
+	else
+		rho = 0.5 * L;
+	if (x->wall_mm - x->pixel_mm - rho >= x->min_mm)
+		return 0;
+	n = (int)ceil(L / (0.5 * x->wall_mm));
+	if (n < 1)
+		n = 1;
+	if (n > 16)
+		return 1; /* a triangle this long is no part of a sensible strip */
+	for (int i = 0; i <= n; i++)
+		for (int j = 0; i + j <= n; j++) {
+			double u = (double)i / n, w = (double)j / n;
+			struct vec3 p = v3_add(v3_add(v3_scale(a, 1 - u - w), v3_scale(b, u)),
+					       v3_scale(c, w));
+			if (mesh_bvh_closest(x->bvh, p, NULL, NULL) < x->min_mm)
+				return 1;
+		}
+	return 0;
+}
+
+/* ---- the eroded stack pulls layers of the current solid ---- */
+
+struct src_ctx {
+	struct slicer *s;
+	double layer_mm;
+};
+
+static int src_layer(void *ctx, int k, struct paths *region, struct err *e)
+{
+	struct src_ctx *c = ctx;
+
+	return slice_at(c->s, (k + 0.5) * c->layer_mm, region, NULL, e);
+}
+
+/* ---- result mesh ---- */
+
+/* Append void v (offsets v->l) to m: its vertices, strips, and both caps
+ * (floor: normal +z into the void; ceiling reversed: -z). */
+static int append_void(struct mesh *m, const struct hl_void *v, struct err *e)
+{
+	uint32_t base = (uint32_t)m->nv;
+	size_t cap_n = 0;
+	uint32_t *ct = NULL;
+	double *xy = NULL;
+	int rc = 0;
+
+	if (m->nv + v->nv > MESH_MAX_VERTICES)
+		return ERR_SET(e, ERR_LIMIT, "hollow: result mesh over %u vertices",
+			       MESH_MAX_VERTICES);
+	for (size_t j = 0; j < v->nv; j++)
+		if (mesh_add_vertex(m, hl_void_pos(v, j, v->l[j])))
+			goto nomem;
+	for (size_t t = 0; t < v->nt; t++)
+		if (mesh_add_triangle(m, base + v->tri[3 * t], base + v->tri[3 * t + 1],
+				      base + v->tri[3 * t + 2]))
+			goto nomem;
+	for (int cap = 0; cap < 2; cap++) {
+		size_t k = cap == 0 ? 0 : v->nloops - 1, o = v->off[k], n = v->off[k + 1] - o;
+		if (n > cap_n) {
+			mem_free(ct);
+			mem_free(xy);
+			ct = mem_alloc(3 * n * sizeof *ct);
+			xy = mem_alloc(2 * n * sizeof *xy);
+			cap_n = n;
+			if (!ct || !xy)
+				goto nomem;
+		}
+		for (size_t j = 0; j < n; j++) {
+			struct vec3 p = hl_void_pos(v, o + j, v->l[o + j]);
+			xy[2 * j] = p.x;
+			xy[2 * j + 1] = p.y;
+		}
+		rc = polytri_ears(xy, n, ct, e);
+		if (rc)
+			goto out;
+		for (size_t t = 0; t + 2 < n; t++) {
+			uint32_t a = base + (uint32_t)(o + ct[3 * t]), b = base + (uint32_t)(o + ct[3 * t + 1]),
+				 c = base + (uint32_t)(o + ct[3 * t + 2]);
+			if (cap == 0 ? mesh_add_triangle(m, a, b, c) : mesh_add_triangle(m, a, c, b))
+				goto nomem;
+		}
+	}
+	goto out;
+nomem:
+	rc = ERR_SET(e, ERR_NOMEM, "hollow: out of memory building the result mesh");
+out:
+	mem_free(ct);
+	mem_free(xy);
+	return rc;
+}
+
+/* ---- one round ---- */
+
+struct round_in {
+	const struct hl_config *c;
+	const struct mesh *solid; /* S_r */
+	double wall;              /* t_r */
+	int m;                    /* stack layers per optimisation slice */
+	int nslices;              /* optimisation slices */
+	int stack_count;
+	struct paths *base;       /* round 1 offset per slice (rounds >= 2), or NULL */
+	struct paths *keep;       /* round 1: receives the offset per slice */
+	const struct hl_nlp_opts *nlp;
+};
+
+static void slices_fini(struct hl_slice *sl, size_t n)
+{
+	if (!sl)
+		return;
+	for (size_t k = 0; k < n; k++) {
+		for (size_t i = 0; i < sl[k].n; i++)
+			hl_loop_fini(&sl[k].loop[i]);
+		mem_free(sl[k].loop);
+	}
+	mem_free(sl);
+}
+
+static void voids_fini(struct hl_void *v, size_t n)
+{
+	for (size_t i = 0; v && i < n; i++)
+		hl_void_fini(&v[i]);
+	mem_free(v);
+}
+
+/* Steps 1-3: the voids of one round, unoptimised. */
+static int round_voids(const struct round_in *in, struct hl_outcome *o, struct hl_void **vout,
+		       size_t *nvout, struct err *e)
+{
+	const struct hl_config *c = in->c;
+	struct slicer *ss = NULL;
+	struct slice_eroder *er = NULL;
+	struct mesh_bvh *bvh = NULL;
+	struct hl_slice *sl = NULL;
+	struct hl_void *vv = NULL;
+	size_t nvv = 0, vcap = 0;
+	int **up = NULL, **down = NULL;
+	struct paths reg, tmp;
+	struct box3 bb = box3_empty();
+	double t0 = progress_now_s();
+	int rc;
+
+	paths_init(&reg);
+	paths_init(&tmp);
+	for (size_t i = 0; i < in->solid->nv; i++)
+		box3_add(&bb, in->solid->v[i]);
+	rc = slice_new(in->solid, &ss, e);
+	if (rc)
+		goto out;
+	{
+		struct slice_erode_params ep;
+		struct src_ctx sc = {ss, c->stack_layer_mm};
+		struct slice_erode_source src = {src_layer, &sc};
+		memset(&ep, 0, sizeof ep);
+		ep.r_mm = in->wall;
+		ep.pixel_mm = c->pixel_mm;
+		ep.layer_mm = c->stack_layer_mm;
+		ep.layer_count = in->stack_count;
+		ep.x0_mm = bb.lo.x;
+		ep.y0_mm = bb.lo.y;
+		ep.x1_mm = bb.hi.x;
+		ep.y1_mm = bb.hi.y;
+		/* sc lives on this stack frame for the whole erosion below */
+		rc = slice_erode_new(&ep, &src, &er, e);
+		if (rc)
+			goto out;
+		sl = mem_calloc((size_t)in->nslices + 1, sizeof *sl);
+		if (!sl)
+			goto nomem;
+		for (int k = 0; k < in->nslices; k++) {
+			int j = in->m * k + in->m / 2;
+			struct hl_contour_params cp = {c->sample_mm, c->wall_next_mm,
+						       4 * c->sample_mm * c->sample_mm};
+			rc = slice_erode_layer(er, j, &reg, e);
+			if (rc)
+				goto out;
+			if (in->keep) {
+				rc = paths_copy(&in->keep[k], &reg);
+				if (rc) {
+					rc = ERR_SET(e, ERR_NOMEM, "hollow: out of memory");
+					goto out;
+				}
+			}
+			if (in->base && reg.n) {
+				rc = clip_boolean(CLIP_INTERSECTION, &reg, &in->base[k],
+						  CLIP_FILL_NONZERO, &tmp, e);
+				if (rc)
+					goto out;
+				paths_fini(&reg);
+				reg = tmp;
+				paths_init(&tmp);
+			}
+			if (!reg.n)
+				continue;
+			rc = hl_contours_from_region(&reg, k, (j + 0.5) * c->stack_layer_mm, &cp,
+						     &sl[k], e);
+			if (rc)
+				goto out;
+		}
+	}
+	o->s_offset += progress_now_s() - t0;
+	t0 = progress_now_s();
+	/* groups: chains of mutually best links */
+	rc = hl_group_links(sl, (size_t)in->nslices, 0.5, &up, e);
+	if (rc)
+		goto out;
+	down = mem_calloc((size_t)in->nslices + 1, sizeof *down);
+	if (!down)
+		goto nomem;
+	for (int k = 0; k < in->nslices; k++) {
+		down[k] = mem_alloc((sl[k].n + 1) * sizeof **down);
+		if (!down[k])
+			goto nomem;
+		for (size_t a = 0; a < sl[k].n; a++)
+			down[k][a] = -1;
+	}
+	for (int k = 0; k + 1 < in->nslices; k++)
+		for (size_t a = 0; a < sl[k].n; a++)
+			if (up[k][a] >= 0)
+				down[k + 1][up[k][a]] = (int)a;
+	rc = mesh_bvh_new(in->solid, &bvh, e);
+	if (rc)
+		goto out;
+	{
+		struct block_ctx bx = {bvh, in->wall, c->pixel_mm, 0.5 * in->wall};
+		struct hl_block blk = {blocked, &bx};
+		const struct hl_loop **chain = mem_alloc(((size_t)in->nslices + 1) * sizeof *chain);
+		if (!chain)
+			goto nomem;
+		for (int k = 0; k < in->nslices; k++)
+			for (size_t a = 0; a < sl[k].n; a++) {
+				size_t len = 0, pos = 0;
+				if (down[k][a] >= 0)
+					continue; /* not the bottom of a chain */
+				for (int kk = k, aa = (int)a; aa >= 0 && kk < in->nslices;
+				     aa = kk + 1 < in->nslices ? up[kk][aa] : -1, kk++)
+					chain[len++] = &sl[kk].loop[aa];
+				while (pos + 1 < len) {
+					size_t used = 0;
+					struct hl_void V;
+					void *arr;
+					hl_void_init(&V);
+					rc = hl_void_build(chain + pos, len - pos, &blk, &V, &used, e);
+					if (rc < 0) {
+						mem_free(chain);
+						goto out;
+					}
+					pos += used > 0 ? used : 1;
+					if (rc == 1)
+						continue;
+					arr = vv;
+					if (mem_grow(&arr, &vcap, nvv + 1, sizeof *vv)) {
+						hl_void_fini(&V);
+						mem_free(chain);
+						goto nomem;
+					}
+					vv = arr;
+					vv[nvv++] = V;
+				}
+			}
+		mem_free(chain);
+		rc = 0;
+	}
+	o->s_groups += progress_now_s() - t0;
+	*vout = vv;
+	*nvout = nvv;
+	vv = NULL;
+	nvv = 0;
+	goto out;
+nomem:
+	rc = ERR_SET(e, ERR_NOMEM, "hollow: out of memory");
+out:
+	voids_fini(vv, nvv);
+	hl_links_free(up, (size_t)in->nslices);
+	hl_links_free(down, (size_t)in->nslices);
+	slices_fini(sl, (size_t)in->nslices);
+	mesh_bvh_free(bvh);
+	slice_erode_free(er);
+	slice_free(ss);
+	paths_fini(&reg);
+	paths_fini(&tmp);
+	return rc;
+}
+
+int hl_run(const struct mesh *part, const struct hl_config *c, struct progress *prog,
+	   struct hl_outcome *o, struct err *e)
+{
+	struct hl_outcome res;
+	struct hl_nlp_opts nlp;
+	struct paths *base = NULL;
+	struct hull_pt *hull = NULL, *target = NULL;
+	size_t nhull = 0, ntarget = 0;
+	struct box3 bb = box3_empty();
+	double com[3];
+	int rc = 0, m, stack_count, nslices;
+
+	memset(&res, 0, sizeof res);
+	for (size_t i = 0; i < part->nv; i++)
+		box3_add(&bb, part->v[i]);
+	m = (int)lround(c->opt_layer_mm / c->stack_layer_mm);
+	if (m < 1)
+		m = 1;
+	stack_count = layer_count_for(bb.hi.z, c->stack_layer_mm);
+	if (stack_count < 1)
+		return ERR_SET(e, ERR_LIMIT, "hollow: %.2f mm at %g mm stack layers is too many layers",
+			       bb.hi.z, c->stack_layer_mm);
+	nslices = (stack_count - 1 - m / 2) / m + 1;
+	res.opt_layer_mm = m * c->stack_layer_mm;
+	res.sample_mm = c->sample_mm;
+	res.mesh = mesh_clone(part);
+	if (!res.mesh)
+		return ERR_SET(e, ERR_NOMEM, "hollow: out of memory copying the part");
+	hl_mesh_mass(part, &res.part_volume_mm3, com);
+
+	memset(&nlp, 0, sizeof nlp);
+	nlp.alpha_rad = c->alpha_rad - c->margin_rad;
+	nlp.h_mm = res.opt_layer_mm;
+	nlp.ceil_eps_mm2 = 1e-5;
+	nlp.gate_tau = 1e-3;
+	nlp.max_iter = 400;
+	nlp.max_outer = 4;
+	nlp.objective = c->objective;
+	nlp.light_weight = c->light_weight;
+	if (c->objective == HL_OBJ_STABILITY) {
+		double rho;
+		struct hull_pt q = {com[0], com[1]};
+		rc = hl_contact_hull(part, c->print_layer_mm, &hull, &nhull, e);
+		if (rc)
+			goto out;
+		if (nhull < 3) {
+			snprintf(res.note, sizeof res.note, "no contact area found on the first layer");
+		} else {
+			rho = hull_inradius_mm(hull, nhull, NULL);
+			res.has_com = 1;
+			res.hull_offset_mm = 0.5 * rho;
+			res.com_before_mm = hull_signed_distance_mm(hull, nhull, q);
+			res.stands_before = res.com_before_mm > 0;
+			/* target: H_r shrunk by another 10 % of r, so the optimum (on
+			 * the target's boundary) lies strictly inside H_r */
+			rc = hull_offset_in(hull, nhull, 0.55 * rho, &target, &ntarget, e);
+			if (rc)
+				goto out;
+			nlp.target = target;
+			nlp.ntarget = ntarget;
+		}
+	}
+	base = mem_calloc((size_t)nslices + 1, sizeof *base);
+	if (!base) {
+		rc = ERR_SET(e, ERR_NOMEM, "hollow: out of memory");
+		goto out;
+	}
+	for (int k = 0; k < nslices; k++)
+		paths_init(&base[k]);
+	for (int r = 1; r <= c->rounds; r++) {
+		struct round_in in = {c, res.mesh, r == 1 ? c->wall_mm : c->wall_next_mm, m, nslices,
+				      stack_count, r == 1 ? NULL : base, r == 1 ? base : NULL, &nlp};
+		struct hl_void *vv = NULL;
+		size_t nvv = 0, kept = 0;
+		double f0 = (double)(r - 1) / c->rounds, f1 = (double)r / c->rounds, t0;
+
+		if (prog) {
+			rc = progress_update(prog, f0, e);
+			if (rc)
+				goto out;
+		}
+		rc = round_voids(&in, &res, &vv, &nvv, e);
+		if (rc)
+			goto out;
+		if (c->objective == HL_OBJ_STABILITY && ntarget >= 3) {
+			double vs, cs[3];
+			hl_mesh_mass(res.mesh, &vs, cs);
+			nlp.vol_mm3 = vs;
+			nlp.com_xy[0] = cs[0];
+			nlp.com_xy[1] = cs[1];
+		} else {
+			nlp.objective = HL_OBJ_LIGHTWEIGHT;
+		}
+		t0 = progress_now_s();
+		rc = hl_solve_round(vv, nvv, &nlp, c->threads, prog, f0 + 0.2 * (f1 - f0), f1, e);
+		res.s_solve += progress_now_s() - t0;
+		if (rc) {
+			voids_fini(vv, nvv);
+			goto out;
+		}
+		t0 = progress_now_s();
+		for (size_t i = 0; i < nvv; i++) {
+			res.iterations += vv[i].iterations;
+			if (vv[i].status < 0) {
+				res.groups_failed++;
+				continue;
+			}
+			if (vv[i].volume_mm3 < c->min_void_mm3) {
+				res.groups_small++;
+				continue;
+			}
+			rc = append_void(res.mesh, &vv[i], e);
+			if (rc) {
+				voids_fini(vv, nvv);
+				goto out;
+			}
+			res.voids_fallback += vv[i].status == HL_STATUS_FALLBACK;
+			res.void_volume_mm3 += vv[i].volume_mm3;
+			kept++;
+		}
+		res.s_mesh += progress_now_s() - t0;
+		voids_fini(vv, nvv);
+		if (!kept)
+			break;
+		res.voids += kept;
+		res.rounds = r;
+	}
+	if (!res.voids && !res.note[0])
+		snprintf(res.note, sizeof res.note,
+			 "too thin to hollow: no support-free void of at least %g mm3 fits inside a "
+			 "%g mm wall; the part is returned unchanged",
+			 c->min_void_mm3, c->wall_mm);
+	if (res.has_com) {
+		double va, ca[3];
+		struct hull_pt q;
+		hl_mesh_mass(res.mesh, &va, ca);
+		q.x = ca[0];
+		q.y = ca[1];
+		res.com_after_mm = hull_signed_distance_mm(hull, nhull, q);
+		{
+			struct hull_pt *hr = NULL;
+			size_t nhr = 0;
+			rc = hull_offset_in(hull, nhull, res.hull_offset_mm, &hr, &nhr, e);
+			if (rc)
+				goto out;
+			res.com_inside = nhr >= 3 && hull_signed_distance_mm(hr, nhr, q) > 0;
+			mem_free(hr);
+		}
+	}
+	*o = res;
+	memset(&res, 0, sizeof res);
+out:
+	hl_outcome_fini(&res);
+	for (int k = 0; base && k < nslices; k++)
+		paths_fini(&base[k]);
+	mem_free(base);
+	mem_free(hull);
+	mem_free(target);
+	return rc;
+}

@@ -1,0 +1,77 @@
+/* rounds.h - the hollowing pipeline of paper 004 over repeated rounds
+ * (rounds.c): uniform offset -> slices -> loops -> groups -> strips ->
+ * optimisation -> voids, the solid of one round being the input of the
+ * next (section 7.2).  Design: docs/hollow.md.
+ */
+#ifndef INFILLD_HOLLOW_ROUNDS_H
+#define INFILLD_HOLLOW_ROUNDS_H
+
+#include <stddef.h>
+
+#include "engine/geom/hull.h"
+#include "engine/hollow/nlp.h"
+
+struct mesh;
+struct progress;
+struct err;
+
+struct hl_config {
+	double wall_mm;        /* first offset t (shell to the outside) */
+	double wall_next_mm;   /* offset of later rounds (walls between voids) */
+	double opt_layer_mm;   /* h of the optimisation (snapped to the stack) */
+	double stack_layer_mm; /* layer height of the eroded stack */
+	double pixel_mm;       /* erosion grid pitch */
+	double sample_mm;      /* loop sampling step s */
+	double alpha_rad;      /* overhang limit, from the vertical */
+	double margin_rad;     /* safety subtracted from alpha in the constraints */
+	double min_void_mm3;
+	int rounds;            /* at most this many rounds */
+	int threads;
+	enum hl_objective objective;
+	double light_weight;   /* stability: weight of the lightweight term */
+	double print_layer_mm; /* the job's layer (contact layer for stability) */
+};
+
+struct hl_outcome {
+	struct mesh *mesh;        /* outer surface + void surfaces (owned) */
+	int rounds;               /* rounds that added voids */
+	size_t voids;
+	size_t voids_fallback;    /* voids kept at their support-free start */
+	size_t groups_failed;     /* optimised groups dropped (check failed) */
+	size_t groups_small;      /* dropped: below min_void_mm3 */
+	double part_volume_mm3;
+	double void_volume_mm3;
+	double opt_layer_mm;      /* h actually used */
+	double sample_mm;
+	int iterations;           /* Ipopt iterations, all voids and rounds */
+	double s_offset, s_contours, s_groups, s_solve, s_mesh; /* seconds */
+	char note[256];           /* "" or why nothing was hollowed */
+	/* stability */
+	int has_com;
+	double com_before_mm;     /* signed distance to the contact hull, > 0 inside */
+	double com_after_mm;
+	int com_inside;           /* after: inside the offset hull H_r */
+	double hull_offset_mm;    /* r, half the inscribed radius */
+	int stands_before;
+};
+
+void hl_outcome_fini(struct hl_outcome *o);
+
+/* Hollow the placed, closed mesh part (printer frame, mm).  On success
+ * *o holds the result (o->mesh never NULL: the part itself, copied, when
+ * nothing could be hollowed, with o->note saying why).  prog may be NULL.
+ * Returns 0, ERR_NOMEM, ERR_CANCELLED, ERR_LIMIT (grid too large) or an
+ * error of the slicer. */
+int hl_run(const struct mesh *part, const struct hl_config *c, struct progress *prog,
+	   struct hl_outcome *o, struct err *e);
+
+/* Volume (mm^3) and centre of mass (mm) of a closed, outward mesh by the
+ * divergence theorem. */
+void hl_mesh_mass(const struct mesh *m, double *vol, double com[3]);
+
+/* Contact hull of a part: convex hull of its first layer's region
+ * (z = layer_mm / 2).  *h (caller frees with mem_free), *n >= 3 or 0. */
+int hl_contact_hull(const struct mesh *part, double layer_mm, struct hull_pt **h, size_t *n,
+		    struct err *e);
+
+#endif

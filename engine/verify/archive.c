@@ -1,0 +1,268 @@
+/* archive.c - verify_archive(): the layer checker on a written SL1/SL1S or
+ * plain zip of PNG layers, read back with libarchive and libpng.
+ *
+ * Entries are read once in archive order: config.ini and prusaslicer.ini
+ * are parsed, layer PNGs (every *.png outside thumbnail/) kept compressed
+ * in memory (a few KB each), then decoded one at a time in file-name order
+ * (zero-padded names sort in print order) and fed to the checker, so at
+ * most one decoded image exists at a time.  Every size read from the
+ * archive is checked before allocating.
+ */
+#include "engine/verify/verify.h"
+
+#include <archive.h>
+#include <archive_entry.h>
+#include <math.h>
+#include <png.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "engine/core/err.h"
+#include "engine/core/mem.h"
+
+#define VA_MAX_ENTRY (64u << 20)  /* largest entry read (bytes) */
+#define VA_MAX_TOTAL (4ull << 30) /* all layer PNGs together */
+#define VA_MAX_INI (1u << 20)
+#define VA_MAX_LAYERS 200000
+
+struct png_ent {
+	char *name;
+	unsigned char *data;
+	size_t len;
+};
+
+struct ini_vals {
+	double layer_mm;
+	double disp_w, disp_h;
+	double pix_x, pix_y;
+	int portrait;
+};
+
+static int cmp_ent(const void *a, const void *b)
+{
+	return strcmp(((const struct png_ent *)a)->name, ((const struct png_ent *)b)->name);
+}
+
+/* Value of `key = value` in INI text (NUL-terminated), or NULL. */
+static const char *ini_get(const char *text, const char *key, char *buf, size_t len)
+{
+	size_t kl = strlen(key);
+
+	for (const char *l = text; l && *l; l = strchr(l, '\n') ? strchr(l, '\n') + 1 : NULL) {
+		const char *p = l;
+		while (*p == ' ' || *p == '\t')
+			p++;
+		if (strncmp(p, key, kl) != 0)
+			continue;
+		p += kl;
+		while (*p == ' ' || *p == '\t')
+			p++;
+		if (*p != '=')
+			continue;
+		p++;
+		while (*p == ' ' || *p == '\t')
+			p++;
+		size_t n = strcspn(p, "\r\n");
+		if (n >= len)
+			n = len - 1;
+		memcpy(buf, p, n);
+		buf[n] = 0;
+		return buf;
+	}
+	return NULL;
+}
+
+static void parse_ini(const char *text, struct ini_vals *iv)
+{
+	char b[128];
+
+	if (ini_get(text, "layerHeight", b, sizeof b))
+		iv->layer_mm = atof(b);
+	if (ini_get(text, "display_width", b, sizeof b))
+		iv->disp_w = atof(b);
+	if (ini_get(text, "display_height", b, sizeof b))
+		iv->disp_h = atof(b);
+	if (ini_get(text, "display_pixels_x", b, sizeof b))
+		iv->pix_x = atof(b);
+	if (ini_get(text, "display_pixels_y", b, sizeof b))
+		iv->pix_y = atof(b);
+	if (ini_get(text, "display_orientation", b, sizeof b))
+		iv->portrait = strcmp(b, "portrait") == 0;
+}
+
+static int read_entry(struct archive *a, size_t size, unsigned char **out, const char *name,
+		      struct err *e)
+{
+	unsigned char *buf = mem_alloc(size + 1);
+	size_t got = 0;
+
+	if (!buf)
+		return ERR_SET(e, ERR_NOMEM, "verify: out of memory reading %s", name);
+	while (got < size) {
+		la_ssize_t r = archive_read_data(a, buf + got, size - got);
+		if (r < 0) {
+			mem_free(buf);
+			return ERR_SET(e, ERR_PARSE, "verify: reading %s: %s", name,
+				       archive_error_string(a));
+		}
+		if (r == 0)
+			break;
+		got += (size_t)r;
+	}
+	if (got != size) {
+		mem_free(buf);
+		return ERR_SET(e, ERR_PARSE, "verify: %s is truncated (%zu of %zu bytes)", name, got,
+			       size);
+	}
+	buf[size] = 0;
+	*out = buf;
+	return 0;
+}
+
+int verify_archive(const char *path, const struct verify_params *p, struct verify_report *out,
+		   struct err *e)
+{
+	struct archive *a = archive_read_new();
+	struct archive_entry *ent;
+	struct png_ent *L = NULL;
+	size_t n = 0, cap = 0;
+	unsigned long long total = 0;
+	struct ini_vals iv;
+	struct verify_params vp = *p;
+	struct verify *v = NULL;
+	struct raster *img = NULL;
+	int rc = 0, r;
+
+	memset(&iv, 0, sizeof iv);
+	if (!a)
+		return ERR_SET(e, ERR_NOMEM, "verify: out of memory");
+	archive_read_support_format_zip(a);
+	archive_read_support_filter_all(a);
+	if (archive_read_open_filename(a, path, 1 << 16) != ARCHIVE_OK) {
+		rc = ERR_SET(e, ERR_IO, "verify: cannot open %s: %s", path, archive_error_string(a));
+		goto out;
+	}
+	while ((r = archive_read_next_header(a, &ent)) == ARCHIVE_OK) {
+		const char *name = archive_entry_pathname(ent);
+		la_int64_t sz = archive_entry_size(ent);
+		size_t nl = name ? strlen(name) : 0;
+		unsigned char *data = NULL;
+		if (!name || archive_entry_filetype(ent) != AE_IFREG)
+			continue;
+		if (strcmp(name, "config.ini") == 0 || strcmp(name, "prusaslicer.ini") == 0) {
+			if (sz < 0 || (unsigned long long)sz > VA_MAX_INI)
+				continue;
+			rc = read_entry(a, (size_t)sz, &data, name, e);
+			if (rc)
+				goto out;
+			parse_ini((const char *)data, &iv);
+			mem_free(data);
+			continue;
+		}
+		if (nl < 5 || strcmp(name + nl - 4, ".png") != 0 || strncmp(name, "thumbnail/", 10) == 0)
+			continue;
+		if (sz <= 0 || (unsigned long long)sz > VA_MAX_ENTRY) {
+			rc = ERR_SET(e, ERR_LIMIT, "verify: layer %s has size %lld (max %u)", name,
+				     (long long)sz, VA_MAX_ENTRY);
+			goto out;
+		}
+		total += (unsigned long long)sz;
+		if (total > VA_MAX_TOTAL || n >= VA_MAX_LAYERS) {
+			rc = ERR_SET(e, ERR_LIMIT, "verify: %s has too many or too large layers", path);
+			goto out;
+		}
+		if (n == cap) {
+			void *arr = L;
+			if (mem_grow(&arr, &cap, n + 1, sizeof *L)) {
+				rc = ERR_SET(e, ERR_NOMEM, "verify: out of memory");
+				goto out;
+			}
+			L = arr;
+		}
+		memset(&L[n], 0, sizeof L[n]);
+		L[n].name = mem_strdup(name);
+		if (!L[n].name) {
+			rc = ERR_SET(e, ERR_NOMEM, "verify: out of memory");
+			goto out;
+		}
+		n++;
+		rc = read_entry(a, (size_t)sz, &L[n - 1].data, name, e);
+		if (rc)
+			goto out;
+		L[n - 1].len = (size_t)sz;
+	}
+	if (r != ARCHIVE_EOF) {
+		rc = ERR_SET(e, ERR_PARSE, "verify: %s: %s", path, archive_error_string(a));
+		goto out;
+	}
+	if (n == 0) {
+		rc = ERR_SET(e, ERR_PARSE, "verify: %s holds no layer images", path);
+		goto out;
+	}
+	qsort(L, n, sizeof *L, cmp_ent);
+	if (!(vp.layer_mm > 0))
+		vp.layer_mm = iv.layer_mm;
+	if (!(vp.pixel_x_mm > 0) || !(vp.pixel_y_mm > 0)) {
+		if (iv.disp_w > 0 && iv.disp_h > 0 && iv.pix_x > 0 && iv.pix_y > 0) {
+			/* portrait: image columns run along the display's short side */
+			vp.pixel_x_mm = iv.portrait ? iv.disp_h / iv.pix_y : iv.disp_w / iv.pix_x;
+			vp.pixel_y_mm = iv.portrait ? iv.disp_w / iv.pix_x : iv.disp_h / iv.pix_y;
+		}
+	}
+	if (!(vp.layer_mm > 0) || !(vp.pixel_x_mm > 0)) {
+		rc = ERR_SET(e, ERR_PARSE,
+			     "verify: %s does not state its layer height and pixel size "
+			     "(config.ini layerHeight, prusaslicer.ini display_*); give them",
+			     path);
+		goto out;
+	}
+	rc = verify_new(&vp, &v, e);
+	if (rc)
+		goto out;
+	for (size_t k = 0; k < n; k++) {
+		png_image pi;
+		memset(&pi, 0, sizeof pi);
+		pi.version = PNG_IMAGE_VERSION;
+		if (!png_image_begin_read_from_memory(&pi, L[k].data, L[k].len)) {
+			rc = ERR_SET(e, ERR_PARSE, "verify: %s: %s", L[k].name, pi.message);
+			goto out;
+		}
+		pi.format = PNG_FORMAT_GRAY;
+		if (pi.width < 1 || pi.height < 1 || pi.width > 65535 || pi.height > 65535) {
+			png_image_free(&pi);
+			rc = ERR_SET(e, ERR_LIMIT, "verify: %s is %ux%u pixels", L[k].name, pi.width,
+				     pi.height);
+			goto out;
+		}
+		if (!img || img->w != (int)pi.width || img->h != (int)pi.height) {
+			raster_free(img);
+			img = raster_new((int)pi.width, (int)pi.height);
+			if (!img) {
+				png_image_free(&pi);
+				rc = ERR_SET(e, ERR_NOMEM, "verify: out of memory");
+				goto out;
+			}
+		}
+		if (!png_image_finish_read(&pi, NULL, img->px, (png_int_32)img->stride, NULL)) {
+			rc = ERR_SET(e, ERR_PARSE, "verify: %s: %s", L[k].name, pi.message);
+			png_image_free(&pi);
+			goto out;
+		}
+		mem_free(L[k].data); /* decoded: drop the compressed copy early */
+		L[k].data = NULL;
+		rc = verify_layer(v, img, e);
+		if (rc)
+			goto out;
+	}
+	rc = verify_finish(v, out, e);
+out:
+	verify_free(v);
+	raster_free(img);
+	for (size_t k = 0; k < n; k++) {
+		mem_free(L[k].name);
+		mem_free(L[k].data);
+	}
+	mem_free(L);
+	archive_read_free(a);
+	return rc;
+}

@@ -1,0 +1,704 @@
+/* verify.c - streaming layer-stack checker (see verify.h, docs/verify.md).
+ *
+ * Per layer, over a crop = bounding box of this and the previous layer's
+ * solid pixels grown by the overhang reach plus two pixels (everything
+ * outside the crop is void connected to the outside):
+ *  1. void components, 4-connected; each gets a union-find id; those
+ *     touching the crop edge are the outside (id VX_OUT);
+ *  2. vertical links: a void pixel above/below a void pixel joins their
+ *     components (6-connectivity in 3D);
+ *  3. overhangs: solid pixels over void pixels of the previous layer whose
+ *     distance to that layer's solid exceeds the reach; counted per void
+ *     component and resolved at the end (a component that later reaches
+ *     the outside is not interior);
+ *  4. islands: solid components (8-connected) with no solid beneath;
+ *  5. distance transforms: to this layer's solid (for the next layer's
+ *     overhang test) and to its outside void (wall thickness).
+ *
+ * Tolerance.  A print's layer images are the surface sampled at pixel
+ * centres (or thresholded coverage): each layer's boundary is displaced
+ * by up to half a pixel (a pixel's centre can be inside while most of its
+ * area is not, and the reverse).  An overhang compares two boundaries,
+ * layer i's solid and layer i+1's, so a support-free surface can show up
+ * to one pixel more than layer_mm * tan(alpha) between them.  Distances
+ * are measured between pixel centres, so the reach a pixel centre may lie
+ * from the nearest solid centre is layer_mm * tan(alpha) + 1 pixel; a
+ * true overhang larger than that by any amount is always caught.
+ */
+#include "engine/verify/verify.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+
+#include "engine/core/err.h"
+#include "engine/core/mem.h"
+#include "engine/core/metrics.h"
+#include "engine/geom/edt.h"
+
+#define VX_OUT 1u /* union-find id of the outside */
+
+struct crop {
+	int x0, y0, w, h; /* w == 0: empty */
+	int sx0, sy0, sx1, sy1; /* bounding box of the layer's solid; sx1 < 0: none */
+	size_t cap;
+	uint8_t *solid;   /* 1 = solid */
+	uint32_t *lab;    /* void component id, 0 on solid */
+	float *d2;        /* squared distance (mm^2) to this layer's solid */
+};
+
+struct rec {
+	uint32_t id;
+	int layer;
+	double val; /* px count (overhang, void volume) or wall mm */
+};
+
+struct recs {
+	struct rec *v;
+	size_t n, cap;
+};
+
+struct verify {
+	struct verify_params p;
+	double reach_mm;
+	int margin;
+	int w, h, next;
+	struct crop a, b, *prev, *cur;
+	uint32_t *uf;
+	size_t nuf, ufcap;
+	struct recs ov, wall, vol;
+	uint16_t *col;        /* per image pixel: layer where its solid run began (+ type bit) */
+	int col_ok;           /* layer count fits the 15-bit counter */
+	uint8_t *enc;         /* per component of the current layer: 2D-enclosed */
+	size_t enc_cap;
+	uint8_t *prev_enc;    /* same for the previous layer's components */
+	size_t prev_enc_cap;
+	uint32_t prev_first, cur_first; /* first component id of each layer */
+	double *agg;          /* per-component scratch */
+	size_t agg_cap;
+	int *stack;
+	size_t stack_cap;
+	uint8_t *seed;
+	float *ext_d2;
+	size_t ext_cap;
+	double *cnt;          /* per-component pixel counts */
+	size_t cnt_cap;
+	size_t scratch_cap;
+	struct edt_scratch es;
+	struct verify_report r;
+	int failed, finished;
+};
+
+void verify_report_fini(struct verify_report *r)
+{
+	mem_free(r->overhang_px);
+	memset(r, 0, sizeof *r);
+}
+
+static void crop_fini(struct crop *c)
+{
+	mem_free(c->solid);
+	mem_free(c->lab);
+	mem_free(c->d2);
+	memset(c, 0, sizeof *c);
+}
+
+void verify_free(struct verify *v)
+{
+	if (!v)
+		return;
+	crop_fini(&v->a);
+	crop_fini(&v->b);
+	mem_free(v->uf);
+	mem_free(v->ov.v);
+	mem_free(v->wall.v);
+	mem_free(v->vol.v);
+	mem_free(v->col);
+	mem_free(v->enc);
+	mem_free(v->prev_enc);
+	mem_free(v->agg);
+	mem_free(v->stack);
+	mem_free(v->seed);
+	mem_free(v->ext_d2);
+	mem_free(v->cnt);
+	edt_scratch_fini(&v->es);
+	verify_report_fini(&v->r);
+	mem_free(v);
+}
+
+int verify_new(const struct verify_params *p, struct verify **out, struct err *e)
+{
+	struct verify *v;
+	double pmin;
+
+	if (!(p->layer_mm > 0))
+		return ERR_FIELD(e, "layer_mm", "verify: layer height must be > 0 (got %g)", p->layer_mm);
+	if (!(p->alpha_deg > 0 && p->alpha_deg < 90))
+		return ERR_FIELD(e, "alpha_deg", "verify: alpha must be in (0, 90) degrees (got %g)",
+				 p->alpha_deg);
+	if (!(p->pixel_x_mm > 0) || !(p->pixel_y_mm > 0))
+		return ERR_FIELD(e, "pixel_mm", "verify: pixel pitch must be > 0 (got %g x %g)",
+				 p->pixel_x_mm, p->pixel_y_mm);
+	if (p->tolerance_px < 0 || p->threshold < 0 || p->threshold > 255)
+		return ERR_FIELD(e, "tolerance_px", "verify: bad tolerance or threshold");
+	v = mem_calloc(1, sizeof *v);
+	if (!v)
+		return ERR_SET(e, ERR_NOMEM, "verify: out of memory");
+	v->p = *p;
+	if (v->p.tolerance_px == 0)
+		v->p.tolerance_px = 1;
+	if (v->p.threshold == 0)
+		v->p.threshold = 128;
+	pmin = fmin(p->pixel_x_mm, p->pixel_y_mm);
+	v->reach_mm = p->layer_mm * tan(p->alpha_deg * M_PI / 180) +
+		      v->p.tolerance_px * fmax(p->pixel_x_mm, p->pixel_y_mm);
+	v->margin = (int)ceil(v->reach_mm / pmin) + 2;
+	v->prev = &v->a;
+	v->cur = &v->b;
+	edt_scratch_init(&v->es);
+	v->r.worst_layer = -1;
+	v->r.first_island_layer = -1;
+	v->r.min_wall_mm = INFINITY;
+	v->r.min_wall_layer = -1;
+	v->r.min_wall_vertical_mm = INFINITY;
+	/* union-find: 0 unused, 1 = outside */
+	v->ufcap = 1024;
+	v->uf = mem_alloc(v->ufcap * sizeof *v->uf);
+	if (!v->uf) {
+		verify_free(v);
+		return ERR_SET(e, ERR_NOMEM, "verify: out of memory");
+	}
+	v->uf[0] = 0;
+	v->uf[1] = 1;
+	v->nuf = 2;
+	*out = v;
+	return 0;
+}
+
+static uint32_t uf_find(struct verify *v, uint32_t a)
+{
+	while (v->uf[a] != a) {
+		v->uf[a] = v->uf[v->uf[a]];
+		a = v->uf[a];
+	}
+	return a;
+}
+
+static void uf_union(struct verify *v, uint32_t a, uint32_t b)
+{
+	a = uf_find(v, a);
+	b = uf_find(v, b);
+	if (a == b)
+		return;
+	/* the outside stays a root */
+	if (a == VX_OUT)
+		v->uf[b] = a;
+	else
+		v->uf[a] = b;
+}
+
+static int uf_new(struct verify *v, uint32_t *id)
+{
+	if (v->nuf == v->ufcap) {
+		void *arr = v->uf;
+		if (v->nuf >= UINT32_MAX - 1 || mem_grow(&arr, &v->ufcap, v->nuf + 1, sizeof *v->uf))
+			return ERR_NOMEM;
+		v->uf = arr;
+	}
+	*id = (uint32_t)v->nuf;
+	v->uf[v->nuf] = (uint32_t)v->nuf;
+	v->nuf++;
+	return 0;
+}
+
+static int rec_add(struct recs *r, uint32_t id, int layer, double val)
+{
+	if (r->n == r->cap) {
+		void *arr = r->v;
+		if (mem_grow(&arr, &r->cap, r->n + 1, sizeof *r->v))
+			return ERR_NOMEM;
+		r->v = arr;
+	}
+	r->v[r->n].id = id;
+	r->v[r->n].layer = layer;
+	r->v[r->n].val = val;
+	r->n++;
+	return 0;
+}
+
+static int grow_bytes(void **p, size_t *cap, size_t need)
+{
+	if (need <= *cap)
+		return 0;
+	mem_free(*p);
+	*p = mem_alloc(need);
+	*cap = *p ? need : 0;
+	return *p ? 0 : ERR_NOMEM;
+}
+
+static int crop_alloc(struct crop *c, size_t n)
+{
+	if (n <= c->cap)
+		return 0;
+	mem_free(c->solid);
+	mem_free(c->lab);
+	mem_free(c->d2);
+	c->solid = mem_alloc(n);
+	c->lab = mem_alloc(n * sizeof *c->lab);
+	c->d2 = mem_alloc(n * sizeof *c->d2);
+	c->cap = c->solid && c->lab && c->d2 ? n : 0;
+	return c->cap ? 0 : ERR_NOMEM;
+}
+
+/* Solid state of image pixel (x, y) in crop c: 1 solid, 0 void (outside the
+ * crop is void). */
+static int crop_solid(const struct crop *c, int x, int y, size_t *idx)
+{
+	int cx = x - c->x0, cy = y - c->y0;
+
+	if (c->w == 0 || cx < 0 || cy < 0 || cx >= c->w || cy >= c->h) {
+		*idx = SIZE_MAX;
+		return 0;
+	}
+	*idx = (size_t)cy * (size_t)c->w + (size_t)cx;
+	return c->solid[*idx];
+}
+
+static int push(struct verify *v, size_t n, int val)
+{
+	if (n >= v->stack_cap) {
+		void *arr = v->stack;
+		if (mem_grow(&arr, &v->stack_cap, n + 1, sizeof *v->stack))
+			return ERR_NOMEM;
+		v->stack = arr;
+	}
+	v->stack[n] = val;
+	return 0;
+}
+
+/* Label void components (4-connected) of the current crop. */
+static int label_voids(struct verify *v, uint32_t *ncomp)
+{
+	struct crop *c = v->cur;
+	int w = c->w, h = c->h;
+	uint32_t first = (uint32_t)v->nuf, n = 0;
+
+	for (size_t i = 0; i < (size_t)w * (size_t)h; i++)
+		c->lab[i] = 0;
+	for (int y = 0; y < h; y++)
+		for (int x = 0; x < w; x++) {
+			size_t i = (size_t)y * (size_t)w + (size_t)x, sp = 0;
+			uint32_t id;
+			int touch = 0;
+			if (c->solid[i] || c->lab[i])
+				continue;
+			if (uf_new(v, &id) || push(v, sp++, (int)i))
+				return ERR_NOMEM;
+			c->lab[i] = id;
+			while (sp) {
+				int q = v->stack[--sp], qx = q % w, qy = q / w;
+				static const int dx[4] = {1, -1, 0, 0}, dy[4] = {0, 0, 1, -1};
+				if (qx == 0 || qy == 0 || qx == w - 1 || qy == h - 1)
+					touch = 1;
+				for (int k = 0; k < 4; k++) {
+					int nx = qx + dx[k], ny = qy + dy[k];
+					size_t j;
+					if (nx < 0 || ny < 0 || nx >= w || ny >= h)
+						continue;
+					j = (size_t)ny * (size_t)w + (size_t)nx;
+					if (c->solid[j] || c->lab[j])
+						continue;
+					c->lab[j] = id;
+					if (push(v, sp++, (int)j))
+						return ERR_NOMEM;
+				}
+			}
+			if (grow_bytes((void **)&v->enc, &v->enc_cap, n + 1))
+				return ERR_NOMEM;
+			v->enc[n] = !touch;
+			if (touch)
+				uf_union(v, id, VX_OUT);
+			n++;
+		}
+	v->cur_first = first;
+	*ncomp = n;
+	return 0;
+}
+
+/* Islands: solid components (8-connected) without solid beneath. */
+static int islands(struct verify *v, int layer)
+{
+	struct crop *c = v->cur;
+	int w = c->w, h = c->h;
+	uint8_t *seen;
+
+	if (layer == 0)
+		return 0;
+	if (grow_bytes((void **)&v->seed, &v->scratch_cap, (size_t)w * (size_t)h))
+		return ERR_NOMEM;
+	seen = v->seed;
+	memset(seen, 0, (size_t)w * (size_t)h);
+	for (int y = 0; y < h; y++)
+		for (int x = 0; x < w; x++) {
+			size_t i = (size_t)y * (size_t)w + (size_t)x, sp = 0, area = 0;
+			int supported = 0;
+			if (!c->solid[i] || seen[i])
+				continue;
+			seen[i] = 1;
+			if (push(v, sp++, (int)i))
+				return ERR_NOMEM;
+			while (sp) {
+				int q = v->stack[--sp], qx = q % w, qy = q / w;
+				size_t pi;
+				area++;
+				if (!supported && crop_solid(v->prev, qx + c->x0, qy + c->y0, &pi))
+					supported = 1;
+				for (int dy = -1; dy <= 1; dy++)
+					for (int dx = -1; dx <= 1; dx++) {
+						int nx = qx + dx, ny = qy + dy;
+						size_t j;
+						if (nx < 0 || ny < 0 || nx >= w || ny >= h)
+							continue;
+						j = (size_t)ny * (size_t)w + (size_t)nx;
+						if (!c->solid[j] || seen[j])
+							continue;
+						seen[j] = 1;
+						if (push(v, sp++, (int)j))
+							return ERR_NOMEM;
+					}
+			}
+			if (!supported) {
+				v->r.islands++;
+				v->r.island_mm2 += (double)area * v->p.pixel_x_mm * v->p.pixel_y_mm;
+				if (v->r.first_island_layer < 0)
+					v->r.first_island_layer = layer;
+			}
+		}
+	return 0;
+}
+
+/* Is component id (of the previous layer) 2D-enclosed there? */
+static int prev_enclosed(const struct verify *v, uint32_t id)
+{
+	return id >= v->prev_first && id - v->prev_first < v->prev_enc_cap &&
+	       v->prev_enc[id - v->prev_first];
+}
+
+int verify_layer(struct verify *v, const struct raster *r, struct err *e)
+{
+	struct crop *c, *pc;
+	int x0 = INT32_MAX, y0 = INT32_MAX, x1 = -1, y1 = -1, layer = v->next;
+	uint32_t ncomp = 0;
+	double pa = v->p.pixel_x_mm * v->p.pixel_y_mm, reach2 = v->reach_mm * v->reach_mm;
+
+	if (v->failed || v->finished)
+		return ERR_SET(e, ERR_INTERNAL, "verify: check already %s",
+			       v->failed ? "failed" : "finished");
+	if (layer == 0) {
+		v->w = r->w;
+		v->h = r->h;
+		v->col_ok = 1;
+		v->col = mem_calloc((size_t)r->w * (size_t)r->h, sizeof *v->col);
+		if (!v->col)
+			goto nomem;
+	} else if (r->w != v->w || r->h != v->h) {
+		return ERR_FIELD(e, "layer", "verify: layer %d is %dx%d, earlier layers %dx%d", layer,
+				 r->w, r->h, v->w, v->h);
+	}
+	if (layer >= 32767)
+		v->col_ok = 0;
+	/* swap: the current crop becomes the previous one */
+	pc = v->cur;
+	v->cur = v->prev;
+	v->prev = pc;
+	c = v->cur;
+	{
+		uint8_t *t = v->prev_enc;
+		size_t tc = v->prev_enc_cap;
+		v->prev_enc = v->enc;
+		v->prev_enc_cap = v->enc_cap;
+		v->enc = t;
+		v->enc_cap = tc;
+		v->prev_first = v->cur_first;
+	}
+	if (layer == 0)
+		pc->w = 0;
+	v->cur_first = (uint32_t)v->nuf;
+	/* solid bounding box of this layer */
+	for (int y = 0; y < r->h; y++) {
+		const uint8_t *row = r->px + (size_t)y * r->stride;
+		for (int x = 0; x < r->w; x++)
+			if (row[x] >= v->p.threshold) {
+				x0 = x < x0 ? x : x0;
+				x1 = x > x1 ? x : x1;
+				y0 = y < y0 ? y : y0;
+				y1 = y > y1 ? y : y1;
+			}
+	}
+	c->sx0 = x0;
+	c->sy0 = y0;
+	c->sx1 = x1;
+	c->sy1 = y1;
+	/* grow by the previous layer's solid (not its crop: crops would creep) */
+	if (pc->w && pc->sx1 >= 0) {
+		x0 = pc->sx0 < x0 ? pc->sx0 : x0;
+		y0 = pc->sy0 < y0 ? pc->sy0 : y0;
+		x1 = pc->sx1 > x1 ? pc->sx1 : x1;
+		y1 = pc->sy1 > y1 ? pc->sy1 : y1;
+	}
+	if (x1 < 0) {
+		c->w = c->h = 0; /* nothing on this layer or the previous one */
+	} else {
+		x0 = x0 - v->margin < 0 ? 0 : x0 - v->margin;
+		y0 = y0 - v->margin < 0 ? 0 : y0 - v->margin;
+		x1 = x1 + v->margin >= r->w ? r->w - 1 : x1 + v->margin;
+		y1 = y1 + v->margin >= r->h ? r->h - 1 : y1 + v->margin;
+		c->x0 = x0;
+		c->y0 = y0;
+		c->w = x1 - x0 + 1;
+		c->h = y1 - y0 + 1;
+		if (crop_alloc(c, (size_t)c->w * (size_t)c->h))
+			goto nomem;
+		for (int y = 0; y < c->h; y++) {
+			const uint8_t *row = r->px + (size_t)(y + y0) * r->stride + x0;
+			for (int x = 0; x < c->w; x++)
+				c->solid[(size_t)y * (size_t)c->w + (size_t)x] = row[x] >= v->p.threshold;
+		}
+		if (label_voids(v, &ncomp))
+			goto nomem;
+	}
+	/* 2. vertical links (the plate closes the bottom of layer 0) */
+	if (layer > 0) {
+		for (int y = 0; y < c->h; y++)
+			for (int x = 0; x < c->w; x++) {
+				size_t i = (size_t)y * (size_t)c->w + (size_t)x, pi;
+				if (c->solid[i])
+					continue;
+				if (crop_solid(pc, x + c->x0, y + c->y0, &pi))
+					continue;
+				uf_union(v, c->lab[i], pi == SIZE_MAX ? VX_OUT : pc->lab[pi]);
+			}
+		/* previous void outside this crop sits under this layer's outside */
+		for (int y = 0; y < pc->h; y++)
+			for (int x = 0; x < pc->w; x++) {
+				size_t i = (size_t)y * (size_t)pc->w + (size_t)x, ci;
+				int gx = x + pc->x0, gy = y + pc->y0;
+				if (pc->solid[i])
+					continue;
+				crop_solid(c, gx, gy, &ci);
+				if (ci == SIZE_MAX)
+					uf_union(v, pc->lab[i], VX_OUT);
+			}
+	}
+	/* 3. overhangs of this layer over the previous one, per void component */
+	if (layer > 0 && c->w) {
+		size_t np = pc->w ? (size_t)(v->nuf - v->prev_first) : 0;
+		long long out_px = 0;
+		if (np && grow_bytes((void **)&v->agg, &v->agg_cap, np * sizeof *v->agg))
+			goto nomem;
+		for (size_t k = 0; k < np; k++)
+			v->agg[k] = 0;
+		for (int y = 0; y < c->h; y++)
+			for (int x = 0; x < c->w; x++) {
+				size_t i = (size_t)y * (size_t)c->w + (size_t)x, pi;
+				if (!c->solid[i])
+					continue;
+				if (crop_solid(pc, x + c->x0, y + c->y0, &pi))
+					continue;
+				if (pi == SIZE_MAX) {
+					out_px++; /* over the outside, beyond the reach by the margin */
+					continue;
+				}
+				if (pc->d2[pi] <= reach2)
+					continue;
+				v->agg[pc->lab[pi] - v->prev_first] += 1;
+			}
+		v->r.exterior_overhang_mm2 += (double)out_px * pa;
+		for (size_t k = 0; k < np; k++)
+			if (v->agg[k] > 0 && rec_add(&v->ov, v->prev_first + (uint32_t)k, layer, v->agg[k]))
+				goto nomem;
+	}
+	/* 4. islands */
+	if (c->w && islands(v, layer))
+		goto nomem;
+	/* 5a. distance to this layer's solid (next layer's overhang test) */
+	if (c->w && edt_sq(c->solid, (size_t)c->w, c->w, c->h, v->p.pixel_x_mm, v->p.pixel_y_mm,
+			   c->d2, &v->es, e))
+		goto fail;
+	/* 5b. walls: distance from enclosed voids to this layer's outside void */
+	if (c->w && ncomp) {
+		size_t n = (size_t)c->w * (size_t)c->h;
+		int any = 0;
+		if (grow_bytes((void **)&v->seed, &v->scratch_cap, n) ||
+		    grow_bytes((void **)&v->agg, &v->agg_cap, ncomp * sizeof *v->agg) ||
+		    grow_bytes((void **)&v->cnt, &v->cnt_cap, ncomp * sizeof *v->cnt) ||
+		    grow_bytes((void **)&v->ext_d2, &v->ext_cap, n * sizeof *v->ext_d2))
+			goto nomem;
+		for (size_t i = 0; i < n; i++) {
+			uint32_t l = c->lab[i];
+			v->seed[i] = !c->solid[i] && !v->enc[l - v->cur_first];
+			any |= !c->solid[i] && v->enc[l - v->cur_first];
+		}
+		if (any) {
+			if (edt_sq(v->seed, (size_t)c->w, c->w, c->h, v->p.pixel_x_mm, v->p.pixel_y_mm,
+				   v->ext_d2, &v->es, e))
+				goto fail;
+			for (uint32_t k = 0; k < ncomp; k++) {
+				v->agg[k] = INFINITY;
+				v->cnt[k] = 0;
+			}
+			for (size_t i = 0; i < n; i++) {
+				uint32_t l = c->lab[i];
+				if (c->solid[i] || !v->enc[l - v->cur_first])
+					continue;
+				v->cnt[l - v->cur_first] += 1;
+				if (v->ext_d2[i] < v->agg[l - v->cur_first])
+					v->agg[l - v->cur_first] = v->ext_d2[i];
+			}
+			for (uint32_t k = 0; k < ncomp; k++) {
+				if (!v->enc[k])
+					continue;
+				/* centre-to-centre distance minus the two half pixels */
+				if (isfinite(v->agg[k]) &&
+				    rec_add(&v->wall, v->cur_first + k, layer,
+					    sqrt(v->agg[k]) - fmin(v->p.pixel_x_mm, v->p.pixel_y_mm)))
+					goto nomem;
+				if (rec_add(&v->vol, v->cur_first + k, layer, v->cnt[k]))
+					goto nomem;
+			}
+		}
+	}
+	/* 5c. walls along columns: solid runs between the outside and an
+	 * enclosed void (2D-enclosed in their layers) */
+	if (v->col_ok && c->w) {
+		for (int y = 0; y < c->h; y++)
+			for (int x = 0; x < c->w; x++) {
+				size_t i = (size_t)y * (size_t)c->w + (size_t)x, pi;
+				int gx = x + c->x0, gy = y + c->y0, below_solid;
+				uint16_t *cs = &v->col[(size_t)gy * (size_t)v->w + (size_t)gx];
+				int enc_now = !c->solid[i] && v->enc[c->lab[i] - v->cur_first];
+				below_solid = layer > 0 && crop_solid(pc, gx, gy, &pi);
+				if (c->solid[i]) {
+					if (!below_solid) {
+						/* a run starts: remember what is under it */
+						int enc_below = layer > 0 && pi != SIZE_MAX &&
+								prev_enclosed(v, pc->lab[pi]);
+						*cs = (uint16_t)(layer | (enc_below ? 0x8000 : 0));
+					}
+					continue;
+				}
+				if (!below_solid)
+					continue;
+				/* a run ended: it separated what was below from this */
+				{
+					int start = *cs & 0x7fff, enc_below = (*cs & 0x8000) != 0;
+					double t = (layer - start) * v->p.layer_mm;
+					if (enc_now != enc_below && t < v->r.min_wall_vertical_mm)
+						v->r.min_wall_vertical_mm = t;
+				}
+			}
+	}
+	v->next++;
+	return 0;
+nomem:
+	ERR_SET(e, ERR_NOMEM, "verify: out of memory at layer %d", layer);
+fail:
+	v->failed = 1;
+	return e ? e->code : ERR_NOMEM;
+}
+
+static int cmp_rec_layer(const void *a, const void *b)
+{
+	const struct rec *x = a, *y = b;
+	return (x->layer > y->layer) - (x->layer < y->layer);
+}
+
+int verify_finish(struct verify *v, struct verify_report *out, struct err *e)
+{
+	struct crop *c = v->cur;
+	double pa = v->p.pixel_x_mm * v->p.pixel_y_mm;
+
+	if (v->failed)
+		return ERR_SET(e, ERR_INTERNAL, "verify: check failed earlier");
+	v->finished = 1;
+	/* the space above the last layer is open: void components there reach
+	 * the outside, and solid runs over enclosed voids end at the outside */
+	for (size_t i = 0; c->w && i < (size_t)c->w * (size_t)c->h; i++) {
+		if (!c->solid[i]) {
+			uf_union(v, c->lab[i], VX_OUT);
+		} else if (v->col_ok) {
+			size_t gx = i % (size_t)c->w + (size_t)c->x0, gy = i / (size_t)c->w + (size_t)c->y0;
+			uint16_t cs = v->col[gy * (size_t)v->w + gx];
+			double t = (v->next - (cs & 0x7fff)) * v->p.layer_mm;
+			if ((cs & 0x8000) && t < v->r.min_wall_vertical_mm)
+				v->r.min_wall_vertical_mm = t;
+		}
+	}
+	v->r.layers = v->next;
+	v->r.width = v->w;
+	v->r.height = v->h;
+	v->r.overhang_px = mem_calloc((size_t)v->next + 1, sizeof *v->r.overhang_px);
+	if (!v->r.overhang_px)
+		return ERR_SET(e, ERR_NOMEM, "verify: out of memory");
+	if (v->ov.n)
+		qsort(v->ov.v, v->ov.n, sizeof *v->ov.v, cmp_rec_layer);
+	for (size_t k = 0; k < v->ov.n; k++) {
+		const struct rec *q = &v->ov.v[k];
+		if (uf_find(v, q->id) == VX_OUT) {
+			v->r.exterior_overhang_mm2 += q->val * pa;
+			continue;
+		}
+		v->r.overhang_px[q->layer] += (long long)q->val;
+		v->r.interior_overhang_px += (long long)q->val;
+	}
+	for (int l = 0; l < v->next; l++) {
+		if (!v->r.overhang_px[l])
+			continue;
+		v->r.overhang_layers++;
+		if (v->r.overhang_px[l] > v->r.worst_layer_px) {
+			v->r.worst_layer_px = v->r.overhang_px[l];
+			v->r.worst_layer = l;
+		}
+	}
+	v->r.interior_overhang_mm2 = (double)v->r.interior_overhang_px * pa;
+	for (size_t k = 0; k < v->wall.n; k++) {
+		const struct rec *q = &v->wall.v[k];
+		if (uf_find(v, q->id) == VX_OUT)
+			continue;
+		if (q->val < v->r.min_wall_mm) {
+			v->r.min_wall_mm = q->val;
+			v->r.min_wall_layer = q->layer;
+		}
+	}
+	for (size_t k = 0; k < v->vol.n; k++)
+		if (uf_find(v, v->vol.v[k].id) != VX_OUT)
+			v->r.enclosed_void_mm3 += v->vol.v[k].val * pa * v->p.layer_mm;
+	verify_report_fini(out);
+	*out = v->r;
+	memset(&v->r, 0, sizeof v->r);
+	return 0;
+}
+
+int verify_report_metrics(const struct verify_report *r, const char *prefix, struct metrics *m,
+			  struct err *e)
+{
+	char k[128];
+	int rc = 0;
+#define KEY(s) (snprintf(k, sizeof k, "%s.%s", prefix, s), k)
+	rc |= metrics_num(m, KEY("interior_overhang_mm2"), r->interior_overhang_mm2);
+	rc |= metrics_int(m, KEY("interior_overhang_px"), r->interior_overhang_px);
+	rc |= metrics_int(m, KEY("overhang_layers"), r->overhang_layers);
+	rc |= metrics_int(m, KEY("worst_layer"), r->worst_layer);
+	rc |= metrics_int(m, KEY("worst_layer_px"), r->worst_layer_px);
+	rc |= metrics_num(m, KEY("exterior_overhang_mm2"), r->exterior_overhang_mm2);
+	rc |= metrics_int(m, KEY("islands"), r->islands);
+	rc |= metrics_num(m, KEY("island_mm2"), r->island_mm2);
+	rc |= metrics_int(m, KEY("first_island_layer"), r->first_island_layer);
+	rc |= metrics_num(m, KEY("min_wall_mm"), r->min_wall_mm);
+	rc |= metrics_num(m, KEY("min_wall_vertical_mm"), r->min_wall_vertical_mm);
+	rc |= metrics_num(m, KEY("enclosed_void_mm3"), r->enclosed_void_mm3);
+	rc |= metrics_int(m, KEY("layers"), r->layers);
+#undef KEY
+	return rc ? ERR_SET(e, ERR_NOMEM, "verify: out of memory recording metrics") : 0;
+}

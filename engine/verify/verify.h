@@ -1,0 +1,96 @@
+/* verify.h - printability check of a produced layer stack, independent of
+ * the engine that made it.
+ *
+ * Reads layer images in print order (0 = on the plate) and finds:
+ *  - interior overhangs: a solid pixel of layer i+1 above a void pixel of
+ *    layer i that is farther than layer_mm * tan(alpha) (+ 1 pixel, see
+ *    verify.c) from layer i's solid, where that void pixel belongs to an
+ *    ENCLOSED void: its 3D void component (4-connected in a layer, linked
+ *    to the void directly above and below) never reaches the outside (the
+ *    image border, or anything above the last layer; the build plate
+ *    closes the bottom).  Such overhangs would need supports that can
+ *    never be removed.  Overhangs over voids that do reach the outside are
+ *    counted apart (ordinary, removable supports);
+ *  - floating islands: solid components (8-connected) of layer i+1 with
+ *    no pixel above layer i's solid;
+ *  - minimum wall thickness between enclosed voids and the outside: in
+ *    the layer plane (exact distance transform) and along columns.
+ * Memory: two layers of per-pixel state over the layers' bounding boxes,
+ * plus two 16-bit column counters per image pixel.  Design and the
+ * tolerance argument: docs/verify.md.
+ */
+#ifndef INFILLD_VERIFY_H
+#define INFILLD_VERIFY_H
+
+#include <stddef.h>
+
+#include "engine/geom/raster.h"
+
+struct err;
+struct metrics;
+
+struct verify_params {
+	double layer_mm;     /* layer height, > 0 */
+	double alpha_deg;    /* largest self-supporting overhang from the vertical, (0, 90) */
+	double pixel_x_mm;   /* pitch along image columns (x), > 0 */
+	double pixel_y_mm;   /* pitch along image rows (y), > 0 */
+	double tolerance_px; /* rasterisation tolerance in pixels (1 when 0 is given) */
+	int threshold;       /* gray >= threshold is solid (128 when 0 is given) */
+};
+
+struct verify_report {
+	int layers;
+	int width, height;
+	/* interior (enclosed) overhangs */
+	double interior_overhang_mm2;
+	long long interior_overhang_px;
+	int overhang_layers;          /* layers with at least one interior overhang pixel */
+	int worst_layer;              /* -1 when none */
+	long long worst_layer_px;
+	long long *overhang_px;       /* per layer (layers entries, owned): interior px on that layer */
+	/* overhangs over voids open to the outside (removable supports) */
+	double exterior_overhang_mm2;
+	/* floating islands */
+	long long islands;
+	double island_mm2;
+	int first_island_layer;       /* -1 when none */
+	/* walls between enclosed voids and the outside */
+	double min_wall_mm;           /* in-layer (2D distance); INFINITY without enclosed voids */
+	int min_wall_layer;
+	double min_wall_vertical_mm;  /* along columns (floors and ceilings); INFINITY if none */
+	double enclosed_void_mm3;     /* volume of enclosed voids */
+};
+
+void verify_report_fini(struct verify_report *r);
+
+struct verify;
+
+/* Check p (ERR_PARAM naming the field) and start a check.  Caller frees
+ * with verify_free(). */
+int verify_new(const struct verify_params *p, struct verify **out, struct err *e);
+void verify_free(struct verify *v);
+
+/* Feed the next layer (layers in print order).  All layers must have the
+ * same size (ERR_PARAM otherwise).  r is borrowed for the call. */
+int verify_layer(struct verify *v, const struct raster *r, struct err *e);
+
+/* Close the stack (the space above the last layer is outside) and fill
+ * *out (replaced; caller frees with verify_report_fini).  The check can
+ * not be fed afterwards. */
+int verify_finish(struct verify *v, struct verify_report *out, struct err *e);
+
+/* Record the report under "<prefix>." (e.g. "verify.interior_overhang_mm2"). */
+int verify_report_metrics(const struct verify_report *r, const char *prefix, struct metrics *m,
+			  struct err *e);
+
+/* Check a written layer archive (PrusaSlicer SL1/SL1S or a plain zip of
+ * PNG layers): layers are the PNGs outside thumbnail/, in file-name order;
+ * layer height and pixel pitch come from config.ini (layerHeight) and
+ * prusaslicer.ini (display_width/height, display_pixels_x/y,
+ * display_orientation) unless p gives them (> 0).  alpha_deg from p.
+ * Reads with libarchive and libpng; holds the compressed PNGs in memory
+ * only when the archive does not list them in order. */
+int verify_archive(const char *path, const struct verify_params *p, struct verify_report *out,
+		   struct err *e);
+
+#endif

@@ -1,0 +1,123 @@
+/* test_nlp.c - the support-free offset optimisation on synthetic voids.
+ *
+ * A box-shaped inner region (10 x 10 mm, 20 slices of 0.5 mm) must become
+ * a void whose ceiling collapses onto the square's medial axis (the two
+ * diagonals) with every face within alpha of the vertical: a groin vault.
+ * Its continuous optimum: at depth d below the top (z = 9.75) the void is
+ * the square minus four triangles of area (5 - sqrt2 d)^2 each, so
+ * V = int_0^9.5 [100 - 4 (5 - sqrt2 d)^2]_+ dd = 100 * 9.5 - 4 * 125 / (3 sqrt2)
+ *   = 832.1 mm^3.  The discrete optimum lies below it (eq. 5 holds the
+ * zigzag cross edges, not just the faces, to h tan alpha).  Constraints are re-checked by
+ * hl_void_check(), an evaluation independent of the solver's callbacks,
+ * and the volume by the divergence theorem.
+ */
+#include "harness.h"
+
+#include "engine/core/err.h"
+#include "engine/core/mem.h"
+#include "engine/hollow/hollow_int.h"
+#include "engine/hollow/nlp.h"
+#include "engine/hollow/void.h"
+
+/* Loop around the rectangle [x0,x1] x [y0,y1] with spacing ~s, CCW. */
+static void rect_loop(struct hl_loop *L, double x0, double y0, double x1, double y1, double s,
+		      double z, int slice)
+{
+	double c[5][2] = {{x0, y0}, {x1, y0}, {x1, y1}, {x0, y1}, {x0, y0}};
+	size_t n = 0, cap = 0;
+
+	memset(L, 0, sizeof *L);
+	for (int e = 0; e < 4; e++) {
+		double len = hypot(c[e + 1][0] - c[e][0], c[e + 1][1] - c[e][1]);
+		int k = (int)ceil(len / s);
+		for (int i = 0; i < k; i++) {
+			double t = (double)i / k;
+			if (n + 1 > cap) {
+				cap = cap ? 2 * cap : 64;
+				L->xy = realloc(L->xy, 2 * cap * sizeof *L->xy);
+			}
+			L->xy[2 * n] = c[e][0] + t * (c[e + 1][0] - c[e][0]);
+			L->xy[2 * n + 1] = c[e][1] + t * (c[e + 1][1] - c[e][1]);
+			n++;
+		}
+	}
+	/* tests own this memory with malloc; copy into mem_alloc storage */
+	double *xy = mem_alloc(2 * n * sizeof *xy);
+	memcpy(xy, L->xy, 2 * n * sizeof *xy);
+	free(L->xy);
+	L->xy = xy;
+	L->n = n;
+	L->z_mm = z;
+	L->slice = slice;
+	L->area_mm2 = (x1 - x0) * (y1 - y0);
+}
+
+static void opts_init(struct hl_nlp_opts *o, double alpha_deg, double h)
+{
+	memset(o, 0, sizeof *o);
+	o->alpha_rad = alpha_deg * M_PI / 180;
+	o->h_mm = h;
+	o->ceil_eps_mm2 = 1e-4;
+	o->gate_tau = 1e-3;
+	o->max_iter = 500;
+	o->max_outer = 4;
+}
+
+static void test_box_roof(void)
+{
+	enum { NS = 20 };
+	struct hl_loop L[NS];
+	const struct hl_loop *lp[NS];
+	struct hl_void v;
+	struct hl_nlp_opts o;
+	struct hl_check c;
+	struct err e;
+	size_t used;
+	double h = 0.5, s = 0.5 * h * tan(M_PI / 4);
+
+	for (int k = 0; k < NS; k++) {
+		rect_loop(&L[k], 0, 0, 10, 10, s, 0.25 + h * k, k);
+		lp[k] = &L[k];
+	}
+	hl_void_init(&v);
+	err_clear(&e);
+	REQUIRE_OK(hl_void_build(lp, NS, NULL, &v, &used, &e), &e);
+	CHECK_EQ_INT(used, NS);
+	CHECK_EQ_INT(v.nt, v.nxe);
+	/* directions point inward; bounds reach the medial axis (<= 5 mm) */
+	for (size_t j = 0; j < v.nv; j++) {
+		CHECK(v.ub[j] <= 5.0 * sqrt(2) + 1e-6);
+		CHECK_NEAR(hypot(v.dir[2 * j], v.dir[2 * j + 1]), 1, 1e-9);
+	}
+	/* the uniform void (l = 0) has a flat ceiling: the check must see it */
+	{
+		double *zero = mem_calloc(v.nv, sizeof *zero);
+		hl_void_check(&v, zero, M_PI / 4, h, 1e-3, &c);
+		CHECK_NEAR(c.top_area_mm2, 100, 1e-6);
+		CHECK_NEAR(hl_void_volume(&v, zero), 100 * 9.5, 1e-6);
+		mem_free(zero);
+	}
+	opts_init(&o, 45, h);
+	REQUIRE_OK(hl_nlp_solve(&v, 1, &o, &e), &e);
+	CHECK_EQ_INT(v.status, 0);
+	hl_void_check(&v, v.l, M_PI / 4, h, 1e-3, &c);
+	fprintf(stderr, "check: face %g rad, edge %g mm, top %g mm2 (eps %g)\n", c.worst_face, c.worst_edge_mm, c.top_area_mm2, v.ceil_eps_mm2);
+	CHECK(c.worst_face <= 1e-4);
+	CHECK(c.worst_edge_mm <= 1e-3);
+	CHECK(c.top_area_mm2 <= 1e-3);
+	CHECK(c.min_shift_mm >= 0);
+	CHECK(c.max_shift_mm <= 1e-12);
+	fprintf(stderr, "box vault: volume %.1f mm3 (bound 832.1), %d iterations, %d rounds, %.2f s\n",
+		v.volume_mm3, v.iterations, v.outer, v.seconds);
+	CHECK(v.volume_mm3 <= 832.1);
+	CHECK(v.volume_mm3 >= 0.8 * 832.1);
+	hl_void_fini(&v);
+	for (int k = 0; k < NS; k++)
+		hl_loop_fini(&L[k]);
+}
+
+int main(void)
+{
+	RUN(test_box_roof);
+	return harness_report();
+}
