@@ -589,7 +589,11 @@ int queue_succeed(struct db *db, int64_t seq, int attempt, const struct job_arti
 {
 	static const char sql[] =
 		"UPDATE jobs SET state = 'succeeded', stage = 'done', progress = 1.0,"
-		" layers_done = layers_total, finished_at = ?3, artifact = ?4, artifact_bytes = ?5,"
+		/* The metrics' layer count is final: a short job can exit before
+		 * its worker wrote any progress row with the total. */
+		" layers_total = COALESCE(json_extract(?7, '$.layers'), layers_total),"
+		" layers_done = COALESCE(json_extract(?7, '$.layers'), layers_total),"
+		" finished_at = ?3, artifact = ?4, artifact_bytes = ?5,"
 		" artifact_sha256 = ?6, metrics = ?7, lease_expires = NULL, worker = NULL,"
 		" error_type = NULL, error = NULL, error_field = NULL, event_seq = event_seq + 1"
 		" WHERE seq = ?1 AND attempt = ?2 AND state = 'running'";

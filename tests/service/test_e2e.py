@@ -104,7 +104,7 @@ def run_job(fmt, params, expect_ext, content_type):
     check(ev[-1][2]["state"] == "succeeded", "job succeeded: %s" % j["error"])
     check(j["state"] == "succeeded" and j["progress"] == 1.0, "final state")
     check(any(e[1] == "progress" for e in ev), "progress events were sent")
-    check(j["metrics"]["layers"] == j["layers_total"] > 0, "metrics layers")
+    check(j["metrics"]["layers"] == j["layers_total"] > 0, "metrics layers %r %r" % (j["metrics"].get("layers"), j["layers_total"]))
     out = srv.request("GET", "/v1/jobs/%s/output" % job["id"], key=srv.key)
     check(out.status == 200, "download: %d %s" % (out.status, out.body[:200]))
     check(out.header("Transfer-Encoding") == "chunked", "chunked stream")
