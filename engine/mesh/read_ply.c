@@ -427,7 +427,8 @@ int mesh_read_ply(const unsigned char *d, size_t len, struct mesh *m,
 				goto out;
 			}
 			m->nv = (size_t)p->el[i].count;
-			memset(m->v, 0, m->nv * sizeof *m->v);
+			if (m->nv) /* "element vertex 0": m->v may be NULL */
+				memset(m->v, 0, m->nv * sizeof *m->v);
 			break;
 		}
 	for (i = 0; i < p->nel; i++) {

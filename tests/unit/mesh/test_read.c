@@ -439,6 +439,8 @@ static void test_fuzz_regressions(void)
 		/* 20-digit counts: integer overflow in the parser and the size check */
 		{"off-int-overflow", MESH_FMT_OFF, ERR_PARSE, "more than a 68-byte file can hold"},
 		{"off-count-overflow", MESH_FMT_OFF, ERR_PARSE, "more than a 99-byte file can hold"},
+		/* "element vertex 0": memset of a NULL vertex array (UBSan) */
+		{"ply-zero-vertices", MESH_FMT_PLY, ERR_PARSE, "face 0 has 0 corners"},
 	};
 	size_t i;
 
