@@ -39,6 +39,7 @@
 void hl_outcome_fini(struct hl_outcome *o)
 {
 	mesh_free(o->mesh);
+	hl_fill_fini(&o->fill);
 	memset(o, 0, sizeof *o);
 }
 
@@ -538,6 +539,16 @@ int hl_run(const struct mesh *part, const struct hl_config *c, struct progress *
 			break;
 		res.voids += kept;
 		res.rounds = r;
+	}
+	res.voids_optimised = res.voids;
+	if (c->fill && c->objective == HL_OBJ_LIGHTWEIGHT) {
+		double t0 = progress_now_s();
+		rc = hl_fill_build(part, res.voids ? res.mesh : NULL, c, stack_count, &res.fill, e);
+		if (rc)
+			goto out;
+		res.voids += res.fill.voids;
+		res.void_volume_mm3 += res.fill.volume_mm3;
+		res.s_fill = progress_now_s() - t0;
 	}
 	if (!res.voids && !res.note[0])
 		snprintf(res.note, sizeof res.note,
