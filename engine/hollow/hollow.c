@@ -52,8 +52,9 @@ static const struct param_desc hollow_desc[] = {
 	 .help = "lightweight: largest support-free voids (eq. 11); stability: move the centre of "
 		 "mass over the contact area (eq. 12-14)."},
 	{.name = "rounds", .type = PARAM_INT, .offset = offsetof(struct hollow_params, rounds),
-	 .min = 1, .max = 50, .def = 8, .unit = "",
-	 .help = "Most hollowing rounds (section 7.2); stops earlier when a round adds no void."},
+	 .min = 0, .max = 50, .def = 8, .unit = "",
+	 .help = "Most optimisation rounds (section 7.2); stops earlier when a round adds no void. "
+		 "0: the top-down fill alone (lightweight)."},
 	{.name = "min_void_mm3", .type = PARAM_NUM,
 	 .offset = offsetof(struct hollow_params, min_void_mm3), .min = 0, .max = 1e9, .def = 8,
 	 .unit = "mm3", .help = "Voids smaller than this are not made (paper: 8 mm3)."},

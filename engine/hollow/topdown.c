@@ -129,17 +129,24 @@ static int offset_stack(const struct mesh *part, const struct mesh *solid,
 
 /* Raster safety margins in pixels (see hl_fill_build): the written void
  * is the designed one eroded by W; the design's reach is layer tan(alpha)
- * less D.  The bound needs 2 W + 0.71 - D <= 1, W >= 0.71. */
-#define HL_FILL_W_PX 0.72
-#define HL_FILL_D_PX 0.45
+ * less D.  The bound needs W + 0.71 - D <= 1 and W >= 0.71 + the round
+ * joins' arc tolerance (0.05 W: the eroded void may reach that much
+ * closer to the solid); cleaning moves vertices by 0.01 px. */
+#define HL_FILL_W_PX 0.78
+#define HL_FILL_D_PX 0.5
 
-/* Drop the paths of ps whose |area| is below min_mm2 (in place). */
+/* Drop the outer loops of void region ps whose area is below min_mm2
+ * (in place; void turns solid, the safe direction), with every hole
+ * their holes orphaned (negative winding): callers renormalise with the
+ * positive fill rule, which drops them.  Holes are never dropped: a small
+ * hole is solid holding something up. */
 static void drop_small(struct paths *ps, double min_mm2)
 {
 	size_t w = 0;
 
 	for (size_t i = 0; i < ps->n; i++) {
-		if (fabs(path_area_mm2(&ps->v[i])) < min_mm2) {
+		double a = path_area_mm2(&ps->v[i]);
+		if (a > 0 && a < min_mm2) {
 			path_fini(&ps->v[i]);
 			continue;
 		}
@@ -188,15 +195,16 @@ static int layer_below(const struct paths *C, const struct paths *Vup, double d_
 		rc = clip_boolean(CLIP_DIFFERENCE, &U, &O, CLIP_FILL_NONZERO, &R, e);
 	if (rc)
 		goto out;
-	drop_small(&R, min_mm2);
 	rc = paths_append_move(&E, &R);
 	if (rc) {
 		rc = ERR_SET(e, ERR_NOMEM, "hollow: out of memory");
 		goto out;
 	}
 	rc = clip_boolean(CLIP_DIFFERENCE, C, &E, CLIP_FILL_NONZERO, V, e);
-	if (!rc)
+	if (!rc) {
 		drop_small(V, min_mm2);
+		rc = clip_union(V, CLIP_FILL_POSITIVE, V, e);
+	}
 	/* bound the vertex count: round joins add vertices at every layer */
 	if (!rc && V->n)
 		rc = clip_clean(V, clean_nm, e);
@@ -407,6 +415,126 @@ out:
 	return rc;
 }
 
+/* ---- keeping voids apart ---- */
+
+/* Split region ps into its components (an outer loop and the holes it
+ * owns), appended to *out (n, caller frees each with paths_fini and the
+ * array with mem_free), with their bounding boxes. */
+struct comp {
+	struct paths p;
+	struct pt2 lo, hi;
+};
+
+static int split_components(const struct paths *ps, struct comp **out, size_t *n, struct err *e)
+{
+	struct comp *c = NULL;
+	size_t nc = 0, *idx = NULL;
+	int rc = 0;
+
+	idx = mem_alloc((ps->n + 1) * sizeof *idx);
+	c = mem_calloc(ps->n + 1, sizeof *c);
+	if (!idx || !c)
+		goto nomem;
+	for (size_t i = 0; i < ps->n; i++) {
+		idx[i] = SIZE_MAX;
+		if (path_area_mm2(&ps->v[i]) <= 0)
+			continue;
+		idx[i] = nc;
+		paths_init(&c[nc].p);
+		bbox_of(&ps->v[i], &c[nc].lo, &c[nc].hi);
+		if (paths_add_pts(&c[nc].p, ps->v[i].pts, ps->v[i].n))
+			goto nomem;
+		nc++;
+	}
+	for (size_t i = 0; i < ps->n; i++) {
+		size_t o;
+		if (path_area_mm2(&ps->v[i]) > 0)
+			continue;
+		o = hole_owner(ps, i);
+		if (o != SIZE_MAX && idx[o] != SIZE_MAX &&
+		    paths_add_pts(&c[idx[o]].p, ps->v[i].pts, ps->v[i].n))
+			goto nomem;
+	}
+	*out = c;
+	*n = nc;
+	c = NULL;
+	goto out;
+nomem:
+	rc = ERR_SET(e, ERR_NOMEM, "hollow: out of memory");
+out:
+	for (size_t i = 0; c && i < nc; i++)
+		paths_fini(&c[i].p);
+	mem_free(c);
+	mem_free(idx);
+	return rc;
+}
+
+/*
+ * Vf (layer_below's void for layer k) cut so that voids stay apart: the
+ * part of Vf within d of component P_i of V(k + 1) belongs to P_i unless
+ * it comes within wall + d of another component (then it stays solid), and
+ * new voids (seeds) only start at >= wall + d from every component of
+ * V(k + 1).  So components that meet at layer k + 1 apart by >= wall stay
+ * >= wall apart (a point of P_i's growth is >= wall + d from P_j, P_j's
+ * growth within d of P_j); without this the greedy void grows into a foam
+ * of cells split by walls thinner than a pixel (docs/hollow.md).
+ * The result is a subset of Vf: turning void into solid never breaks the
+ * overhang rule for the layer above, and the layer below is built from
+ * the result.  Bounding boxes skip far components.
+ */
+static int keep_apart(const struct paths *Vf, const struct paths *Vup, double d_nm,
+		      double wall_nm, struct paths *V, struct err *e)
+{
+	struct comp *c = NULL;
+	size_t nc = 0;
+	struct paths acc, X, G, others;
+	double reach = wall_nm + 2 * d_nm;
+	int rc;
+
+	paths_init(&acc);
+	paths_init(&X);
+	paths_init(&G);
+	paths_init(&others);
+	rc = split_components(Vup, &c, &nc, e);
+	/* seeds: Vf beyond wall + d of everything above */
+	if (!rc)
+		rc = clip_offset(Vup, wall_nm + d_nm, CLIP_JOIN_ROUND, 0, 0, &X, e);
+	if (!rc)
+		rc = clip_boolean(CLIP_DIFFERENCE, Vf, &X, CLIP_FILL_NONZERO, &acc, e);
+	for (size_t i = 0; !rc && i < nc; i++) {
+		paths_clear(&others);
+		for (size_t j = 0; j < nc && !rc; j++) {
+			if (j == i || c[j].lo.x > c[i].hi.x + reach || c[i].lo.x > c[j].hi.x + reach ||
+			    c[j].lo.y > c[i].hi.y + reach || c[i].lo.y > c[j].hi.y + reach)
+				continue;
+			for (size_t q = 0; q < c[j].p.n && !rc; q++)
+				if (paths_add_pts(&others, c[j].p.v[q].pts, c[j].p.v[q].n))
+					rc = ERR_SET(e, ERR_NOMEM, "hollow: out of memory");
+		}
+		if (!rc)
+			rc = clip_offset(&c[i].p, d_nm, CLIP_JOIN_ROUND, 0, 0, &G, e);
+		if (!rc)
+			rc = clip_boolean(CLIP_INTERSECTION, &G, Vf, CLIP_FILL_NONZERO, &G, e);
+		if (!rc && others.n) {
+			rc = clip_offset(&others, wall_nm + d_nm, CLIP_JOIN_ROUND, 0, 0, &X, e);
+			if (!rc)
+				rc = clip_boolean(CLIP_DIFFERENCE, &G, &X, CLIP_FILL_NONZERO, &G, e);
+		}
+		if (!rc && paths_append_move(&acc, &G))
+			rc = ERR_SET(e, ERR_NOMEM, "hollow: out of memory");
+	}
+	if (!rc)
+		rc = clip_union(&acc, CLIP_FILL_NONZERO, V, e);
+	for (size_t i = 0; c && i < nc; i++)
+		paths_fini(&c[i].p);
+	mem_free(c);
+	paths_fini(&acc);
+	paths_fini(&X);
+	paths_fini(&G);
+	paths_fini(&others);
+	return rc;
+}
+
 int hl_fill_build(const struct mesh *part, const struct mesh *solid, const struct hl_config *c,
 		  int stack_count, struct hl_fill *f, struct err *e)
 {
@@ -422,12 +550,13 @@ int hl_fill_build(const struct mesh *part, const struct mesh *solid, const struc
 	 * pixel centre p lies within w of the design's solid, that within d of
 	 * the solid of the layer below, and the pixel centre nearest to that
 	 * point (<= 0.71 px away, solid because it is within w of it) is
-	 * within w + d + 0.71 = layer tan(alpha) + 0.977 px of p: inside the
+	 * within w + d + 0.71 = layer tan(alpha) + 0.987 px of p: inside the
 	 * checker's one pixel of tolerance.  Layers too thick for that (d <= 0)
 	 * get no fill. */
 	double d_nm = (double)geom_mm_to_nm(c->stack_layer_mm * tan(alpha) -
 					    HL_FILL_D_PX * c->pixel_mm);
 	double w_nm = (double)geom_mm_to_nm(HL_FILL_W_PX * c->pixel_mm);
+	double wall_nm = (double)geom_mm_to_nm(c->wall_next_mm);
 	int rc = 0;
 
 	memset(&r, 0, sizeof r);
@@ -454,16 +583,20 @@ int hl_fill_build(const struct mesh *part, const struct mesh *solid, const struc
 		if (!C[k].n)
 			continue;
 		rc = layer_below(&C[k], up, d_nm, 0.1 * d_nm, 0.25 * px2,
-				 (double)geom_mm_to_nm(0.05 * c->pixel_mm), &r.layer[k], e);
+				 (double)geom_mm_to_nm(0.01 * c->pixel_mm), &r.layer[k], e);
+		if (!rc && up->n && r.layer[k].n)
+			rc = keep_apart(&r.layer[k], up, d_nm, wall_nm, &r.layer[k], e);
 		paths_fini(&C[k]);
 	}
 	/* the written void: V eroded by w (V itself drove the layers below) */
 	for (int k = 0; !rc && k < stack_count; k++)
 		if (r.layer[k].n) {
-			rc = clip_offset(&r.layer[k], -w_nm, CLIP_JOIN_ROUND, 0, 0.1 * w_nm,
+			rc = clip_offset(&r.layer[k], -w_nm, CLIP_JOIN_ROUND, 0, 0.05 * w_nm,
 					 &r.layer[k], e);
-			if (!rc)
+			if (!rc) {
 				drop_small(&r.layer[k], 0.25 * px2);
+				rc = clip_union(&r.layer[k], CLIP_FILL_POSITIVE, &r.layer[k], e);
+			}
 		}
 	if (!rc)
 		rc = components(&r, c->min_void_mm3, e);
