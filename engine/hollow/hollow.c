@@ -54,7 +54,7 @@ static const struct param_desc hollow_desc[] = {
 	{.name = "rounds", .type = PARAM_INT, .offset = offsetof(struct hollow_params, rounds),
 	 .min = 0, .max = 50, .def = 8, .unit = "",
 	 .help = "Most optimisation rounds (section 7.2); stops earlier when a round adds no void. "
-		 "0: the top-down fill alone (lightweight)."},
+		 "0: no optimisation (with fill=true: the top-down fill alone)."},
 	{.name = "min_void_mm3", .type = PARAM_NUM,
 	 .offset = offsetof(struct hollow_params, min_void_mm3), .min = 0, .max = 1e9, .def = 8,
 	 .unit = "mm3", .help = "Voids smaller than this are not made (paper: 8 mm3)."},
@@ -73,9 +73,9 @@ static const struct param_desc hollow_desc[] = {
 	 .offset = offsetof(struct hollow_params, margin_deg), .min = 0, .max = 10, .def = 0.5,
 	 .unit = "deg", .help = "Safety taken off alpha in the optimisation's constraints."},
 	{.name = "fill", .type = PARAM_BOOL, .offset = offsetof(struct hollow_params, fill),
-	 .min = 0, .max = 1, .def = 1, .unit = "",
+	 .min = 0, .max = 1, .def = 0, .unit = "",
 	 .help = "lightweight: after the optimised voids, hollow the space they left with the "
-		 "top-down support-free fill (docs/hollow.md)."},
+		 "top-down support-free fill (docs/hollow.md; experimental: slow on large parts)."},
 };
 
 /* stability: weight of the lightweight term once the part stands */

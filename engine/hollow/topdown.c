@@ -11,6 +11,7 @@
 
 #include "engine/core/err.h"
 #include "engine/core/mem.h"
+#include "engine/core/progress.h"
 #include "engine/geom/clip.h"
 #include "engine/hollow/rounds.h"
 #include "engine/mesh/mesh.h"
@@ -131,9 +132,10 @@ static int offset_stack(const struct mesh *part, const struct mesh *solid,
  * is the designed one eroded by W; the design's reach is layer tan(alpha)
  * less D.  The bound needs W + 0.71 - D <= 1 and W >= 0.71 + the round
  * joins' arc tolerance (0.05 W: the eroded void may reach that much
- * closer to the solid); cleaning moves vertices by 0.01 px. */
+ * closer to the solid); cleaning moves vertices by 0.01 px and the
+ * covering test of layer_below is generous by 0.02 px. */
 #define HL_FILL_W_PX 0.78
-#define HL_FILL_D_PX 0.5
+#define HL_FILL_D_PX 0.52
 
 /* Drop the outer loops of void region ps whose area is below min_mm2
  * (in place; void turns solid, the safe direction), with every hole
@@ -189,8 +191,12 @@ static int layer_below(const struct paths *C, const struct paths *Vup, double d_
 		rc = clip_boolean(CLIP_DIFFERENCE, &U, Vup, CLIP_FILL_NONZERO, &U, e);
 	if (!rc)
 		rc = clip_offset(&U, -d_nm, CLIP_JOIN_ROUND, 0, arc_nm, &E, e);
+	/* O by d + arc_nm with arc tolerance arc_nm / 2: the chords then lie
+	 * outside the true d-disc, so R holds no slivers of the round joins
+	 * (they would persist as hair-thin pillars); points between d and
+	 * d + arc_nm count as covered: HL_FILL_D_PX allows for it */
 	if (!rc)
-		rc = clip_offset(&E, d_nm, CLIP_JOIN_ROUND, 0, arc_nm, &O, e);
+		rc = clip_offset(&E, d_nm + arc_nm, CLIP_JOIN_ROUND, 0, 0.5 * arc_nm, &O, e);
 	if (!rc)
 		rc = clip_boolean(CLIP_DIFFERENCE, &U, &O, CLIP_FILL_NONZERO, &R, e);
 	if (rc)
@@ -536,7 +542,8 @@ static int keep_apart(const struct paths *Vf, const struct paths *Vup, double d_
 }
 
 int hl_fill_build(const struct mesh *part, const struct mesh *solid, const struct hl_config *c,
-		  int stack_count, struct hl_fill *f, struct err *e)
+		  int stack_count, struct progress *prog, double f0, double f1, struct hl_fill *f,
+		  struct err *e)
 {
 	struct hl_fill r;
 	struct paths *C = NULL;
@@ -557,6 +564,7 @@ int hl_fill_build(const struct mesh *part, const struct mesh *solid, const struc
 					    HL_FILL_D_PX * c->pixel_mm);
 	double w_nm = (double)geom_mm_to_nm(HL_FILL_W_PX * c->pixel_mm);
 	double wall_nm = (double)geom_mm_to_nm(c->wall_next_mm);
+	double px_nm = (double)geom_mm_to_nm(c->pixel_mm);
 	int rc = 0;
 
 	memset(&r, 0, sizeof r);
@@ -582,7 +590,12 @@ int hl_fill_build(const struct mesh *part, const struct mesh *solid, const struc
 		const struct paths *up = k + 1 < stack_count ? &r.layer[k + 1] : &none;
 		if (!C[k].n)
 			continue;
-		rc = layer_below(&C[k], up, d_nm, 0.1 * d_nm, 0.25 * px2,
+		if (prog && k % 16 == 0) {
+			rc = progress_update(prog, f0 + (f1 - f0) * (stack_count - k) / stack_count, e);
+			if (rc)
+				break;
+		}
+		rc = layer_below(&C[k], up, d_nm, 0.02 * px_nm, 0.25 * px2,
 				 (double)geom_mm_to_nm(0.01 * c->pixel_mm), &r.layer[k], e);
 		if (!rc && up->n && r.layer[k].n)
 			rc = keep_apart(&r.layer[k], up, d_nm, wall_nm, &r.layer[k], e);

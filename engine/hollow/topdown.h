@@ -13,6 +13,7 @@
 struct mesh;
 struct err;
 struct hl_config;
+struct progress;
 
 struct hl_fill {
 	struct paths *layer; /* n regions (nm, printer frame): the void of stack layer j,
@@ -33,9 +34,12 @@ void hl_fill_fini(struct hl_fill *f);
  * every non-void point of layer j + 1 lies within layer_mm tan(alpha) of
  * a non-void point of layer j (docs/hollow.md).  Components under
  * c->min_void_mm3 are dropped.  stack_count layers of c->stack_layer_mm.
- * Returns 0 (f replaced), ERR_NOMEM, ERR_LIMIT or a slicer error. */
+ * prog (may be NULL) advances from f0 to f1 and can cancel.
+ * Returns 0 (f replaced), ERR_NOMEM, ERR_LIMIT, ERR_CANCELLED or a slicer
+ * error. */
 int hl_fill_build(const struct mesh *part, const struct mesh *solid, const struct hl_config *c,
-		  int stack_count, struct hl_fill *f, struct err *e);
+		  int stack_count, struct progress *prog, double f0, double f1, struct hl_fill *f,
+		  struct err *e);
 
 /* The fill's region for a print layer whose mid-plane is at z_mm:
  * borrowed, NULL when there is none. */
