@@ -152,18 +152,6 @@ static int blocked(void *vctx, struct vec3 a, struct vec3 b, struct vec3 c)
 
 /* ---- the eroded stack pulls layers of the current solid ---- */
 
-struct src_ctx {
-	struct slicer *s;
-	double layer_mm;
-};
-
-static int src_layer(void *ctx, int k, struct paths *region, struct err *e)
-{
-	struct src_ctx *c = ctx;
-
-	return slice_at(c->s, (k + 0.5) * c->layer_mm, region, NULL, e);
-}
-
 /* ---- result mesh ---- */
 
 /* Append void v (offsets v->l) to m: its vertices, strips, and both caps
@@ -280,8 +268,8 @@ static int round_voids(const struct round_in *in, struct hl_outcome *o, struct h
 		goto out;
 	{
 		struct slice_erode_params ep;
-		struct src_ctx sc = {ss, c->stack_layer_mm};
-		struct slice_erode_source src = {src_layer, &sc};
+		struct hl_src_ctx sc = {ss, c->stack_layer_mm};
+		struct slice_erode_source src = {hl_src_layer, &sc};
 		memset(&ep, 0, sizeof ep);
 		ep.r_mm = in->wall;
 		ep.pixel_mm = c->pixel_mm;

@@ -43,21 +43,16 @@ const struct paths *hl_fill_at(const struct hl_fill *f, double z_mm)
 
 /* ---- the offset stack C(k) ---- */
 
-struct src_ctx {
-	struct slicer *s;
-	double layer_mm;
-};
-
-static int src_layer(void *ctx, int k, struct paths *region, struct err *e)
+int hl_src_layer(void *ctx, int k, struct paths *region, struct err *e)
 {
-	struct src_ctx *c = ctx;
+	struct hl_src_ctx *c = ctx;
 
 	return slice_at(c->s, (k + 0.5) * c->layer_mm, region, NULL, e);
 }
 
 struct eroded {
 	struct slicer *s;
-	struct src_ctx sc;
+	struct hl_src_ctx sc;
 	struct slice_eroder *er;
 };
 
@@ -75,7 +70,7 @@ static int eroded_open(struct eroded *x, const struct mesh *m, double r_mm,
 		return rc;
 	x->sc.s = x->s;
 	x->sc.layer_mm = c->stack_layer_mm;
-	src.layer = src_layer;
+	src.layer = hl_src_layer;
 	src.ctx = &x->sc; /* x outlives the eroder */
 	memset(&ep, 0, sizeof ep);
 	ep.r_mm = r_mm;

@@ -41,6 +41,15 @@ int hl_fill_build(const struct mesh *part, const struct mesh *solid, const struc
 		  int stack_count, struct progress *prog, double f0, double f1, struct hl_fill *f,
 		  struct err *e);
 
+/* Layer source for slice/erode.h over a slicer: layer k is the slice at
+ * (k + 1/2) layer_mm.  ctx is a struct hl_src_ctx (borrowed). */
+struct slicer;
+struct hl_src_ctx {
+	struct slicer *s;
+	double layer_mm;
+};
+int hl_src_layer(void *ctx, int k, struct paths *region, struct err *e);
+
 /* The fill's region for a print layer whose mid-plane is at z_mm:
  * borrowed, NULL when there is none. */
 const struct paths *hl_fill_at(const struct hl_fill *f, double z_mm);
