@@ -11,6 +11,7 @@
 #include <string.h>
 
 #include "engine/core/mem.h"
+#include "engine/geom/clip.h"
 #include "engine/hollow/rounds.h"
 #include "engine/mesh/mesh.h"
 #include "engine/slice/slice.h"
@@ -27,6 +28,7 @@ struct hollow_params {
 	double stack_layer_mm;
 	double sample_mm;
 	double margin_deg;
+	int fill;
 };
 
 static const char *const objective_names[] = {"lightweight", "stability", NULL};
@@ -50,8 +52,9 @@ static const struct param_desc hollow_desc[] = {
 	 .help = "lightweight: largest support-free voids (eq. 11); stability: move the centre of "
 		 "mass over the contact area (eq. 12-14)."},
 	{.name = "rounds", .type = PARAM_INT, .offset = offsetof(struct hollow_params, rounds),
-	 .min = 1, .max = 50, .def = 8, .unit = "",
-	 .help = "Most hollowing rounds (section 7.2); stops earlier when a round adds no void."},
+	 .min = 0, .max = 50, .def = 8, .unit = "",
+	 .help = "Most optimisation rounds (section 7.2); stops earlier when a round adds no void. "
+		 "0: no optimisation (with fill=true: the top-down fill alone)."},
 	{.name = "min_void_mm3", .type = PARAM_NUM,
 	 .offset = offsetof(struct hollow_params, min_void_mm3), .min = 0, .max = 1e9, .def = 8,
 	 .unit = "mm3", .help = "Voids smaller than this are not made (paper: 8 mm3)."},
@@ -69,6 +72,10 @@ static const struct param_desc hollow_desc[] = {
 	{.name = "margin_deg", .type = PARAM_NUM,
 	 .offset = offsetof(struct hollow_params, margin_deg), .min = 0, .max = 10, .def = 0.5,
 	 .unit = "deg", .help = "Safety taken off alpha in the optimisation's constraints."},
+	{.name = "fill", .type = PARAM_BOOL, .offset = offsetof(struct hollow_params, fill),
+	 .min = 0, .max = 1, .def = 0, .unit = "",
+	 .help = "lightweight: after the optimised voids, hollow the space they left with the "
+		 "top-down support-free fill (docs/hollow.md; experimental: slow on large parts)."},
 };
 
 /* stability: weight of the lightweight term once the part stands */
@@ -86,6 +93,7 @@ struct hollow_state {
 	const struct raster_map *map; /* the driver's, when it wants pixels */
 	int antialias;
 	struct raster *own;          /* verification raster when the output has none */
+	struct raster *mask;         /* the fill's pixels of one layer (fill_mask) */
 	struct raster_map own_map;
 	double layer_mm, alpha_deg, t_prepare, t_verify;
 	double min_wall_3d_mm;       /* void vertices to the outer surface */
@@ -210,6 +218,7 @@ static int hollow_prepare(const struct engine_ctx *ctx, const void *params, void
 	c->objective = p->objective == 1 ? HL_OBJ_STABILITY : HL_OBJ_LIGHTWEIGHT;
 	c->light_weight = HOLLOW_LIGHT_WEIGHT;
 	c->print_layer_mm = ctx->layer_mm;
+	c->fill = p->fill;
 	rc = hl_run(ctx->mesh, c, ctx->progress, &s->out, e);
 	if (!rc)
 		rc = min_wall_3d(ctx->mesh, s->out.mesh, &s->min_wall_3d_mm, e);
@@ -226,15 +235,48 @@ static int hollow_prepare(const struct engine_ctx *ctx, const void *params, void
 	return 0;
 }
 
+/* Clear the pixels of r whose centre lies in the fill's region (centre
+ * sampling: the fill's raster-safety bound in topdown.c assumes it; the
+ * outer surface keeps its anti-aliasing).  r is the driver's raster
+ * (s->map) or s->own (s->own_map), as the caller's. */
+static int fill_mask(struct hollow_state *s, const struct paths *fill, struct raster *r,
+		     struct err *e)
+{
+	const struct raster_map *map = r == s->own ? &s->own_map : s->map;
+	int rc;
+
+	if (!s->mask || s->mask->w != r->w || s->mask->h != r->h) {
+		raster_free(s->mask);
+		s->mask = raster_new(r->w, r->h);
+		if (!s->mask)
+			return ERR_SET(e, ERR_NOMEM, "hollow: out of memory");
+	} else {
+		raster_clear(s->mask);
+	}
+	rc = slice_rasterize(fill, map, 0, s->mask, e);
+	if (rc)
+		return rc;
+	for (int y = 0; y < r->h; y++) {
+		const uint8_t *m = s->mask->px + (size_t)y * s->mask->stride;
+		uint8_t *p = r->px + (size_t)y * r->stride;
+		for (int x = 0; x < r->w; x++)
+			if (m[x] >= 128)
+				p[x] = 0;
+	}
+	return 0;
+}
+
 static int hollow_layer(void *state, struct layer *ly, struct err *e)
 {
 	struct hollow_state *s = state;
+	const struct paths *fill;
 	double t0;
 	int rc;
 
 	rc = slice_at(s->slicer, ly->z_mm, &ly->region, NULL, e);
 	if (rc)
 		return rc;
+	fill = ly->region.n ? hl_fill_at(&s->out.fill, ly->z_mm) : NULL;
 	/* the material left is designed: deposit all of it */
 	ly->fill = s->out.voids ? LAYER_FILL_SOLID : LAYER_FILL_PART;
 	t0 = progress_now_s();
@@ -242,6 +284,8 @@ static int hollow_layer(void *state, struct layer *ly, struct err *e)
 		/* render it here, as the writer would, so the check sees the
 		 * very pixels that are written */
 		rc = slice_rasterize(&ly->region, s->map, s->antialias, ly->raster, e);
+		if (!rc && fill)
+			rc = fill_mask(s, fill, ly->raster, e);
 		if (rc)
 			return rc;
 		ly->raster_ready = 1;
@@ -249,9 +293,15 @@ static int hollow_layer(void *state, struct layer *ly, struct err *e)
 	} else {
 		raster_clear(s->own);
 		rc = slice_rasterize(&ly->region, &s->own_map, 0, s->own, e);
+		if (!rc && fill)
+			rc = fill_mask(s, fill, s->own, e);
 		if (!rc)
 			rc = verify_layer(s->ver, s->own, e);
 	}
+	/* the region handed on (G-code, area metrics) loses the fill too */
+	if (!rc && fill)
+		rc = clip_boolean(CLIP_DIFFERENCE, &ly->region, fill, CLIP_FILL_NONZERO, &ly->region,
+				  e);
 	s->layers_seen++;
 	s->t_verify += progress_now_s() - t0;
 	return rc;
@@ -320,6 +370,9 @@ static int hollow_metrics(void *state, struct metrics *m, struct err *e)
 	rc |= metrics_num(m, "hollow.sample_mm", o->sample_mm);
 	rc |= metrics_str(m, "hollow.objective", objective_names[s->objective]);
 	rc |= metrics_int(m, "hollow.solver_iterations", o->iterations);
+	rc |= metrics_int(m, "hollow.voids_optimised", (long long)o->voids_optimised);
+	rc |= metrics_int(m, "hollow.voids_fill", (long long)o->fill.voids);
+	rc |= metrics_num(m, "hollow.fill_volume_mm3", o->fill.volume_mm3);
 	rc |= metrics_int(m, "hollow.voids_fallback", (long long)o->voids_fallback);
 	rc |= metrics_int(m, "hollow.groups_failed", (long long)o->groups_failed);
 	rc |= metrics_int(m, "hollow.groups_small", (long long)o->groups_small);
@@ -327,6 +380,7 @@ static int hollow_metrics(void *state, struct metrics *m, struct err *e)
 	rc |= metrics_num(m, "hollow.seconds.groups", o->s_groups);
 	rc |= metrics_num(m, "hollow.seconds.optimise", o->s_solve);
 	rc |= metrics_num(m, "hollow.seconds.mesh", o->s_mesh);
+	rc |= metrics_num(m, "hollow.seconds.fill", o->s_fill);
 	rc |= metrics_num(m, "hollow.seconds.prepare", s->t_prepare);
 	rc |= metrics_num(m, "hollow.seconds.verify", s->t_verify);
 	if (o->note[0])
@@ -363,6 +417,7 @@ static void hollow_release(void *state)
 	verify_free(s->ver);
 	verify_report_fini(&s->rep);
 	raster_free(s->own);
+	raster_free(s->mask);
 	mem_free(s);
 }
 

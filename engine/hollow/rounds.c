@@ -39,6 +39,7 @@
 void hl_outcome_fini(struct hl_outcome *o)
 {
 	mesh_free(o->mesh);
+	hl_fill_fini(&o->fill);
 	memset(o, 0, sizeof *o);
 }
 
@@ -150,18 +151,6 @@ static int blocked(void *vctx, struct vec3 a, struct vec3 b, struct vec3 c)
 }
 
 /* ---- the eroded stack pulls layers of the current solid ---- */
-
-struct src_ctx {
-	struct slicer *s;
-	double layer_mm;
-};
-
-static int src_layer(void *ctx, int k, struct paths *region, struct err *e)
-{
-	struct src_ctx *c = ctx;
-
-	return slice_at(c->s, (k + 0.5) * c->layer_mm, region, NULL, e);
-}
 
 /* ---- result mesh ---- */
 
@@ -279,8 +268,8 @@ static int round_voids(const struct round_in *in, struct hl_outcome *o, struct h
 		goto out;
 	{
 		struct slice_erode_params ep;
-		struct src_ctx sc = {ss, c->stack_layer_mm};
-		struct slice_erode_source src = {src_layer, &sc};
+		struct hl_src_ctx sc = {ss, c->stack_layer_mm};
+		struct slice_erode_source src = {hl_src_layer, &sc};
 		memset(&ep, 0, sizeof ep);
 		ep.r_mm = in->wall;
 		ep.pixel_mm = c->pixel_mm;
@@ -538,6 +527,17 @@ int hl_run(const struct mesh *part, const struct hl_config *c, struct progress *
 			break;
 		res.voids += kept;
 		res.rounds = r;
+	}
+	res.voids_optimised = res.voids;
+	if (c->fill && c->objective == HL_OBJ_LIGHTWEIGHT) {
+		double t0 = progress_now_s();
+		rc = hl_fill_build(part, res.voids ? res.mesh : NULL, c, stack_count, prog, 0.9, 1.0,
+				   &res.fill, e);
+		if (rc)
+			goto out;
+		res.voids += res.fill.voids;
+		res.void_volume_mm3 += res.fill.volume_mm3;
+		res.s_fill = progress_now_s() - t0;
 	}
 	if (!res.voids && !res.note[0])
 		snprintf(res.note, sizeof res.note,

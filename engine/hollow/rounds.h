@@ -10,6 +10,7 @@
 
 #include "engine/geom/hull.h"
 #include "engine/hollow/nlp.h"
+#include "engine/hollow/topdown.h"
 
 struct mesh;
 struct progress;
@@ -30,21 +31,24 @@ struct hl_config {
 	enum hl_objective objective;
 	double light_weight;   /* stability: weight of the lightweight term */
 	double print_layer_mm; /* the job's layer (contact layer for stability) */
+	int fill;              /* lightweight: top-down fill of what the optimiser left */
 };
 
 struct hl_outcome {
 	struct mesh *mesh;        /* outer surface + void surfaces (owned) */
 	int rounds;               /* rounds that added voids */
-	size_t voids;
+	size_t voids;             /* optimised (mesh) voids + fill components */
+	size_t voids_optimised;   /* of them: made by the optimiser (or its start) */
 	size_t voids_fallback;    /* voids kept at their support-free start */
 	size_t groups_failed;     /* optimised groups dropped (check failed) */
 	size_t groups_small;      /* dropped: below min_void_mm3 */
 	double part_volume_mm3;
 	double void_volume_mm3;
+	struct hl_fill fill;      /* top-down fill (topdown.h); empty when off */
 	double opt_layer_mm;      /* h actually used */
 	double sample_mm;
 	int iterations;           /* Ipopt iterations, all voids and rounds */
-	double s_offset, s_contours, s_groups, s_solve, s_mesh; /* seconds */
+	double s_offset, s_contours, s_groups, s_solve, s_mesh, s_fill; /* seconds */
 	char note[256];           /* "" or why nothing was hollowed */
 	/* stability */
 	int has_com;
