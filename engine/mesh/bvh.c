@@ -98,6 +98,16 @@ static int cmp_keyed(const void *pa, const void *pb)
 	return (a->i > b->i) - (a->i < b->i);
 }
 
+/* Bin of centroid coordinate c, 0..NBINS-1; clamped in double before the
+ * cast: a denormal extent makes scale infinite, and 0 * inf is NaN (which
+ * lands in bin 0). */
+static int sah_bin(double c, double clo, double scale)
+{
+	double t = (c - clo) * scale;
+
+	return t >= NBINS - 1 ? NBINS - 1 : t > 0 ? (int)t : 0;
+}
+
 /* Binned SAH: partitions the range and returns the split position
  * (first < mid < first + n), or 0 when a leaf is cheaper or no axis
  * separates the centroids. */
@@ -119,8 +129,7 @@ static size_t sah_split(struct build *s, size_t first, size_t n, struct box3 box
 		for (i = 0; i < NBINS; i++)
 			bb[i] = box3_empty();
 		for (j = first; j < first + n; j++) {
-			int k = (int)((v3_comp(s->cen[j], axis) - clo) * scale);
-			k = k < 0 ? 0 : k >= NBINS ? NBINS - 1 : k;
+			int k = sah_bin(v3_comp(s->cen[j], axis), clo, scale);
 			cnt[k]++;
 			box_union(&bb[k], s->tbox[j]);
 		}
@@ -154,8 +163,7 @@ static size_t sah_split(struct build *s, size_t first, size_t n, struct box3 box
 		lo = first;
 		hi = first + n;
 		while (lo < hi) {
-			int k = (int)((v3_comp(s->cen[lo], best_axis) - clo) * scale);
-			k = k < 0 ? 0 : k >= NBINS ? NBINS - 1 : k;
+			int k = sah_bin(v3_comp(s->cen[lo], best_axis), clo, scale);
 			if (k <= best_bin)
 				lo++;
 			else

@@ -35,6 +35,10 @@ enum mesh_format {
 /* Hard caps applied by every reader before allocating. */
 #define MESH_MAX_TRIANGLES 50000000u
 #define MESH_MAX_VERTICES 50000000u
+/* Largest |coordinate| a file may hold, in its own units: no printable part
+ * is 1e9 units across in any unit (mm, cm, m, in), and keeping coordinates
+ * this small keeps extents, areas and volumes finite in double. */
+#define MESH_MAX_COORD 1e9
 
 /* What a reader saw besides the geometry. */
 struct mesh_read_info {

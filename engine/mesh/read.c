@@ -10,6 +10,7 @@
 
 #include <errno.h>
 #include <fcntl.h>
+#include <math.h>
 #include <stdarg.h>
 #include <stdio.h>
 #include <string.h>
@@ -171,6 +172,17 @@ int mesh_read_buffer(const void *data, size_t len, enum mesh_format fmt, const c
 		rc = ERR_PLACE(e, ERR_GEOMETRY, (long long)len, 0, -1,
 			       "the %s file contains no triangles", format_name(fmt));
 		goto out;
+	}
+	for (size_t i = 0; i < m->nv; i++) {
+		const double c[3] = {m->v[i].x, m->v[i].y, m->v[i].z};
+		for (int k = 0; k < 3; k++)
+			if (!(fabs(c[k]) <= MESH_MAX_COORD)) { /* also NaN */
+				rc = ERR_PLACE(e, ERR_GEOMETRY, -1, 0, (long long)i,
+					       "vertex %zu: coordinate %g is not a finite number "
+					       "within +-%g (not a printable part in any unit)",
+					       i, c[k], MESH_MAX_COORD);
+				goto out;
+			}
 	}
 	*out = m;
 	m = NULL;

@@ -8,6 +8,8 @@
 
 #include "mesh_fixtures.h"
 
+#include "engine/mesh/text.h"
+
 static double total_area(const struct mesh *m)
 {
 	double a = 0;
@@ -407,20 +409,29 @@ static void test_numbers(void)
 			  "v 3.141592653589793238 -0 1.7976931348623157e308\n"
 			  "v 4.9e-324 .5 5.\n"
 			  "f 1 2 3\n";
-	struct mesh *m = NULL;
-	struct err e;
+	static const double want[] = {0.1, 1e-300, 123456789012345678901234567890.0,
+				      3.141592653589793, -0.0, 1.7976931348623157e308,
+				      4.9e-324, 0.5, 5.0};
+	struct mesh_text t;
+	double d;
+	size_t i;
 
-	REQUIRE_OK(fx_read_str(src, MESH_FMT_OBJ, &m, NULL, &e), &e);
-	CHECK(m->v[0].x == 0.1);
-	CHECK(m->v[0].y == 1e-300);
-	CHECK(m->v[0].z == 123456789012345678901234567890.0);
-	CHECK(m->v[1].x == 3.141592653589793);
-	CHECK(m->v[1].y == 0 && signbit(m->v[1].y));
-	CHECK(m->v[1].z == 1.7976931348623157e308);
-	CHECK(m->v[2].x == 4.9e-324);
-	CHECK(m->v[2].y == 0.5);
-	CHECK(m->v[2].z == 5.0);
-	mesh_free(m);
+	/* The number parser itself (the readers then refuse coordinates
+	 * beyond MESH_MAX_COORD). */
+	mesh_text_init(&t, src, strlen(src));
+	for (i = 0; i < 9; i++) {
+		if (i % 3 == 0) {
+			mesh_text_skip_blank(&t);
+			t.p++; /* the "v" */
+		}
+		mesh_text_skip_blank(&t);
+		CHECK_EQ_INT(mesh_text_number(&t, &d), 0);
+		CHECK(d == want[i] && signbit(d) == signbit(want[i]));
+		if (i % 3 == 2)
+			mesh_text_next_line(&t);
+	}
+	expect_error("v 0 0 0\nv 1 0 0\nv 0 1.7976931348623157e308 0\nf 1 2 3\n", MESH_FMT_OBJ,
+		     ERR_GEOMETRY, "vertex 2: coordinate 1.79769e+308 is not a finite number", 0);
 	expect_error("v 1 2 1e999\n", MESH_FMT_OBJ, ERR_PARSE, "infinite", 1);
 }
 
@@ -441,6 +452,8 @@ static void test_fuzz_regressions(void)
 		{"off-count-overflow", MESH_FMT_OFF, ERR_PARSE, "more than a 99-byte file can hold"},
 		/* "element vertex 0": memset of a NULL vertex array (UBSan) */
 		{"ply-zero-vertices", MESH_FMT_PLY, ERR_PARSE, "face 0 has 0 corners"},
+		/* 1e300: extents and areas overflow to inf downstream */
+		{"off-huge-coordinate", MESH_FMT_OFF, ERR_GEOMETRY, "vertex 1: coordinate 1e+300"},
 	};
 	size_t i;
 
