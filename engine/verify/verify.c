@@ -3,8 +3,10 @@
  * Per layer, over a crop = bounding box of this and the previous layer's
  * solid pixels grown by the overhang reach plus two pixels (everything
  * outside the crop is void connected to the outside):
- *  1. void components, 4-connected; each gets a union-find id; those
- *     touching the crop edge are the outside (id VX_OUT);
+ *  1. void components, 8-connected (so solid walls are 4-connected: a
+ *     void pixel that meets the outside only at a pixel corner IS the
+ *     outside); each gets a union-find id; those touching the crop edge
+ *     are the outside (id VX_OUT);
  *  2. vertical links: a void pixel above/below a void pixel joins their
  *     components (6-connectivity in 3D);
  *  3. overhangs: solid pixels over void pixels of the previous layer whose
@@ -24,6 +26,19 @@
  * are measured between pixel centres, so the reach a pixel centre may lie
  * from the nearest solid centre is layer_mm * tan(alpha) + 1 pixel; a
  * true overhang larger than that by any amount is always caught.
+ *
+ * Walls.  In-layer wall of an enclosed void component = min over its
+ * pixels of the Euclidean distance between that pixel's centre and the
+ * nearest centre of an outside void pixel of the same layer, minus one
+ * pixel pitch (the half pixel of void on each side: a wall of N solid
+ * pixels between two void pixels on a row reads exactly N pixels).  With
+ * centre-sampled or coverage-thresholded layers each boundary is off by
+ * up to half a pixel, so a true wall T reads within T +- 1 pixel.
+ * Vertical wall = length of a column's solid run between an enclosed
+ * void and the outside (or the open top), in whole layers.  Enclosure is
+ * the 3D one (resolved in verify_finish).  Enclosed 3D components of at
+ * most speck_voxels voxels (rasterisation specks) do not enter the
+ * minima; they are counted apart (specks, speck_min_wall_mm).
  */
 #include "engine/verify/verify.h"
 
@@ -140,6 +155,9 @@ int verify_new(const struct verify_params *p, struct verify **out, struct err *e
 	if (!(p->pixel_x_mm > 0) || !(p->pixel_y_mm > 0))
 		return ERR_FIELD(e, "pixel_mm", "verify: pixel pitch must be > 0 (got %g x %g)",
 				 p->pixel_x_mm, p->pixel_y_mm);
+	if (p->speck_voxels < 0)
+		return ERR_FIELD(e, "speck_voxels", "verify: speck_voxels must be >= 0 (got %d)",
+				 p->speck_voxels);
 	if (p->tolerance_px < 0 || p->threshold < 0 || p->threshold > 255)
 		return ERR_FIELD(e, "tolerance_px", "verify: bad tolerance or threshold");
 	v = mem_calloc(1, sizeof *v);
@@ -150,6 +168,8 @@ int verify_new(const struct verify_params *p, struct verify **out, struct err *e
 		v->p.tolerance_px = 1;
 	if (v->p.threshold == 0)
 		v->p.threshold = 128;
+	if (v->p.speck_voxels == 0)
+		v->p.speck_voxels = VERIFY_SPECK_VOXELS;
 	pmin = fmin(p->pixel_x_mm, p->pixel_y_mm);
 	v->reach_mm = p->layer_mm * tan(p->alpha_deg * M_PI / 180) +
 		      v->p.tolerance_px * fmax(p->pixel_x_mm, p->pixel_y_mm);
@@ -162,6 +182,7 @@ int verify_new(const struct verify_params *p, struct verify **out, struct err *e
 	v->r.min_wall_mm = INFINITY;
 	v->r.min_wall_layer = -1;
 	v->r.min_wall_vertical_mm = INFINITY;
+	v->r.speck_min_wall_mm = INFINITY;
 	/* union-find: 0 unused, 1 = outside */
 	v->ufcap = 1024;
 	v->uf = mem_alloc(v->ufcap * sizeof *v->uf);
@@ -277,7 +298,8 @@ static int push(struct verify *v, size_t n, int val)
 	return 0;
 }
 
-/* Label void components (4-connected) of the current crop. */
+/* Label void components (8-connected) of the current crop; see the head
+ * comment for why 8 and not 4. */
 static int label_voids(struct verify *v, uint32_t *ncomp)
 {
 	struct crop *c = v->cur;
@@ -298,10 +320,11 @@ static int label_voids(struct verify *v, uint32_t *ncomp)
 			c->lab[i] = id;
 			while (sp) {
 				int q = v->stack[--sp], qx = q % w, qy = q / w;
-				static const int dx[4] = {1, -1, 0, 0}, dy[4] = {0, 0, 1, -1};
+				static const int dx[8] = {1, -1, 0, 0, 1, 1, -1, -1};
+				static const int dy[8] = {0, 0, 1, -1, 1, -1, 1, -1};
 				if (qx == 0 || qy == 0 || qx == w - 1 || qy == h - 1)
 					touch = 1;
-				for (int k = 0; k < 4; k++) {
+				for (int k = 0; k < 8; k++) {
 					int nx = qx + dx[k], ny = qy + dy[k];
 					size_t j;
 					if (nx < 0 || ny < 0 || nx >= w || ny >= h)
@@ -326,7 +349,11 @@ static int label_voids(struct verify *v, uint32_t *ncomp)
 	return 0;
 }
 
-/* Islands: solid components (8-connected) without solid beneath. */
+/* Islands: solid components (8-connected) without solid beneath.  Not
+ * the dual of the 8-connected voids on purpose: this asks whether cured
+ * resin is attached, and pixels meeting at a corner cure together; with
+ * 4-connectivity every stair-step pixel of a rasterised slope with no
+ * solid beneath would read as a floating part. */
 static int islands(struct verify *v, int layer)
 {
 	struct crop *c = v->cur;
@@ -617,7 +644,7 @@ static int cmp_rec_layer(const void *a, const void *b)
 int verify_finish(struct verify *v, struct verify_report *out, struct err *e)
 {
 	struct crop *c = v->cur;
-	double pa = v->p.pixel_x_mm * v->p.pixel_y_mm;
+	double pa = v->p.pixel_x_mm * v->p.pixel_y_mm, *vox;
 
 	if (v->failed)
 		return ERR_SET(e, ERR_INTERNAL, "verify: check failed earlier");
@@ -662,18 +689,37 @@ int verify_finish(struct verify *v, struct verify_report *out, struct err *e)
 		}
 	}
 	v->r.interior_overhang_mm2 = (double)v->r.interior_overhang_px * pa;
+	/* voxels per enclosed 3D component (indexed by root id): every layer
+	 * component of an enclosed 3D component is 2D-enclosed, so it has a
+	 * vol record */
+	vox = mem_calloc(v->nuf, sizeof *vox);
+	if (!vox)
+		return ERR_SET(e, ERR_NOMEM, "verify: out of memory");
+	for (size_t k = 0; k < v->vol.n; k++) {
+		uint32_t root = uf_find(v, v->vol.v[k].id);
+		if (root == VX_OUT)
+			continue;
+		v->r.enclosed_void_mm3 += v->vol.v[k].val * pa * v->p.layer_mm;
+		vox[root] += v->vol.v[k].val;
+	}
+	for (uint32_t k = 2; k < v->nuf; k++)
+		if (uf_find(v, k) == k && vox[k] > 0 && vox[k] <= v->p.speck_voxels)
+			v->r.specks++;
 	for (size_t k = 0; k < v->wall.n; k++) {
 		const struct rec *q = &v->wall.v[k];
-		if (uf_find(v, q->id) == VX_OUT)
+		uint32_t root = uf_find(v, q->id);
+		if (root == VX_OUT)
 			continue;
+		if (vox[root] <= v->p.speck_voxels) {
+			v->r.speck_min_wall_mm = fmin(v->r.speck_min_wall_mm, q->val);
+			continue;
+		}
 		if (q->val < v->r.min_wall_mm) {
 			v->r.min_wall_mm = q->val;
 			v->r.min_wall_layer = q->layer;
 		}
 	}
-	for (size_t k = 0; k < v->vol.n; k++)
-		if (uf_find(v, v->vol.v[k].id) != VX_OUT)
-			v->r.enclosed_void_mm3 += v->vol.v[k].val * pa * v->p.layer_mm;
+	mem_free(vox);
 	verify_report_fini(out);
 	*out = v->r;
 	memset(&v->r, 0, sizeof v->r);
@@ -698,6 +744,8 @@ int verify_report_metrics(const struct verify_report *r, const char *prefix, str
 	rc |= metrics_num(m, KEY("min_wall_mm"), r->min_wall_mm);
 	rc |= metrics_num(m, KEY("min_wall_vertical_mm"), r->min_wall_vertical_mm);
 	rc |= metrics_num(m, KEY("enclosed_void_mm3"), r->enclosed_void_mm3);
+	rc |= metrics_int(m, KEY("specks"), r->specks);
+	rc |= metrics_num(m, KEY("speck_min_wall_mm"), r->speck_min_wall_mm);
 	rc |= metrics_int(m, KEY("layers"), r->layers);
 #undef KEY
 	return rc ? ERR_SET(e, ERR_NOMEM, "verify: out of memory recording metrics") : 0;
