@@ -65,6 +65,7 @@ struct crop {
 
 struct rec {
 	uint32_t id;
+	uint32_t id2; /* vertical walls: the void on the run's other side */
 	int layer;
 	double val; /* px count (overhang, void volume) or wall mm */
 };
@@ -82,9 +83,11 @@ struct verify {
 	struct crop a, b, *prev, *cur;
 	uint32_t *uf;
 	size_t nuf, ufcap;
-	struct recs ov, wall, vol;
-	uint16_t *col;        /* per image pixel: layer where its solid run began (+ type bit) */
-	int col_ok;           /* layer count fits the 15-bit counter */
+	struct recs ov, wall, vol, vwall;
+	uint16_t *col;        /* per image pixel: layer where its solid run began */
+	uint32_t *col_id;     /* per image pixel: void component under that run when
+			       * it was 2D-enclosed, else VX_OUT (outside, plate) */
+	int col_ok;           /* layer count fits the 16-bit counter */
 	uint8_t *enc;         /* per component of the current layer: 2D-enclosed */
 	size_t enc_cap;
 	uint8_t *prev_enc;    /* same for the previous layer's components */
@@ -129,7 +132,9 @@ void verify_free(struct verify *v)
 	mem_free(v->ov.v);
 	mem_free(v->wall.v);
 	mem_free(v->vol.v);
+	mem_free(v->vwall.v);
 	mem_free(v->col);
+	mem_free(v->col_id);
 	mem_free(v->enc);
 	mem_free(v->prev_enc);
 	mem_free(v->agg);
@@ -233,7 +238,7 @@ static int uf_new(struct verify *v, uint32_t *id)
 	return 0;
 }
 
-static int rec_add(struct recs *r, uint32_t id, int layer, double val)
+static int rec_add2(struct recs *r, uint32_t id, uint32_t id2, int layer, double val)
 {
 	if (r->n == r->cap) {
 		void *arr = r->v;
@@ -242,10 +247,30 @@ static int rec_add(struct recs *r, uint32_t id, int layer, double val)
 		r->v = arr;
 	}
 	r->v[r->n].id = id;
+	r->v[r->n].id2 = id2;
 	r->v[r->n].layer = layer;
 	r->v[r->n].val = val;
 	r->n++;
 	return 0;
+}
+
+static int rec_add(struct recs *r, uint32_t id, int layer, double val)
+{
+	return rec_add2(r, id, 0, layer, val);
+}
+
+/* A solid run of t_mm along a column between void components a (above)
+ * and b (below); at least one was 2D-enclosed.  Runs of one row of
+ * pixels between the same two components collapse into one record. */
+static int vwall_add(struct verify *v, uint32_t a, uint32_t b, int layer, double t_mm)
+{
+	struct rec *q = v->vwall.n ? &v->vwall.v[v->vwall.n - 1] : NULL;
+
+	if (q && q->id == a && q->id2 == b && q->layer == layer) {
+		q->val = fmin(q->val, t_mm);
+		return 0;
+	}
+	return rec_add2(&v->vwall, a, b, layer, t_mm);
 }
 
 static int grow_bytes(void **p, size_t *cap, size_t need)
@@ -427,13 +452,14 @@ int verify_layer(struct verify *v, const struct raster *r, struct err *e)
 		v->h = r->h;
 		v->col_ok = 1;
 		v->col = mem_calloc((size_t)r->w * (size_t)r->h, sizeof *v->col);
-		if (!v->col)
+		v->col_id = mem_calloc((size_t)r->w * (size_t)r->h, sizeof *v->col_id);
+		if (!v->col || !v->col_id)
 			goto nomem;
 	} else if (r->w != v->w || r->h != v->h) {
 		return ERR_FIELD(e, "layer", "verify: layer %d is %dx%d, earlier layers %dx%d", layer,
 				 r->w, r->h, v->w, v->h);
 	}
-	if (layer >= 32767)
+	if (layer >= UINT16_MAX)
 		v->col_ok = 0;
 	/* swap: the current crop becomes the previous one */
 	pc = v->cur;
@@ -596,14 +622,15 @@ int verify_layer(struct verify *v, const struct raster *r, struct err *e)
 			}
 		}
 	}
-	/* 5c. walls along columns: solid runs between the outside and an
-	 * enclosed void (2D-enclosed in their layers) */
+	/* 5c. walls along columns: solid runs with a 2D-enclosed void on at
+	 * least one end; whether one end is the outside and the other an
+	 * enclosed void is decided in 3D in verify_finish */
 	if (v->col_ok && c->w) {
 		for (int y = 0; y < c->h; y++)
 			for (int x = 0; x < c->w; x++) {
 				size_t i = (size_t)y * (size_t)c->w + (size_t)x, pi;
 				int gx = x + c->x0, gy = y + c->y0, below_solid;
-				uint16_t *cs = &v->col[(size_t)gy * (size_t)v->w + (size_t)gx];
+				size_t gi = (size_t)gy * (size_t)v->w + (size_t)gx;
 				int enc_now = !c->solid[i] && v->enc[c->lab[i] - v->cur_first];
 				below_solid = layer > 0 && crop_solid(pc, gx, gy, &pi);
 				if (c->solid[i]) {
@@ -611,19 +638,18 @@ int verify_layer(struct verify *v, const struct raster *r, struct err *e)
 						/* a run starts: remember what is under it */
 						int enc_below = layer > 0 && pi != SIZE_MAX &&
 								prev_enclosed(v, pc->lab[pi]);
-						*cs = (uint16_t)(layer | (enc_below ? 0x8000 : 0));
+						v->col[gi] = (uint16_t)layer;
+						v->col_id[gi] = enc_below ? pc->lab[pi] : VX_OUT;
 					}
 					continue;
 				}
 				if (!below_solid)
 					continue;
 				/* a run ended: it separated what was below from this */
-				{
-					int start = *cs & 0x7fff, enc_below = (*cs & 0x8000) != 0;
-					double t = (layer - start) * v->p.layer_mm;
-					if (enc_now != enc_below && t < v->r.min_wall_vertical_mm)
-						v->r.min_wall_vertical_mm = t;
-				}
+				if ((enc_now || v->col_id[gi] != VX_OUT) &&
+				    vwall_add(v, enc_now ? c->lab[i] : VX_OUT, v->col_id[gi], layer,
+					      (layer - v->col[gi]) * v->p.layer_mm))
+					goto nomem;
 			}
 	}
 	v->next++;
@@ -656,10 +682,11 @@ int verify_finish(struct verify *v, struct verify_report *out, struct err *e)
 			uf_union(v, c->lab[i], VX_OUT);
 		} else if (v->col_ok) {
 			size_t gx = i % (size_t)c->w + (size_t)c->x0, gy = i / (size_t)c->w + (size_t)c->y0;
-			uint16_t cs = v->col[gy * (size_t)v->w + gx];
-			double t = (v->next - (cs & 0x7fff)) * v->p.layer_mm;
-			if ((cs & 0x8000) && t < v->r.min_wall_vertical_mm)
-				v->r.min_wall_vertical_mm = t;
+			size_t gi = gy * (size_t)v->w + gx;
+			if (v->col_id[gi] != VX_OUT &&
+			    vwall_add(v, VX_OUT, v->col_id[gi], v->next,
+				      (v->next - v->col[gi]) * v->p.layer_mm))
+				return ERR_SET(e, ERR_NOMEM, "verify: out of memory");
 		}
 	}
 	v->r.layers = v->next;
@@ -718,6 +745,20 @@ int verify_finish(struct verify *v, struct verify_report *out, struct err *e)
 			v->r.min_wall_mm = q->val;
 			v->r.min_wall_layer = q->layer;
 		}
+	}
+	/* a vertical wall separates an enclosed void from the outside: exactly
+	 * one end's 3D component is enclosed (two enclosed ends = a wall
+	 * between two cavities, not to the outside) */
+	for (size_t k = 0; k < v->vwall.n; k++) {
+		const struct rec *q = &v->vwall.v[k];
+		uint32_t ra = uf_find(v, q->id), rb = uf_find(v, q->id2), in;
+		if ((ra == VX_OUT) == (rb == VX_OUT))
+			continue;
+		in = ra == VX_OUT ? rb : ra;
+		if (vox[in] <= v->p.speck_voxels)
+			v->r.speck_min_wall_mm = fmin(v->r.speck_min_wall_mm, q->val);
+		else
+			v->r.min_wall_vertical_mm = fmin(v->r.min_wall_vertical_mm, q->val);
 	}
 	mem_free(vox);
 	verify_report_fini(out);
