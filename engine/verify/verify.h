@@ -16,7 +16,7 @@
  *  - minimum wall thickness between enclosed voids and the outside: in
  *    the layer plane (exact distance transform) and along columns.
  * Memory: two layers of per-pixel state over the layers' bounding boxes,
- * plus two 16-bit column counters per image pixel.  Design and the
+ * plus a 16-bit run start and a 32-bit void id per image pixel.  Design and the
  * tolerance argument: docs/verify.md.
  */
 #ifndef INFILLD_VERIFY_H
