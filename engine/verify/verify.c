@@ -3,8 +3,10 @@
  * Per layer, over a crop = bounding box of this and the previous layer's
  * solid pixels grown by the overhang reach plus two pixels (everything
  * outside the crop is void connected to the outside):
- *  1. void components, 4-connected; each gets a union-find id; those
- *     touching the crop edge are the outside (id VX_OUT);
+ *  1. void components, 8-connected (so solid walls are 4-connected: a
+ *     void pixel that meets the outside only at a pixel corner IS the
+ *     outside); each gets a union-find id; those touching the crop edge
+ *     are the outside (id VX_OUT);
  *  2. vertical links: a void pixel above/below a void pixel joins their
  *     components (6-connectivity in 3D);
  *  3. overhangs: solid pixels over void pixels of the previous layer whose
@@ -24,6 +26,19 @@
  * are measured between pixel centres, so the reach a pixel centre may lie
  * from the nearest solid centre is layer_mm * tan(alpha) + 1 pixel; a
  * true overhang larger than that by any amount is always caught.
+ *
+ * Walls.  In-layer wall of an enclosed void component = min over its
+ * pixels of the Euclidean distance between that pixel's centre and the
+ * nearest centre of an outside void pixel of the same layer, minus one
+ * pixel pitch (the half pixel of void on each side: a wall of N solid
+ * pixels between two void pixels on a row reads exactly N pixels).  With
+ * centre-sampled or coverage-thresholded layers each boundary is off by
+ * up to half a pixel, so a true wall T reads within T +- 1 pixel.
+ * Vertical wall = length of a column's solid run between an enclosed
+ * void and the outside (or the open top), in whole layers.  Enclosure is
+ * the 3D one (resolved in verify_finish).  Enclosed 3D components of at
+ * most speck_voxels voxels (rasterisation specks) do not enter the
+ * minima; they are counted apart (specks, speck_min_wall_mm).
  */
 #include "engine/verify/verify.h"
 
@@ -50,6 +65,7 @@ struct crop {
 
 struct rec {
 	uint32_t id;
+	uint32_t id2; /* vertical walls: the void on the run's other side */
 	int layer;
 	double val; /* px count (overhang, void volume) or wall mm */
 };
@@ -67,9 +83,11 @@ struct verify {
 	struct crop a, b, *prev, *cur;
 	uint32_t *uf;
 	size_t nuf, ufcap;
-	struct recs ov, wall, vol;
-	uint16_t *col;        /* per image pixel: layer where its solid run began (+ type bit) */
-	int col_ok;           /* layer count fits the 15-bit counter */
+	struct recs ov, wall, vol, vwall;
+	uint16_t *col;        /* per image pixel: layer where its solid run began */
+	uint32_t *col_id;     /* per image pixel: void component under that run when
+			       * it was 2D-enclosed, else VX_OUT (outside, plate) */
+	int col_ok;           /* layer count fits the 16-bit counter */
 	uint8_t *enc;         /* per component of the current layer: 2D-enclosed */
 	size_t enc_cap;
 	uint8_t *prev_enc;    /* same for the previous layer's components */
@@ -114,7 +132,9 @@ void verify_free(struct verify *v)
 	mem_free(v->ov.v);
 	mem_free(v->wall.v);
 	mem_free(v->vol.v);
+	mem_free(v->vwall.v);
 	mem_free(v->col);
+	mem_free(v->col_id);
 	mem_free(v->enc);
 	mem_free(v->prev_enc);
 	mem_free(v->agg);
@@ -140,6 +160,9 @@ int verify_new(const struct verify_params *p, struct verify **out, struct err *e
 	if (!(p->pixel_x_mm > 0) || !(p->pixel_y_mm > 0))
 		return ERR_FIELD(e, "pixel_mm", "verify: pixel pitch must be > 0 (got %g x %g)",
 				 p->pixel_x_mm, p->pixel_y_mm);
+	if (p->speck_voxels < 0)
+		return ERR_FIELD(e, "speck_voxels", "verify: speck_voxels must be >= 0 (got %d)",
+				 p->speck_voxels);
 	if (p->tolerance_px < 0 || p->threshold < 0 || p->threshold > 255)
 		return ERR_FIELD(e, "tolerance_px", "verify: bad tolerance or threshold");
 	v = mem_calloc(1, sizeof *v);
@@ -150,6 +173,8 @@ int verify_new(const struct verify_params *p, struct verify **out, struct err *e
 		v->p.tolerance_px = 1;
 	if (v->p.threshold == 0)
 		v->p.threshold = 128;
+	if (v->p.speck_voxels == 0)
+		v->p.speck_voxels = VERIFY_SPECK_VOXELS;
 	pmin = fmin(p->pixel_x_mm, p->pixel_y_mm);
 	v->reach_mm = p->layer_mm * tan(p->alpha_deg * M_PI / 180) +
 		      v->p.tolerance_px * fmax(p->pixel_x_mm, p->pixel_y_mm);
@@ -162,6 +187,7 @@ int verify_new(const struct verify_params *p, struct verify **out, struct err *e
 	v->r.min_wall_mm = INFINITY;
 	v->r.min_wall_layer = -1;
 	v->r.min_wall_vertical_mm = INFINITY;
+	v->r.speck_min_wall_mm = INFINITY;
 	/* union-find: 0 unused, 1 = outside */
 	v->ufcap = 1024;
 	v->uf = mem_alloc(v->ufcap * sizeof *v->uf);
@@ -212,7 +238,7 @@ static int uf_new(struct verify *v, uint32_t *id)
 	return 0;
 }
 
-static int rec_add(struct recs *r, uint32_t id, int layer, double val)
+static int rec_add2(struct recs *r, uint32_t id, uint32_t id2, int layer, double val)
 {
 	if (r->n == r->cap) {
 		void *arr = r->v;
@@ -221,10 +247,30 @@ static int rec_add(struct recs *r, uint32_t id, int layer, double val)
 		r->v = arr;
 	}
 	r->v[r->n].id = id;
+	r->v[r->n].id2 = id2;
 	r->v[r->n].layer = layer;
 	r->v[r->n].val = val;
 	r->n++;
 	return 0;
+}
+
+static int rec_add(struct recs *r, uint32_t id, int layer, double val)
+{
+	return rec_add2(r, id, 0, layer, val);
+}
+
+/* A solid run of t_mm along a column between void components a (above)
+ * and b (below); at least one was 2D-enclosed.  Runs of one row of
+ * pixels between the same two components collapse into one record. */
+static int vwall_add(struct verify *v, uint32_t a, uint32_t b, int layer, double t_mm)
+{
+	struct rec *q = v->vwall.n ? &v->vwall.v[v->vwall.n - 1] : NULL;
+
+	if (q && q->id == a && q->id2 == b && q->layer == layer) {
+		q->val = fmin(q->val, t_mm);
+		return 0;
+	}
+	return rec_add2(&v->vwall, a, b, layer, t_mm);
 }
 
 static int grow_bytes(void **p, size_t *cap, size_t need)
@@ -277,7 +323,8 @@ static int push(struct verify *v, size_t n, int val)
 	return 0;
 }
 
-/* Label void components (4-connected) of the current crop. */
+/* Label void components (8-connected) of the current crop; see the head
+ * comment for why 8 and not 4. */
 static int label_voids(struct verify *v, uint32_t *ncomp)
 {
 	struct crop *c = v->cur;
@@ -298,10 +345,11 @@ static int label_voids(struct verify *v, uint32_t *ncomp)
 			c->lab[i] = id;
 			while (sp) {
 				int q = v->stack[--sp], qx = q % w, qy = q / w;
-				static const int dx[4] = {1, -1, 0, 0}, dy[4] = {0, 0, 1, -1};
+				static const int dx[8] = {1, -1, 0, 0, 1, 1, -1, -1};
+				static const int dy[8] = {0, 0, 1, -1, 1, -1, 1, -1};
 				if (qx == 0 || qy == 0 || qx == w - 1 || qy == h - 1)
 					touch = 1;
-				for (int k = 0; k < 4; k++) {
+				for (int k = 0; k < 8; k++) {
 					int nx = qx + dx[k], ny = qy + dy[k];
 					size_t j;
 					if (nx < 0 || ny < 0 || nx >= w || ny >= h)
@@ -326,7 +374,11 @@ static int label_voids(struct verify *v, uint32_t *ncomp)
 	return 0;
 }
 
-/* Islands: solid components (8-connected) without solid beneath. */
+/* Islands: solid components (8-connected) without solid beneath.  Not
+ * the dual of the 8-connected voids on purpose: this asks whether cured
+ * resin is attached, and pixels meeting at a corner cure together; with
+ * 4-connectivity every stair-step pixel of a rasterised slope with no
+ * solid beneath would read as a floating part. */
 static int islands(struct verify *v, int layer)
 {
 	struct crop *c = v->cur;
@@ -400,13 +452,14 @@ int verify_layer(struct verify *v, const struct raster *r, struct err *e)
 		v->h = r->h;
 		v->col_ok = 1;
 		v->col = mem_calloc((size_t)r->w * (size_t)r->h, sizeof *v->col);
-		if (!v->col)
+		v->col_id = mem_calloc((size_t)r->w * (size_t)r->h, sizeof *v->col_id);
+		if (!v->col || !v->col_id)
 			goto nomem;
 	} else if (r->w != v->w || r->h != v->h) {
 		return ERR_FIELD(e, "layer", "verify: layer %d is %dx%d, earlier layers %dx%d", layer,
 				 r->w, r->h, v->w, v->h);
 	}
-	if (layer >= 32767)
+	if (layer >= UINT16_MAX)
 		v->col_ok = 0;
 	/* swap: the current crop becomes the previous one */
 	pc = v->cur;
@@ -569,14 +622,15 @@ int verify_layer(struct verify *v, const struct raster *r, struct err *e)
 			}
 		}
 	}
-	/* 5c. walls along columns: solid runs between the outside and an
-	 * enclosed void (2D-enclosed in their layers) */
+	/* 5c. walls along columns: solid runs with a 2D-enclosed void on at
+	 * least one end; whether one end is the outside and the other an
+	 * enclosed void is decided in 3D in verify_finish */
 	if (v->col_ok && c->w) {
 		for (int y = 0; y < c->h; y++)
 			for (int x = 0; x < c->w; x++) {
 				size_t i = (size_t)y * (size_t)c->w + (size_t)x, pi;
 				int gx = x + c->x0, gy = y + c->y0, below_solid;
-				uint16_t *cs = &v->col[(size_t)gy * (size_t)v->w + (size_t)gx];
+				size_t gi = (size_t)gy * (size_t)v->w + (size_t)gx;
 				int enc_now = !c->solid[i] && v->enc[c->lab[i] - v->cur_first];
 				below_solid = layer > 0 && crop_solid(pc, gx, gy, &pi);
 				if (c->solid[i]) {
@@ -584,19 +638,18 @@ int verify_layer(struct verify *v, const struct raster *r, struct err *e)
 						/* a run starts: remember what is under it */
 						int enc_below = layer > 0 && pi != SIZE_MAX &&
 								prev_enclosed(v, pc->lab[pi]);
-						*cs = (uint16_t)(layer | (enc_below ? 0x8000 : 0));
+						v->col[gi] = (uint16_t)layer;
+						v->col_id[gi] = enc_below ? pc->lab[pi] : VX_OUT;
 					}
 					continue;
 				}
 				if (!below_solid)
 					continue;
 				/* a run ended: it separated what was below from this */
-				{
-					int start = *cs & 0x7fff, enc_below = (*cs & 0x8000) != 0;
-					double t = (layer - start) * v->p.layer_mm;
-					if (enc_now != enc_below && t < v->r.min_wall_vertical_mm)
-						v->r.min_wall_vertical_mm = t;
-				}
+				if ((enc_now || v->col_id[gi] != VX_OUT) &&
+				    vwall_add(v, enc_now ? c->lab[i] : VX_OUT, v->col_id[gi], layer,
+					      (layer - v->col[gi]) * v->p.layer_mm))
+					goto nomem;
 			}
 	}
 	v->next++;
@@ -617,7 +670,7 @@ static int cmp_rec_layer(const void *a, const void *b)
 int verify_finish(struct verify *v, struct verify_report *out, struct err *e)
 {
 	struct crop *c = v->cur;
-	double pa = v->p.pixel_x_mm * v->p.pixel_y_mm;
+	double pa = v->p.pixel_x_mm * v->p.pixel_y_mm, *vox;
 
 	if (v->failed)
 		return ERR_SET(e, ERR_INTERNAL, "verify: check failed earlier");
@@ -629,10 +682,11 @@ int verify_finish(struct verify *v, struct verify_report *out, struct err *e)
 			uf_union(v, c->lab[i], VX_OUT);
 		} else if (v->col_ok) {
 			size_t gx = i % (size_t)c->w + (size_t)c->x0, gy = i / (size_t)c->w + (size_t)c->y0;
-			uint16_t cs = v->col[gy * (size_t)v->w + gx];
-			double t = (v->next - (cs & 0x7fff)) * v->p.layer_mm;
-			if ((cs & 0x8000) && t < v->r.min_wall_vertical_mm)
-				v->r.min_wall_vertical_mm = t;
+			size_t gi = gy * (size_t)v->w + gx;
+			if (v->col_id[gi] != VX_OUT &&
+			    vwall_add(v, VX_OUT, v->col_id[gi], v->next,
+				      (v->next - v->col[gi]) * v->p.layer_mm))
+				return ERR_SET(e, ERR_NOMEM, "verify: out of memory");
 		}
 	}
 	v->r.layers = v->next;
@@ -662,18 +716,51 @@ int verify_finish(struct verify *v, struct verify_report *out, struct err *e)
 		}
 	}
 	v->r.interior_overhang_mm2 = (double)v->r.interior_overhang_px * pa;
+	/* voxels per enclosed 3D component (indexed by root id): every layer
+	 * component of an enclosed 3D component is 2D-enclosed, so it has a
+	 * vol record */
+	vox = mem_calloc(v->nuf, sizeof *vox);
+	if (!vox)
+		return ERR_SET(e, ERR_NOMEM, "verify: out of memory");
+	for (size_t k = 0; k < v->vol.n; k++) {
+		uint32_t root = uf_find(v, v->vol.v[k].id);
+		if (root == VX_OUT)
+			continue;
+		v->r.enclosed_void_mm3 += v->vol.v[k].val * pa * v->p.layer_mm;
+		vox[root] += v->vol.v[k].val;
+	}
+	for (uint32_t k = 2; k < v->nuf; k++)
+		if (uf_find(v, k) == k && vox[k] > 0 && vox[k] <= v->p.speck_voxels)
+			v->r.specks++;
 	for (size_t k = 0; k < v->wall.n; k++) {
 		const struct rec *q = &v->wall.v[k];
-		if (uf_find(v, q->id) == VX_OUT)
+		uint32_t root = uf_find(v, q->id);
+		if (root == VX_OUT)
 			continue;
+		if (vox[root] <= v->p.speck_voxels) {
+			v->r.speck_min_wall_mm = fmin(v->r.speck_min_wall_mm, q->val);
+			continue;
+		}
 		if (q->val < v->r.min_wall_mm) {
 			v->r.min_wall_mm = q->val;
 			v->r.min_wall_layer = q->layer;
 		}
 	}
-	for (size_t k = 0; k < v->vol.n; k++)
-		if (uf_find(v, v->vol.v[k].id) != VX_OUT)
-			v->r.enclosed_void_mm3 += v->vol.v[k].val * pa * v->p.layer_mm;
+	/* a vertical wall separates an enclosed void from the outside: exactly
+	 * one end's 3D component is enclosed (two enclosed ends = a wall
+	 * between two cavities, not to the outside) */
+	for (size_t k = 0; k < v->vwall.n; k++) {
+		const struct rec *q = &v->vwall.v[k];
+		uint32_t ra = uf_find(v, q->id), rb = uf_find(v, q->id2), in;
+		if ((ra == VX_OUT) == (rb == VX_OUT))
+			continue;
+		in = ra == VX_OUT ? rb : ra;
+		if (vox[in] <= v->p.speck_voxels)
+			v->r.speck_min_wall_mm = fmin(v->r.speck_min_wall_mm, q->val);
+		else
+			v->r.min_wall_vertical_mm = fmin(v->r.min_wall_vertical_mm, q->val);
+	}
+	mem_free(vox);
 	verify_report_fini(out);
 	*out = v->r;
 	memset(&v->r, 0, sizeof v->r);
@@ -698,6 +785,8 @@ int verify_report_metrics(const struct verify_report *r, const char *prefix, str
 	rc |= metrics_num(m, KEY("min_wall_mm"), r->min_wall_mm);
 	rc |= metrics_num(m, KEY("min_wall_vertical_mm"), r->min_wall_vertical_mm);
 	rc |= metrics_num(m, KEY("enclosed_void_mm3"), r->enclosed_void_mm3);
+	rc |= metrics_int(m, KEY("specks"), r->specks);
+	rc |= metrics_num(m, KEY("speck_min_wall_mm"), r->speck_min_wall_mm);
 	rc |= metrics_int(m, KEY("layers"), r->layers);
 #undef KEY
 	return rc ? ERR_SET(e, ERR_NOMEM, "verify: out of memory recording metrics") : 0;

@@ -5,7 +5,7 @@
  *  - interior overhangs: a solid pixel of layer i+1 above a void pixel of
  *    layer i that is farther than layer_mm * tan(alpha) (+ 1 pixel, see
  *    verify.c) from layer i's solid, where that void pixel belongs to an
- *    ENCLOSED void: its 3D void component (4-connected in a layer, linked
+ *    ENCLOSED void: its 3D void component (8-connected in a layer, linked
  *    to the void directly above and below) never reaches the outside (the
  *    image border, or anything above the last layer; the build plate
  *    closes the bottom).  Such overhangs would need supports that can
@@ -16,7 +16,7 @@
  *  - minimum wall thickness between enclosed voids and the outside: in
  *    the layer plane (exact distance transform) and along columns.
  * Memory: two layers of per-pixel state over the layers' bounding boxes,
- * plus two 16-bit column counters per image pixel.  Design and the
+ * plus a 16-bit run start and a 32-bit void id per image pixel.  Design and the
  * tolerance argument: docs/verify.md.
  */
 #ifndef INFILLD_VERIFY_H
@@ -35,8 +35,15 @@ struct verify_params {
 	double pixel_x_mm;   /* pitch along image columns (x), > 0 */
 	double pixel_y_mm;   /* pitch along image rows (y), > 0 */
 	double tolerance_px; /* rasterisation tolerance in pixels (1 when 0 is given) */
-	int threshold;       /* gray >= threshold is solid (128 when 0 is given) */
+	int threshold;       /* gray >= threshold is solid (128 when 0 is given): an
+			      * anti-aliased pixel is solid when at least half covered */
+	int speck_voxels;    /* enclosed 3D void components of at most this many
+			      * voxels are specks: counted apart, kept out of the wall
+			      * minima (VERIFY_SPECK_VOXELS when 0 is given) */
 };
+
+/* Default speck size: a 2 x 2 x 2 voxel pocket. */
+#define VERIFY_SPECK_VOXELS 8
 
 struct verify_report {
 	int layers;
@@ -54,11 +61,14 @@ struct verify_report {
 	long long islands;
 	double island_mm2;
 	int first_island_layer;       /* -1 when none */
-	/* walls between enclosed voids and the outside */
+	/* walls between enclosed voids and the outside (definitions:
+	 * verify.c head comment, docs/verify.md); specks excluded */
 	double min_wall_mm;           /* in-layer (2D distance); INFINITY without enclosed voids */
 	int min_wall_layer;
 	double min_wall_vertical_mm;  /* along columns (floors and ceilings); INFINITY if none */
-	double enclosed_void_mm3;     /* volume of enclosed voids */
+	double enclosed_void_mm3;     /* volume of enclosed voids, specks included */
+	long long specks;             /* enclosed 3D void components of <= speck_voxels voxels */
+	double speck_min_wall_mm;     /* smallest in-layer wall around a speck; INFINITY if none */
 };
 
 void verify_report_fini(struct verify_report *r);
