@@ -93,7 +93,7 @@ static void test_generated(void)
 	m->v[0].x = 1e-310;
 	m->v[1].y = -0.0;
 	m->v[2].z = 0.1 + 0.2;
-	m->v[3].x = 123456.789e20;
+	m->v[3].x = 987654321.123456789; /* near MESH_MAX_COORD */
 	for (i = 4; i < m->nv; i++)
 		m->v[i].x += 1.0 / 3.0;
 	for (f = 0; f < W_COUNT; f++)
