@@ -504,6 +504,40 @@ static int keep_apart(struct win *s, int ww, int wh, const struct geo *g, struct
 	return 0;
 }
 
+/*
+ * No floating islands: a solid component of layer k + 1 (8-connected, the
+ * part's material and the outside counting as solid) with nothing solid
+ * under any of its pixels would print onto liquid resin.  Its pixels stay
+ * solid in layer k (on s->v): a pillar that the next layers carry down to
+ * the floor (adding solid never breaks the overhang rule).  O(pixels).
+ */
+static int support_islands(struct win *s, int ww, int wh, struct err *e)
+{
+	size_t np = (size_t)ww * (size_t)wh;
+	uint8_t *held = NULL;
+	int32_t count;
+	int rc;
+
+	for (size_t i = 0; i < np; i++)
+		s->seed[i] = !s->vw[i];
+	rc = hl_grid_label(s->seed, ww, wh, s->lab, &count, e);
+	if (rc)
+		return rc;
+	held = mem_calloc((size_t)count + 1, 1);
+	if (!held)
+		return ERR_SET(e, ERR_NOMEM, "hollow: out of memory (fill islands)");
+	for (size_t i = 0; i < np; i++)
+		if (s->lab[i] && !s->v[i])
+			held[s->lab[i]] = 1;
+	for (size_t i = 0; i < np; i++)
+		if (s->lab[i] && !held[s->lab[i]]) {
+			s->v[i] = 0;
+			s->sn[i] = 0;
+		}
+	mem_free(held);
+	return 0;
+}
+
 /* Grid of map m over the part's box: *u0, *v0, *w, *h; pitches. */
 static int grid_of(const struct mesh *part, const struct raster_map *m, struct hl_fill *f,
 		   double *px, double *py, struct err *e)
@@ -622,6 +656,8 @@ int hl_fill_build(const struct mesh *part, const struct mesh *solid, const struc
 			rc = layer_below(&s, ww, wh, &g, e);
 			if (!rc)
 				rc = keep_apart(&s, ww, wh, &g, e);
+			if (!rc)
+				rc = support_islands(&s, ww, wh, e);
 			if (!rc)
 				rc = hl_grid_runs(s.v, ww, 0, 0, ww, wh, &r.layer[k].run, &r.layer[k].n,
 						  &cap, e);
