@@ -73,9 +73,10 @@ static const struct param_desc hollow_desc[] = {
 	 .offset = offsetof(struct hollow_params, margin_deg), .min = 0, .max = 10, .def = 0.5,
 	 .unit = "deg", .help = "Safety taken off alpha in the optimisation's constraints."},
 	{.name = "fill", .type = PARAM_BOOL, .offset = offsetof(struct hollow_params, fill),
-	 .min = 0, .max = 1, .def = 0, .unit = "",
+	 .min = 0, .max = 1, .def = 1, .unit = "",
 	 .help = "lightweight: after the optimised voids, hollow the space they left with the "
-		 "top-down support-free fill (docs/hollow.md; experimental: slow on large parts)."},
+		 "top-down support-free fill, designed on the layer pixels (docs/hollow.md; layer "
+		 "outputs only: mesh outputs carry the optimised voids alone)."},
 };
 
 /* stability: weight of the lightweight term once the part stands */
@@ -230,7 +231,8 @@ static int hollow_prepare(const struct engine_ctx *ctx, const void *params, void
 	c->objective = p->objective == 1 ? HL_OBJ_STABILITY : HL_OBJ_LIGHTWEIGHT;
 	c->light_weight = HOLLOW_LIGHT_WEIGHT;
 	c->print_layer_mm = ctx->layer_mm;
-	c->fill = p->fill;
+	/* the fill lives in the layers: a mesh output could not carry it */
+	c->fill = p->fill && (ctx->want_raster || ctx->want_region);
 	/* the fill is designed on the pixels the verifier reads */
 	if (s->map)
 		c->fill_map = *s->map;
