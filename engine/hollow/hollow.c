@@ -73,9 +73,10 @@ static const struct param_desc hollow_desc[] = {
 	 .offset = offsetof(struct hollow_params, margin_deg), .min = 0, .max = 10, .def = 0.5,
 	 .unit = "deg", .help = "Safety taken off alpha in the optimisation's constraints."},
 	{.name = "fill", .type = PARAM_BOOL, .offset = offsetof(struct hollow_params, fill),
-	 .min = 0, .max = 1, .def = 0, .unit = "",
+	 .min = 0, .max = 1, .def = 1, .unit = "",
 	 .help = "lightweight: after the optimised voids, hollow the space they left with the "
-		 "top-down support-free fill (docs/hollow.md; experimental: slow on large parts)."},
+		 "top-down support-free fill, designed on the layer pixels (docs/hollow.md; layer "
+		 "outputs only: mesh outputs carry the optimised voids alone)."},
 };
 
 /* stability: weight of the lightweight term once the part stands */
@@ -93,7 +94,6 @@ struct hollow_state {
 	const struct raster_map *map; /* the driver's, when it wants pixels */
 	int antialias;
 	struct raster *own;          /* verification raster when the output has none */
-	struct raster *mask;         /* the fill's pixels of one layer (fill_mask) */
 	struct raster_map own_map;
 	double layer_mm, alpha_deg, t_prepare, t_verify;
 	double min_wall_3d_mm;       /* void vertices to the outer surface */
@@ -126,6 +126,22 @@ static void map_pitch(const struct raster_map *m, double *px, double *py)
 	*py = hypot(m->a[0][1], m->a[0][0]) / fabs(det);
 }
 
+/* The verifier's own grid when the driver draws no images: pitch
+ * HOLLOW_VERIFY_PIXEL_MM, four pixels of margin around m's box. */
+static void own_map_of(const struct mesh *m, struct raster_map *map)
+{
+	struct box3 bb = box3_empty();
+	double p = HOLLOW_VERIFY_PIXEL_MM;
+
+	for (size_t i = 0; i < m->nv; i++)
+		box3_add(&bb, m->v[i]);
+	memset(map, 0, sizeof *map);
+	map->a[0][0] = 1 / p;
+	map->a[1][1] = 1 / p;
+	map->b[0] = -(bb.lo.x - 4 * p) / p;
+	map->b[1] = -(bb.lo.y - 4 * p) / p;
+}
+
 static int start_verify(struct hollow_state *s, const struct mesh *m, struct err *e)
 {
 	struct verify_params vp;
@@ -145,14 +161,11 @@ static int start_verify(struct hollow_state *s, const struct mesh *m, struct err
 		h = (int)ceil((bb.hi.y - bb.lo.y) / p) + 8;
 		if (w > 65535 || h > 65535)
 			return ERR_SET(e, ERR_LIMIT, "hollow: part too wide to verify at %g mm", p);
+		raster_free(s->own);
 		s->own = raster_new(w, h);
 		if (!s->own)
 			return ERR_SET(e, ERR_NOMEM, "hollow: out of memory");
-		memset(&s->own_map, 0, sizeof s->own_map);
-		s->own_map.a[0][0] = 1 / p;
-		s->own_map.a[1][1] = 1 / p;
-		s->own_map.b[0] = -(bb.lo.x - 4 * p) / p;
-		s->own_map.b[1] = -(bb.lo.y - 4 * p) / p;
+		own_map_of(m, &s->own_map);
 		vp.pixel_x_mm = vp.pixel_y_mm = p;
 	}
 	return verify_new(&vp, &s->ver, e);
@@ -218,7 +231,14 @@ static int hollow_prepare(const struct engine_ctx *ctx, const void *params, void
 	c->objective = p->objective == 1 ? HL_OBJ_STABILITY : HL_OBJ_LIGHTWEIGHT;
 	c->light_weight = HOLLOW_LIGHT_WEIGHT;
 	c->print_layer_mm = ctx->layer_mm;
-	c->fill = p->fill;
+	/* the fill lives in the layers: a mesh output could not carry it */
+	c->fill = p->fill && (ctx->want_raster || ctx->want_region);
+	/* the fill is designed on the pixels the verifier reads */
+	if (s->map)
+		c->fill_map = *s->map;
+	else
+		own_map_of(ctx->mesh, &c->fill_map);
+	c->fill_map_set = 1;
 	rc = hl_run(ctx->mesh, c, ctx->progress, &s->out, e);
 	if (!rc)
 		rc = min_wall_3d(ctx->mesh, s->out.mesh, &s->min_wall_3d_mm, e);
@@ -235,41 +255,10 @@ static int hollow_prepare(const struct engine_ctx *ctx, const void *params, void
 	return 0;
 }
 
-/* Clear the pixels of r whose centre lies in the fill's region (centre
- * sampling: the fill's raster-safety bound in topdown.c assumes it; the
- * outer surface keeps its anti-aliasing).  r is the driver's raster
- * (s->map) or s->own (s->own_map), as the caller's. */
-static int fill_mask(struct hollow_state *s, const struct paths *fill, struct raster *r,
-		     struct err *e)
-{
-	const struct raster_map *map = r == s->own ? &s->own_map : s->map;
-	int rc;
-
-	if (!s->mask || s->mask->w != r->w || s->mask->h != r->h) {
-		raster_free(s->mask);
-		s->mask = raster_new(r->w, r->h);
-		if (!s->mask)
-			return ERR_SET(e, ERR_NOMEM, "hollow: out of memory");
-	} else {
-		raster_clear(s->mask);
-	}
-	rc = slice_rasterize(fill, map, 0, s->mask, e);
-	if (rc)
-		return rc;
-	for (int y = 0; y < r->h; y++) {
-		const uint8_t *m = s->mask->px + (size_t)y * s->mask->stride;
-		uint8_t *p = r->px + (size_t)y * r->stride;
-		for (int x = 0; x < r->w; x++)
-			if (m[x] >= 128)
-				p[x] = 0;
-	}
-	return 0;
-}
-
 static int hollow_layer(void *state, struct layer *ly, struct err *e)
 {
 	struct hollow_state *s = state;
-	const struct paths *fill;
+	const struct hl_fill_layer *fill;
 	double t0;
 	int rc;
 
@@ -285,7 +274,7 @@ static int hollow_layer(void *state, struct layer *ly, struct err *e)
 		 * very pixels that are written */
 		rc = slice_rasterize(&ly->region, s->map, s->antialias, ly->raster, e);
 		if (!rc && fill)
-			rc = fill_mask(s, fill, ly->raster, e);
+			hl_fill_clear(&s->out.fill, fill, ly->raster);
 		if (rc)
 			return rc;
 		ly->raster_ready = 1;
@@ -294,14 +283,20 @@ static int hollow_layer(void *state, struct layer *ly, struct err *e)
 		raster_clear(s->own);
 		rc = slice_rasterize(&ly->region, &s->own_map, 0, s->own, e);
 		if (!rc && fill)
-			rc = fill_mask(s, fill, s->own, e);
+			hl_fill_clear(&s->out.fill, fill, s->own);
 		if (!rc)
 			rc = verify_layer(s->ver, s->own, e);
 	}
 	/* the region handed on (G-code, area metrics) loses the fill too */
-	if (!rc && fill)
-		rc = clip_boolean(CLIP_DIFFERENCE, &ly->region, fill, CLIP_FILL_NONZERO, &ly->region,
-				  e);
+	if (!rc && fill) {
+		struct paths fr;
+		paths_init(&fr);
+		rc = hl_fill_region(&s->out.fill, fill, &fr, e);
+		if (!rc)
+			rc = clip_boolean(CLIP_DIFFERENCE, &ly->region, &fr, CLIP_FILL_NONZERO,
+					  &ly->region, e);
+		paths_fini(&fr);
+	}
 	s->layers_seen++;
 	s->t_verify += progress_now_s() - t0;
 	return rc;
@@ -417,7 +412,6 @@ static void hollow_release(void *state)
 	verify_free(s->ver);
 	verify_report_fini(&s->rep);
 	raster_free(s->own);
-	raster_free(s->mask);
 	mem_free(s);
 }
 

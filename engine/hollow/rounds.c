@@ -531,8 +531,7 @@ int hl_run(const struct mesh *part, const struct hl_config *c, struct progress *
 	res.voids_optimised = res.voids;
 	if (c->fill && c->objective == HL_OBJ_LIGHTWEIGHT) {
 		double t0 = progress_now_s();
-		rc = hl_fill_build(part, res.voids ? res.mesh : NULL, c, stack_count, prog, 0.9, 1.0,
-				   &res.fill, e);
+		rc = hl_fill_build(part, res.voids ? res.mesh : NULL, c, prog, 0.9, 1.0, &res.fill, e);
 		if (rc)
 			goto out;
 		res.voids += res.fill.voids;

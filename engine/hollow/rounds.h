@@ -32,6 +32,8 @@ struct hl_config {
 	double light_weight;   /* stability: weight of the lightweight term */
 	double print_layer_mm; /* the job's layer (contact layer for stability) */
 	int fill;              /* lightweight: top-down fill of what the optimiser left */
+	struct raster_map fill_map; /* printer mm -> pixels of the images the verifier reads */
+	int fill_map_set;      /* fill_map is set (else no fill) */
 };
 
 struct hl_outcome {

@@ -1,8 +1,9 @@
 /* topdown.c - the top-down support-free fill: the void a greedy top-down
- * construction fits inside the offset stack, one stack layer at a time,
- * exact in integer nm (Clipper offsets); the hollow engine's fallback where
- * the optimiser (nlp.c) leaves space unhollowed.  Derivation and why it is
- * a deviation from paper 004: docs/hollow.md "Top-down fill".
+ * construction fits inside the offset stack, one print layer at a time, on
+ * the very pixel grid the verifier reads (distance transforms, O(pixels)
+ * per layer whatever the shape); the hollow engine's fallback where the
+ * optimiser (nlp.c) leaves space unhollowed.  Derivation and why it is a
+ * deviation from paper 004: docs/hollow.md "Top-down fill".
  */
 #include "engine/hollow/topdown.h"
 
@@ -12,7 +13,7 @@
 #include "engine/core/err.h"
 #include "engine/core/mem.h"
 #include "engine/core/progress.h"
-#include "engine/geom/clip.h"
+#include "engine/geom/edt.h"
 #include "engine/hollow/rounds.h"
 #include "engine/mesh/mesh.h"
 #include "engine/slice/erode.h"
@@ -21,24 +22,70 @@
 void hl_fill_fini(struct hl_fill *f)
 {
 	for (int k = 0; f->layer && k < f->n; k++)
-		paths_fini(&f->layer[k]);
+		mem_free(f->layer[k].run);
 	mem_free(f->layer);
 	memset(f, 0, sizeof *f);
 }
 
-const struct paths *hl_fill_at(const struct hl_fill *f, double z_mm)
+const struct hl_fill_layer *hl_fill_at(const struct hl_fill *f, double z_mm)
 {
 	int j;
 
 	if (!f->layer || f->n < 1 || !(f->layer_mm > 0))
 		return NULL;
-	/* a print layer's mid-plane lies inside exactly one stack slab (the
-	 * 1e-9 keeps a mid-plane that falls on a slab boundary in the upper
-	 * one, whatever the rounding) */
+	/* a print layer's mid-plane lies inside exactly one slab (the 1e-9
+	 * keeps a mid-plane that falls on a slab boundary in the upper one) */
 	j = (int)floor(z_mm / f->layer_mm + 1e-9);
 	if (j < 0 || j >= f->n || !f->layer[j].n)
 		return NULL;
 	return &f->layer[j];
+}
+
+void hl_fill_clear(const struct hl_fill *f, const struct hl_fill_layer *l, struct raster *r)
+{
+	for (size_t i = 0; i < l->n; i++) {
+		int v = f->v0 + l->run[i].y;
+		int a = f->u0 + l->run[i].x0, b = f->u0 + l->run[i].x1;
+		if (v < 0 || v >= r->h)
+			continue;
+		a = a < 0 ? 0 : a;
+		b = b >= r->w ? r->w - 1 : b;
+		if (a <= b)
+			memset(r->px + (size_t)v * r->stride + a, 0, (size_t)(b - a + 1));
+	}
+}
+
+int hl_fill_region(const struct hl_fill *f, const struct hl_fill_layer *l, struct paths *region,
+		   struct err *e)
+{
+	int x0 = INT32_MAX, y0 = INT32_MAX, x1 = -1, y1 = -1, w, h;
+	struct raster_map m = f->map;
+	float *fld;
+	int rc;
+
+	paths_clear(region);
+	for (size_t i = 0; i < l->n; i++) {
+		x0 = l->run[i].x0 < x0 ? l->run[i].x0 : x0;
+		x1 = l->run[i].x1 > x1 ? l->run[i].x1 : x1;
+		y0 = l->run[i].y < y0 ? l->run[i].y : y0;
+		y1 = l->run[i].y > y1 ? l->run[i].y : y1;
+	}
+	if (x1 < 0)
+		return 0;
+	w = x1 - x0 + 3;
+	h = y1 - y0 + 3;
+	fld = mem_calloc((size_t)w * (size_t)h, sizeof *fld);
+	if (!fld)
+		return ERR_SET(e, ERR_NOMEM, "hollow: out of memory (fill region)");
+	for (size_t i = 0; i < l->n; i++)
+		for (int x = l->run[i].x0; x <= l->run[i].x1; x++)
+			fld[(size_t)(l->run[i].y - y0 + 1) * (size_t)w + (size_t)(x - x0 + 1)] = 1;
+	/* field pixel (i, j) is image pixel (u0 + x0 - 1 + i, v0 + y0 - 1 + j) */
+	m.b[0] -= f->u0 + x0 - 1;
+	m.b[1] -= f->v0 + y0 - 1;
+	rc = slice_field_contours(fld, w, h, 0.5f, &m, region, e);
+	mem_free(fld);
+	return rc;
 }
 
 /* ---- the offset stack C(k) ---- */
@@ -56,9 +103,8 @@ struct eroded {
 	struct slice_eroder *er;
 };
 
-static int eroded_open(struct eroded *x, const struct mesh *m, double r_mm,
-		       const struct hl_config *c, int stack_count, const struct box3 *bb,
-		       struct err *e)
+static int eroded_open(struct eroded *x, const struct mesh *m, double r_mm, double pixel_mm,
+		       double layer_mm, int layer_count, const struct box3 *bb, struct err *e)
 {
 	struct slice_erode_params ep;
 	struct slice_erode_source src;
@@ -69,14 +115,14 @@ static int eroded_open(struct eroded *x, const struct mesh *m, double r_mm,
 	if (rc)
 		return rc;
 	x->sc.s = x->s;
-	x->sc.layer_mm = c->stack_layer_mm;
+	x->sc.layer_mm = layer_mm;
 	src.layer = hl_src_layer;
 	src.ctx = &x->sc; /* x outlives the eroder */
 	memset(&ep, 0, sizeof ep);
 	ep.r_mm = r_mm;
-	ep.pixel_mm = c->pixel_mm;
-	ep.layer_mm = c->stack_layer_mm;
-	ep.layer_count = stack_count;
+	ep.pixel_mm = pixel_mm;
+	ep.layer_mm = layer_mm;
+	ep.layer_count = layer_count;
 	ep.x0_mm = bb->lo.x;
 	ep.y0_mm = bb->lo.y;
 	ep.x1_mm = bb->hi.x;
@@ -91,532 +137,573 @@ static void eroded_close(struct eroded *x)
 	memset(x, 0, sizeof *x);
 }
 
-/* C[k] for every stack layer, bottom-up (the eroders stream upward). */
+/* C[k] (pixels of the grid map gm, w x h) for every print layer, as runs,
+ * bottom-up (the eroders stream upward): centre-sampled erosions of the
+ * part by wall_mm and of solid by wall_next_mm, intersected. */
 static int offset_stack(const struct mesh *part, const struct mesh *solid,
-			const struct hl_config *c, int n, struct paths *C, struct err *e)
+			const struct hl_config *c, const struct raster_map *gm, int w, int h, int n,
+			struct hl_fill_layer *C, struct err *e)
 {
 	struct eroded ep, es;
 	struct box3 bb = box3_empty();
-	struct paths tmp;
-	int rc;
+	struct raster *ra = raster_new(w, h), *rb = solid ? raster_new(w, h) : NULL;
+	uint8_t *mask = mem_alloc((size_t)w * (size_t)h + 1);
+	int rc = 0;
 
+	memset(&ep, 0, sizeof ep);
 	memset(&es, 0, sizeof es);
-	paths_init(&tmp);
+	if (!ra || !mask || (solid && !rb)) {
+		rc = ERR_SET(e, ERR_NOMEM, "hollow: out of memory (fill grid %d x %d)", w, h);
+		goto out;
+	}
 	for (size_t i = 0; i < part->nv; i++)
 		box3_add(&bb, part->v[i]);
-	rc = eroded_open(&ep, part, c->wall_mm, c, n, &bb, e);
+	rc = eroded_open(&ep, part, c->wall_mm, c->pixel_mm, c->print_layer_mm, n, &bb, e);
 	if (!rc && solid)
-		rc = eroded_open(&es, solid, c->wall_next_mm, c, n, &bb, e);
+		rc = eroded_open(&es, solid, c->wall_next_mm, c->pixel_mm, c->print_layer_mm, n, &bb,
+				 e);
 	for (int k = 0; !rc && k < n; k++) {
-		rc = slice_erode_layer(ep.er, k, &C[k], e);
-		if (rc || !solid || !C[k].n)
-			continue;
-		rc = slice_erode_layer(es.er, k, &tmp, e);
-		if (!rc)
-			rc = clip_boolean(CLIP_INTERSECTION, &C[k], &tmp, CLIP_FILL_NONZERO, &C[k], e);
+		size_t cap = 0;
+		raster_clear(ra);
+		rc = slice_erode_raster(ep.er, k, gm, 0, ra, e);
+		if (!rc && solid) {
+			raster_clear(rb);
+			rc = slice_erode_raster(es.er, k, gm, 0, rb, e);
+		}
+		if (rc)
+			break;
+		for (int y = 0; y < h; y++) {
+			const uint8_t *a = ra->px + (size_t)y * ra->stride;
+			const uint8_t *b = rb ? rb->px + (size_t)y * rb->stride : a;
+			uint8_t *m = mask + (size_t)y * (size_t)w;
+			for (int x = 0; x < w; x++)
+				m[x] = a[x] >= 128 && b[x] >= 128;
+		}
+		rc = hl_grid_runs(mask, w, 0, 0, w, h, &C[k].run, &C[k].n, &cap, e);
 	}
-	paths_fini(&tmp);
+out:
 	eroded_close(&ep);
 	eroded_close(&es);
+	raster_free(ra);
+	raster_free(rb);
+	mem_free(mask);
 	return rc;
 }
 
-/* ---- the greedy top-down construction ---- */
+/* ---- components (4-connected in a layer, linked to the void directly
+ * above and below: the verifier's void connectivity) ---- */
 
-/* Raster safety margins in pixels (see hl_fill_build): the written void
- * is the designed one eroded by W; the design's reach is layer tan(alpha)
- * less D.  The bound needs W + 0.71 - D <= 1 and W >= 0.71 + the round
- * joins' arc tolerance (0.05 W: the eroded void may reach that much
- * closer to the solid); cleaning moves vertices by 0.01 px and the
- * covering test of layer_below is generous by 0.02 px. */
-#define HL_FILL_W_PX 0.78
-#define HL_FILL_D_PX 0.52
-
-/* Drop the outer loops of void region ps whose area is below min_mm2
- * (in place; void turns solid, the safe direction), with every hole
- * their holes orphaned (negative winding): callers renormalise with the
- * positive fill rule, which drops them.  Holes are never dropped: a small
- * hole is solid holding something up. */
-static void drop_small(struct paths *ps, double min_mm2)
+static uint32_t run_root(struct hl_run **at, uint32_t i)
 {
-	size_t w = 0;
-
-	for (size_t i = 0; i < ps->n; i++) {
-		double a = path_area_mm2(&ps->v[i]);
-		if (a > 0 && a < min_mm2) {
-			path_fini(&ps->v[i]);
-			continue;
-		}
-		ps->v[w++] = ps->v[i];
-	}
-	ps->n = w;
-}
-
-/*
- * Layer k's void V(k) from V(k + 1) (empty above the part), with C = C(k),
- * d = layer_mm tan(alpha), Q(k) the non-void of layer k (solid or outside):
- * the rule is Q(k + 1) within d of Q(k).  Q(k) must contain the complement
- * of C; of Q(k + 1), that covers dilate(not C, d), leaving
- *   U = erode(C, d) \ V(k + 1),
- * which the solid T = Q(k) inside C must cover within d.  The smallest
- * such T we build is
- *   T = erode(U, d)  united with  R = U \ dilate(erode(U, d), d),
- * (R: the parts of U thinner than 2 d and its sharp convex corners, which
- * the opening loses; they are kept whole, so dilate(T, d) contains U),
- * and V(k) = C \ T.  Going down, every wall of solid thus retreats by d
- * per layer: the void's ceiling rises at exactly the overhang limit.
- * Clipper's round joins place their vertices on the arc, so every
- * approximation makes T larger (the void smaller): safe.  Pieces of R
- * under min_mm2 (a quarter pixel: numerical slivers of the round joins)
- * are dropped; the raster tolerance of one pixel covers them.
- */
-static int layer_below(const struct paths *C, const struct paths *Vup, double d_nm,
-		       double arc_nm, double min_mm2, double clean_nm, struct paths *V,
-		       struct err *e)
-{
-	struct paths U, E, O, R;
-	int rc;
-
-	paths_init(&U);
-	paths_init(&E);
-	paths_init(&O);
-	paths_init(&R);
-	rc = clip_offset(C, -d_nm, CLIP_JOIN_ROUND, 0, arc_nm, &U, e);
-	if (!rc && Vup->n)
-		rc = clip_boolean(CLIP_DIFFERENCE, &U, Vup, CLIP_FILL_NONZERO, &U, e);
-	if (!rc)
-		rc = clip_offset(&U, -d_nm, CLIP_JOIN_ROUND, 0, arc_nm, &E, e);
-	/* O by d + arc_nm with arc tolerance arc_nm / 2: the chords then lie
-	 * outside the true d-disc, so R holds no slivers of the round joins
-	 * (they would persist as hair-thin pillars); points between d and
-	 * d + arc_nm count as covered: HL_FILL_D_PX allows for it */
-	if (!rc)
-		rc = clip_offset(&E, d_nm + arc_nm, CLIP_JOIN_ROUND, 0, 0.5 * arc_nm, &O, e);
-	if (!rc)
-		rc = clip_boolean(CLIP_DIFFERENCE, &U, &O, CLIP_FILL_NONZERO, &R, e);
-	if (rc)
-		goto out;
-	rc = paths_append_move(&E, &R);
-	if (rc) {
-		rc = ERR_SET(e, ERR_NOMEM, "hollow: out of memory");
-		goto out;
-	}
-	rc = clip_boolean(CLIP_DIFFERENCE, C, &E, CLIP_FILL_NONZERO, V, e);
-	if (!rc) {
-		drop_small(V, min_mm2);
-		rc = clip_union(V, CLIP_FILL_POSITIVE, V, e);
-	}
-	/* bound the vertex count: round joins add vertices at every layer */
-	if (!rc && V->n)
-		rc = clip_clean(V, clean_nm, e);
-out:
-	paths_fini(&U);
-	paths_fini(&E);
-	paths_fini(&O);
-	paths_fini(&R);
-	return rc;
-}
-
-/* ---- components (3D connectivity through consecutive layers) ---- */
-
-struct piece {
-	int k;          /* layer */
-	size_t outer;   /* path index of its outer loop */
-	struct pt2 lo, hi;
-	double area_mm2; /* outer minus its holes */
-	size_t comp;    /* union-find parent */
-};
-
-static size_t uf_find(struct piece *p, size_t i)
-{
-	while (p[i].comp != i) {
-		p[i].comp = p[p[i].comp].comp;
-		i = p[i].comp;
+	/* comp holds the union-find parent as a global run index */
+	while (at[i]->comp != i) {
+		at[i]->comp = at[at[i]->comp]->comp;
+		i = at[i]->comp;
 	}
 	return i;
 }
 
-static int path_contains(const struct path *p, struct pt2 q)
+static void run_union(struct hl_run **at, uint32_t a, uint32_t b)
 {
-	int w = 0, on = 0;
-
-	for (size_t i = 0; i < p->n; i++)
-		w += path_edge_winding(p->pts[i], p->pts[(i + 1) % p->n], q, &on);
-	return w != 0 || on;
+	a = run_root(at, a);
+	b = run_root(at, b);
+	if (a != b)
+		at[a > b ? a : b]->comp = a < b ? a : b;
 }
 
-/* Which outer loop of layer ps holds hole h: the smallest containing one
- * (Clipper's output has no overlaps), or SIZE_MAX. */
-static size_t hole_owner(const struct paths *ps, size_t h)
+/* Link the runs of row list A (sorted by x) with those of B that overlap
+ * in x; ia, ib: their global indices. */
+static void link_rows(struct hl_run **at, const struct hl_run *A, size_t na, uint32_t ia,
+		      const struct hl_run *B, size_t nb, uint32_t ib)
 {
-	size_t best = SIZE_MAX;
-	double ba = INFINITY;
+	size_t i = 0, j = 0;
 
-	for (size_t i = 0; i < ps->n; i++) {
-		double a = path_area_mm2(&ps->v[i]);
-		if (a > 0 && a < ba && path_contains(&ps->v[i], ps->v[h].pts[0])) {
-			best = i;
-			ba = a;
-		}
-	}
-	return best;
-}
-
-static void bbox_of(const struct path *p, struct pt2 *lo, struct pt2 *hi)
-{
-	*lo = *hi = p->pts[0];
-	for (size_t i = 1; i < p->n; i++) {
-		lo->x = p->pts[i].x < lo->x ? p->pts[i].x : lo->x;
-		lo->y = p->pts[i].y < lo->y ? p->pts[i].y : lo->y;
-		hi->x = p->pts[i].x > hi->x ? p->pts[i].x : hi->x;
-		hi->y = p->pts[i].y > hi->y ? p->pts[i].y : hi->y;
+	while (i < na && j < nb) {
+		if (A[i].x0 <= B[j].x1 && B[j].x0 <= A[i].x1)
+			run_union(at, ia + (uint32_t)i, ib + (uint32_t)j);
+		if (A[i].x1 < B[j].x1)
+			i++;
+		else
+			j++;
 	}
 }
 
-/* Do outer loops a and b overlap (positive area)? */
-static int outers_overlap(const struct path *a, const struct path *b, int *yes, struct err *e)
+/* First run of each row y (rs[y], rs[h] = n) of a row-major run list. */
+static void row_starts(const struct hl_run *r, size_t n, int h, size_t *rs)
 {
-	struct paths pa, pb, x;
-	int rc;
+	size_t i = 0;
 
-	paths_init(&pa);
-	paths_init(&pb);
-	paths_init(&x);
-	*yes = 0;
-	rc = paths_add_pts(&pa, a->pts, a->n) || paths_add_pts(&pb, b->pts, b->n)
-		     ? ERR_SET(e, ERR_NOMEM, "hollow: out of memory")
-		     : 0;
-	if (!rc)
-		rc = clip_boolean(CLIP_INTERSECTION, &pa, &pb, CLIP_FILL_NONZERO, &x, e);
-	if (!rc)
-		*yes = paths_area_mm2(&x) > 1e-9;
-	paths_fini(&pa);
-	paths_fini(&pb);
-	paths_fini(&x);
-	return rc;
+	for (int y = 0; y <= h; y++) {
+		while (i < n && r[i].y < y)
+			i++;
+		rs[y] = i;
+	}
 }
 
-/* Group the fill's pieces into 3D components, drop those under
- * min_mm3, count the rest.  O(pieces^2 per layer pair) overlap tests,
- * bounding boxes first. */
-static int components(struct hl_fill *f, double min_mm3, struct err *e)
+static int components(struct hl_fill *f, double min_mm3, double px_area_mm2, struct err *e)
 {
-	struct piece *p = NULL;
-	size_t np = 0, cap = 0, *first = NULL;
+	size_t total = 0, *rs0 = NULL, *rs1 = NULL;
+	struct hl_run **at = NULL;
 	double *vol = NULL;
-	unsigned char *drop = NULL;
+	uint32_t *off = NULL;
 	int rc = 0;
 
-	first = mem_alloc(((size_t)f->n + 1) * sizeof *first);
-	if (!first)
-		goto nomem;
+	for (int k = 0; k < f->n; k++)
+		total += f->layer[k].n;
+	if (total >= UINT32_MAX - 1)
+		return ERR_SET(e, ERR_LIMIT, "hollow: fill too fragmented (%zu runs)", total);
+	at = mem_alloc((total + 1) * sizeof *at);
+	vol = mem_calloc(total + 1, sizeof *vol);
+	off = mem_alloc(((size_t)f->n + 1) * sizeof *off);
+	rs0 = mem_alloc(((size_t)f->h + 1) * sizeof *rs0);
+	rs1 = mem_alloc(((size_t)f->h + 1) * sizeof *rs1);
+	if (!at || !vol || !off || !rs0 || !rs1) {
+		rc = ERR_SET(e, ERR_NOMEM, "hollow: out of memory grouping the fill");
+		goto out;
+	}
+	total = 0;
 	for (int k = 0; k < f->n; k++) {
-		const struct paths *L = &f->layer[k];
-		first[k] = np;
-		for (size_t i = 0; i < L->n; i++) {
-			double a = path_area_mm2(&L->v[i]);
-			void *arr = p;
-			if (a <= 0)
-				continue;
-			if (mem_grow(&arr, &cap, np + 1, sizeof *p))
-				goto nomem;
-			p = arr;
-			p[np].k = k;
-			p[np].outer = i;
-			p[np].area_mm2 = a;
-			p[np].comp = np;
-			bbox_of(&L->v[i], &p[np].lo, &p[np].hi);
-			np++;
-		}
-		for (size_t i = 0; i < L->n; i++) {
-			size_t o;
-			if (path_area_mm2(&L->v[i]) >= 0)
-				continue;
-			o = hole_owner(L, i);
-			for (size_t q = first[k]; o != SIZE_MAX && q < np; q++)
-				if (p[q].outer == o)
-					p[q].area_mm2 += path_area_mm2(&L->v[i]);
+		off[k] = (uint32_t)total;
+		for (size_t i = 0; i < f->layer[k].n; i++) {
+			at[total] = &f->layer[k].run[i];
+			at[total]->comp = (uint32_t)total;
+			total++;
 		}
 	}
-	first[f->n] = np;
-	for (int k = 0; k + 1 < f->n; k++)
-		for (size_t a = first[k]; a < first[k + 1]; a++)
-			for (size_t b = first[k + 1]; b < first[k + 2]; b++) {
-				int yes;
-				if (p[a].lo.x > p[b].hi.x || p[b].lo.x > p[a].hi.x ||
-				    p[a].lo.y > p[b].hi.y || p[b].lo.y > p[a].hi.y)
-					continue;
-				if (uf_find(p, a) == uf_find(p, b))
-					continue;
-				rc = outers_overlap(&f->layer[k].v[p[a].outer],
-						    &f->layer[k + 1].v[p[b].outer], &yes, e);
-				if (rc)
-					goto out;
-				if (yes)
-					p[uf_find(p, a)].comp = uf_find(p, b);
-			}
-	vol = mem_calloc(np + 1, sizeof *vol);
-	drop = mem_calloc(np + 1, 1);
-	if (!vol || !drop)
-		goto nomem;
-	for (size_t i = 0; i < np; i++)
-		vol[uf_find(p, i)] += p[i].area_mm2 * f->layer_mm;
+	off[f->n] = (uint32_t)total;
+	for (int k = 0; k < f->n; k++) {
+		const struct hl_fill_layer *L = &f->layer[k], *U = k + 1 < f->n ? &f->layer[k + 1] : NULL;
+		row_starts(L->run, L->n, f->h, rs0);
+		if (U)
+			row_starts(U->run, U->n, f->h, rs1);
+		for (int y = 0; y < f->h; y++) {
+			size_t a = rs0[y], na = rs0[y + 1] - a;
+			if (!na)
+				continue;
+			if (y + 1 < f->h)
+				link_rows(at, L->run + a, na, off[k] + (uint32_t)a, L->run + rs0[y + 1],
+					  rs0[y + 2] - rs0[y + 1], off[k] + (uint32_t)rs0[y + 1]);
+			if (U)
+				link_rows(at, L->run + a, na, off[k] + (uint32_t)a, U->run + rs1[y],
+					  rs1[y + 1] - rs1[y], off[k + 1] + (uint32_t)rs1[y]);
+		}
+	}
+	for (size_t i = 0; i < total; i++)
+		at[i]->comp = run_root(at, (uint32_t)i); /* every comp a root */
+	for (size_t i = 0; i < total; i++)
+		vol[at[i]->comp] += (at[i]->x1 - at[i]->x0 + 1) * px_area_mm2 * f->layer_mm;
 	f->voids = f->voids_small = 0;
 	f->volume_mm3 = 0;
-	for (size_t i = 0; i < np; i++) {
-		if (uf_find(p, i) != i)
+	for (size_t i = 0; i < total; i++) {
+		if (at[i]->comp != i)
 			continue;
 		if (vol[i] < min_mm3) {
-			drop[i] = 1;
 			f->voids_small++;
 		} else {
 			f->voids++;
 			f->volume_mm3 += vol[i];
 		}
 	}
-	/* remove dropped components: their outers and the holes they own */
+	/* drop the small components' runs (void turned solid: the safe side);
+	 * every comp is a root now, so compacting keeps it valid */
 	for (int k = 0; k < f->n; k++) {
-		struct paths *L = &f->layer[k];
-		unsigned char *gone;
+		struct hl_fill_layer *L = &f->layer[k];
 		size_t w = 0;
-		int any = 0;
-		for (size_t q = first[k]; q < first[k + 1]; q++)
-			any |= drop[uf_find(p, q)];
-		if (!any)
-			continue;
-		gone = mem_calloc(L->n + 1, 1);
-		if (!gone)
-			goto nomem;
-		for (size_t q = first[k]; q < first[k + 1]; q++)
-			if (drop[uf_find(p, q)])
-				gone[p[q].outer] = 1;
 		for (size_t i = 0; i < L->n; i++)
-			if (path_area_mm2(&L->v[i]) < 0) {
-				size_t o = hole_owner(L, i);
-				gone[i] = o == SIZE_MAX || gone[o];
-			}
-		for (size_t i = 0; i < L->n; i++) {
-			if (gone[i]) {
-				path_fini(&L->v[i]);
-				continue;
-			}
-			L->v[w++] = L->v[i];
-		}
+			if (vol[L->run[i].comp] >= min_mm3)
+				L->run[w++] = L->run[i];
 		L->n = w;
-		mem_free(gone);
 	}
-	goto out;
-nomem:
-	rc = ERR_SET(e, ERR_NOMEM, "hollow: out of memory grouping the fill");
 out:
-	mem_free(p);
-	mem_free(first);
+	mem_free(at);
 	mem_free(vol);
-	mem_free(drop);
+	mem_free(off);
+	mem_free(rs0);
+	mem_free(rs1);
 	return rc;
 }
 
-/* ---- keeping voids apart ---- */
+/* ---- the greedy top-down construction on the grid ---- */
 
-/* Split region ps into its components (an outer loop and the holes it
- * owns), appended to *out (n, caller frees each with paths_fini and the
- * array with mem_free), with their bounding boxes. */
-struct comp {
-	struct paths p;
-	struct pt2 lo, hi;
+/* Scratch of one layer's window (ww x wh pixels, row stride ww). */
+struct win {
+	uint8_t *cm, *seed, *vw, *u, *ex, *v;
+	float *dc2, *dv2, *su, *de2, *d1, *db2, *sn, *sw;
+	int32_t *lab, *near;
+	struct edt_scratch es;
 };
 
-static int split_components(const struct paths *ps, struct comp **out, size_t *n, struct err *e)
+static void win_fini(struct win *s)
 {
-	struct comp *c = NULL;
-	size_t nc = 0, *idx = NULL;
-	int rc = 0;
+	mem_free(s->cm);
+	mem_free(s->seed);
+	mem_free(s->vw);
+	mem_free(s->u);
+	mem_free(s->ex);
+	mem_free(s->v);
+	mem_free(s->dc2);
+	mem_free(s->dv2);
+	mem_free(s->su);
+	mem_free(s->de2);
+	mem_free(s->d1);
+	mem_free(s->db2);
+	mem_free(s->sn);
+	mem_free(s->sw);
+	mem_free(s->lab);
+	mem_free(s->near);
+	edt_scratch_fini(&s->es);
+}
 
-	idx = mem_alloc((ps->n + 1) * sizeof *idx);
-	c = mem_calloc(ps->n + 1, sizeof *c);
-	if (!idx || !c)
-		goto nomem;
-	for (size_t i = 0; i < ps->n; i++) {
-		idx[i] = SIZE_MAX;
-		if (path_area_mm2(&ps->v[i]) <= 0)
-			continue;
-		idx[i] = nc;
-		paths_init(&c[nc].p);
-		bbox_of(&ps->v[i], &c[nc].lo, &c[nc].hi);
-		if (paths_add_pts(&c[nc].p, ps->v[i].pts, ps->v[i].n))
-			goto nomem;
-		nc++;
+static int win_init(struct win *s, size_t np)
+{
+	memset(s, 0, sizeof *s);
+	edt_scratch_init(&s->es);
+	s->cm = mem_alloc(np);
+	s->seed = mem_alloc(np);
+	s->vw = mem_alloc(np);
+	s->u = mem_alloc(np);
+	s->ex = mem_alloc(np);
+	s->v = mem_alloc(np);
+	s->dc2 = mem_alloc(np * sizeof(float));
+	s->dv2 = mem_alloc(np * sizeof(float));
+	s->su = mem_alloc(np * sizeof(float));
+	s->de2 = mem_alloc(np * sizeof(float));
+	s->d1 = mem_alloc(np * sizeof(float));
+	s->db2 = mem_alloc(np * sizeof(float));
+	s->sn = mem_alloc(np * sizeof(float));
+	s->sw = mem_alloc(np * sizeof(float));
+	s->lab = mem_alloc(np * sizeof(int32_t));
+	s->near = mem_alloc(np * sizeof(int32_t));
+	return s->cm && s->seed && s->vw && s->u && s->ex && s->v && s->dc2 && s->dv2 && s->su &&
+	       s->de2 && s->d1 && s->db2 && s->sn && s->sw && s->lab && s->near;
+}
+
+/* Squared distance transform of seed (nonzero), or all INFINITY when
+ * any == 0. */
+static int dist2(struct win *s, const uint8_t *seed, int any, int ww, int wh, double px,
+		 double py, float *out, struct err *e)
+{
+	if (!any) {
+		for (size_t i = 0; i < (size_t)ww * (size_t)wh; i++)
+			out[i] = INFINITY;
+		return 0;
 	}
-	for (size_t i = 0; i < ps->n; i++) {
-		size_t o;
-		if (path_area_mm2(&ps->v[i]) > 0)
-			continue;
-		o = hole_owner(ps, i);
-		if (o != SIZE_MAX && idx[o] != SIZE_MAX &&
-		    paths_add_pts(&c[idx[o]].p, ps->v[i].pts, ps->v[i].n))
-			goto nomem;
+	return edt_sq(seed, (size_t)ww, ww, wh, px, py, out, &s->es, e);
+}
+
+struct geo {
+	double dd;    /* design shrink per layer: layer tan(alpha - margin) */
+	double dg;    /* discrete reach: the verifier's layer tan(alpha) + 1 px, less 2 % px */
+	double wall;  /* wall_next_mm between fill voids */
+	double px, py, pmax;
+};
+
+/*
+ * One layer: V(k) on the window from C(k) (s->cm) and V(k + 1) (s->vw),
+ * s->sw = the inside distance of the design's solid core of layer k + 1
+ * (mm, INFINITY where unknown).  Pixel sets throughout; Q(k) = the
+ * non-void of layer k.  The verifier's rule: every pixel of Q(k + 1)
+ * over a void pixel of layer k lies within dg of Q(k) (centre to centre).
+ *   U = pixels of Q(k + 1) farther than dg from the complement of C(k)
+ *       (the rest is covered by that complement, solid in the image: it
+ *       lies >= wall_next_mm inside the part's material);
+ *   E = the design's erosion of U by dd: pixels whose inside distance
+ *       su = min(dist(not C) - dd, dist(V(k + 1)), sig) exceeds dd; sig
+ *       carries the core's inside distance down the layers, so the core
+ *       shrinks by dd per layer on average even when dd is under a pixel
+ *       (a sub-pixel slope, drawn as a staircase);
+ *   R = pixels of U farther than dg from E (thin parts, the staircase's
+ *       corners): kept solid, so dilate(E u R, dg) covers U exactly on
+ *       the pixels, whatever E is;
+ *   V(k) = C(k) \ (E u R), then kept apart (keep_apart).
+ * Any subset of V(k) keeps the rule for layer k + 1 (void turned solid only
+ * adds support), and layer k - 1 is built from the result.
+ */
+static int layer_below(struct win *s, int ww, int wh, const struct geo *g,
+		       struct err *e)
+{
+	size_t np = (size_t)ww * (size_t)wh;
+	int anyv = 0, anye = 0, rc;
+
+	for (size_t i = 0; i < np; i++) {
+		s->seed[i] = !s->cm[i];
+		anyv |= s->vw[i];
 	}
-	*out = c;
-	*n = nc;
-	c = NULL;
-	goto out;
-nomem:
-	rc = ERR_SET(e, ERR_NOMEM, "hollow: out of memory");
-out:
-	for (size_t i = 0; c && i < nc; i++)
-		paths_fini(&c[i].p);
-	mem_free(c);
-	mem_free(idx);
-	return rc;
+	rc = dist2(s, s->seed, 1, ww, wh, g->px, g->py, s->dc2, e);
+	if (!rc)
+		rc = dist2(s, s->vw, anyv, ww, wh, g->px, g->py, s->dv2, e);
+	if (rc)
+		return rc;
+	for (size_t i = 0; i < np; i++) {
+		double dc = sqrt(s->dc2[i]), su;
+		s->u[i] = s->cm[i] && !s->vw[i] && dc > g->dg;
+		su = fmin(fmin(dc - g->dd, sqrt(s->dv2[i])), s->sw[i]);
+		s->su[i] = (float)su;
+		s->ex[i] = s->u[i] && su > g->dd;
+		anye |= s->ex[i];
+	}
+	rc = dist2(s, s->ex, anye, ww, wh, g->px, g->py, s->de2, e);
+	if (rc)
+		return rc;
+	for (size_t i = 0; i < np; i++) {
+		int t = s->ex[i] || (s->u[i] && s->de2[i] > g->dg * g->dg);
+		s->v[i] = s->cm[i] && !t;
+		s->sn[i] = t ? (float)fmax(0, s->su[i] - g->dd) : INFINITY;
+	}
+	return 0;
 }
 
 /*
- * Vf (layer_below's void for layer k) cut so that voids stay apart: the
- * part of Vf within d of component P_i of V(k + 1) belongs to P_i unless
- * it comes within wall + d of another component (then it stays solid), and
- * new voids (seeds) only start at >= wall + d from every component of
- * V(k + 1).  So components that meet at layer k + 1 apart by >= wall stay
- * >= wall apart (a point of P_i's growth is >= wall + d from P_j, P_j's
- * growth within d of P_j); without this the greedy void grows into a foam
- * of cells split by walls thinner than a pixel (docs/hollow.md).
- * The result is a subset of Vf: turning void into solid never breaks the
- * overhang rule for the layer above, and the layer below is built from
- * the result.  Bounding boxes skip far components.
+ * Keep the voids apart (on s->v, given V(k + 1) = s->vw): without this the
+ * greedy void grows into a foam of cells split by walls thinner than a
+ * pixel (docs/hollow.md).  With d1 the distance to V(k + 1) and B the
+ * pixels where the nearest component of V(k + 1) changes (its Voronoi
+ * boundaries, where within reach), a void pixel stays void if
+ *   - d1 >= wall + dg: a new cell, >= wall + dg from every component; or
+ *   - d1 <= dg (growth of its nearest component) and it lies >= wall / 2
+ *     + 1 px from B: two components stay >= wall apart, each on its side
+ *     of their bisector.
+ * Everything else turns solid (a subset: safe).  O(pixels).
  */
-static int keep_apart(const struct paths *Vf, const struct paths *Vup, double d_nm,
-		      double wall_nm, struct paths *V, struct err *e)
+static int keep_apart(struct win *s, int ww, int wh, const struct geo *g, struct err *e)
 {
-	struct comp *c = NULL;
-	size_t nc = 0;
-	struct paths acc, X, G, others;
-	double reach = wall_nm + 2 * d_nm;
+	size_t np = (size_t)ww * (size_t)wh;
+	double cut = g->wall + 2 * g->dg + 2 * g->pmax, half = 0.5 * g->wall + g->pmax;
+	int32_t count;
+	int anyb = 0, rc;
+
+	rc = hl_grid_label(s->vw, ww, wh, s->lab, &count, e);
+	if (!rc)
+		rc = hl_grid_nearest(s->lab, ww, wh, g->px, g->py, s->d1, s->near, e);
+	if (rc)
+		return rc;
+	for (int y = 0; y < wh; y++)
+		for (int x = 0; x < ww; x++) {
+			size_t i = (size_t)y * (size_t)ww + (size_t)x;
+			int32_t l = s->near[i];
+			s->seed[i] = l && s->d1[i] <= cut * cut &&
+				     ((x > 0 && s->near[i - 1] != l) ||
+				      (x + 1 < ww && s->near[i + 1] != l) ||
+				      (y > 0 && s->near[i - (size_t)ww] != l) ||
+				      (y + 1 < wh && s->near[i + (size_t)ww] != l));
+			anyb |= s->seed[i];
+		}
+	rc = dist2(s, s->seed, anyb, ww, wh, g->px, g->py, s->db2, e);
+	if (rc)
+		return rc;
+	for (size_t i = 0; i < np; i++) {
+		double d1;
+		if (!s->v[i])
+			continue;
+		d1 = sqrt(s->d1[i]);
+		if (d1 >= g->wall + g->dg || (d1 <= g->dg && s->db2[i] >= half * half))
+			continue;
+		s->v[i] = 0;
+		s->sn[i] = 0;
+	}
+	return 0;
+}
+
+/*
+ * No floating islands: a solid component of layer k + 1 (8-connected, the
+ * part's material and the outside counting as solid) with nothing solid
+ * under any of its pixels would print onto liquid resin.  Its pixels stay
+ * solid in layer k (on s->v): a pillar that the next layers carry down to
+ * the floor (adding solid never breaks the overhang rule).  O(pixels).
+ */
+static int support_islands(struct win *s, int ww, int wh, struct err *e)
+{
+	size_t np = (size_t)ww * (size_t)wh;
+	uint8_t *held = NULL;
+	int32_t count;
 	int rc;
 
-	paths_init(&acc);
-	paths_init(&X);
-	paths_init(&G);
-	paths_init(&others);
-	rc = split_components(Vup, &c, &nc, e);
-	/* seeds: Vf beyond wall + d of everything above */
-	if (!rc)
-		rc = clip_offset(Vup, wall_nm + d_nm, CLIP_JOIN_ROUND, 0, 0, &X, e);
-	if (!rc)
-		rc = clip_boolean(CLIP_DIFFERENCE, Vf, &X, CLIP_FILL_NONZERO, &acc, e);
-	for (size_t i = 0; !rc && i < nc; i++) {
-		paths_clear(&others);
-		for (size_t j = 0; j < nc && !rc; j++) {
-			if (j == i || c[j].lo.x > c[i].hi.x + reach || c[i].lo.x > c[j].hi.x + reach ||
-			    c[j].lo.y > c[i].hi.y + reach || c[i].lo.y > c[j].hi.y + reach)
-				continue;
-			for (size_t q = 0; q < c[j].p.n && !rc; q++)
-				if (paths_add_pts(&others, c[j].p.v[q].pts, c[j].p.v[q].n))
-					rc = ERR_SET(e, ERR_NOMEM, "hollow: out of memory");
+	for (size_t i = 0; i < np; i++)
+		s->seed[i] = !s->vw[i];
+	rc = hl_grid_label(s->seed, ww, wh, s->lab, &count, e);
+	if (rc)
+		return rc;
+	held = mem_calloc((size_t)count + 1, 1);
+	if (!held)
+		return ERR_SET(e, ERR_NOMEM, "hollow: out of memory (fill islands)");
+	for (size_t i = 0; i < np; i++)
+		if (s->lab[i] && !s->v[i])
+			held[s->lab[i]] = 1;
+	for (size_t i = 0; i < np; i++)
+		if (s->lab[i] && !held[s->lab[i]]) {
+			s->v[i] = 0;
+			s->sn[i] = 0;
 		}
-		if (!rc)
-			rc = clip_offset(&c[i].p, d_nm, CLIP_JOIN_ROUND, 0, 0, &G, e);
-		if (!rc)
-			rc = clip_boolean(CLIP_INTERSECTION, &G, Vf, CLIP_FILL_NONZERO, &G, e);
-		if (!rc && others.n) {
-			rc = clip_offset(&others, wall_nm + d_nm, CLIP_JOIN_ROUND, 0, 0, &X, e);
-			if (!rc)
-				rc = clip_boolean(CLIP_DIFFERENCE, &G, &X, CLIP_FILL_NONZERO, &G, e);
-		}
-		if (!rc && paths_append_move(&acc, &G))
-			rc = ERR_SET(e, ERR_NOMEM, "hollow: out of memory");
+	mem_free(held);
+	return 0;
+}
+
+/* Grid of map m over the part's box: *u0, *v0, *w, *h; pitches. */
+static int grid_of(const struct mesh *part, const struct raster_map *m, struct hl_fill *f,
+		   double *px, double *py, struct err *e)
+{
+	struct box3 bb = box3_empty();
+	double det = m->a[0][0] * m->a[1][1] - m->a[0][1] * m->a[1][0];
+	double umin = INFINITY, umax = -INFINITY, vmin = INFINITY, vmax = -INFINITY;
+
+	for (size_t i = 0; i < part->nv; i++)
+		box3_add(&bb, part->v[i]);
+	*px = hypot(m->a[1][1], m->a[1][0]) / fabs(det);
+	*py = hypot(m->a[0][1], m->a[0][0]) / fabs(det);
+	for (int q = 0; q < 4; q++) {
+		double u, v;
+		raster_map_apply(m, q & 1 ? bb.hi.x : bb.lo.x, q & 2 ? bb.hi.y : bb.lo.y, &u, &v);
+		umin = fmin(umin, u);
+		umax = fmax(umax, u);
+		vmin = fmin(vmin, v);
+		vmax = fmax(vmax, v);
 	}
-	if (!rc)
-		rc = clip_union(&acc, CLIP_FILL_NONZERO, V, e);
-	for (size_t i = 0; c && i < nc; i++)
-		paths_fini(&c[i].p);
-	mem_free(c);
-	paths_fini(&acc);
-	paths_fini(&X);
-	paths_fini(&G);
-	paths_fini(&others);
-	return rc;
+	f->u0 = (int)floor(umin) - 2;
+	f->v0 = (int)floor(vmin) - 2;
+	f->w = (int)ceil(umax) - f->u0 + 2;
+	f->h = (int)ceil(vmax) - f->v0 + 2;
+	if (f->w > 65535 || f->h > 65535 || (double)f->w * f->h > 268435456.0)
+		return ERR_SET(e, ERR_LIMIT, "hollow: fill grid %d x %d too large", f->w, f->h);
+	return 0;
 }
 
 int hl_fill_build(const struct mesh *part, const struct mesh *solid, const struct hl_config *c,
-		  int stack_count, struct progress *prog, double f0, double f1, struct hl_fill *f,
-		  struct err *e)
+		  struct progress *prog, double f0, double f1, struct hl_fill *f, struct err *e)
 {
+	const struct raster_map *m = &c->fill_map;
 	struct hl_fill r;
-	struct paths *C = NULL;
-	double alpha = c->alpha_rad - c->margin_rad;
-	double px2 = c->pixel_mm * c->pixel_mm;
-	/* Raster safety (docs/hollow.md "Top-down fill"): the layers are
-	 * pixel-centre samples of these regions, the checker allows
-	 * layer tan(alpha) + 1 pixel between a solid pixel and the solid under
-	 * it.  The void written is V eroded by w = HL_FILL_W_PX pixels and the
-	 * construction uses d = layer tan(alpha) - HL_FILL_D_PX pixels: a solid
-	 * pixel centre p lies within w of the design's solid, that within d of
-	 * the solid of the layer below, and the pixel centre nearest to that
-	 * point (<= 0.71 px away, solid because it is within w of it) is
-	 * within w + d + 0.71 = layer tan(alpha) + 0.987 px of p: inside the
-	 * checker's one pixel of tolerance.  Layers too thick for that (d <= 0)
-	 * get no fill. */
-	double d_nm = (double)geom_mm_to_nm(c->stack_layer_mm * tan(alpha) -
-					    HL_FILL_D_PX * c->pixel_mm);
-	double w_nm = (double)geom_mm_to_nm(HL_FILL_W_PX * c->pixel_mm);
-	double wall_nm = (double)geom_mm_to_nm(c->wall_next_mm);
-	double px_nm = (double)geom_mm_to_nm(c->pixel_mm);
-	int rc = 0;
+	struct hl_fill_layer *C = NULL;
+	struct raster_map gm;
+	struct win s;
+	struct geo g;
+	struct box3 bb = box3_empty();
+	uint8_t *vup = NULL;
+	float *sig = NULL;
+	int px0 = 0, py0 = 0, px1 = 0, py1 = 0, pad, rc = 0, n;
+	double L = c->print_layer_mm;
 
 	memset(&r, 0, sizeof r);
-	if (stack_count < 1)
-		return ERR_SET(e, ERR_PARAM, "hollow: fill needs layers");
-	if (!(d_nm > 0))
-		return 0; /* layers too thick for this alpha and pixel: no safe fill */
-	r.n = stack_count;
-	r.layer_mm = c->stack_layer_mm;
-	r.layer = mem_calloc((size_t)stack_count, sizeof *r.layer);
-	C = mem_calloc((size_t)stack_count, sizeof *C);
-	if (!r.layer || !C) {
-		rc = ERR_SET(e, ERR_NOMEM, "hollow: out of memory");
+	memset(&s, 0, sizeof s);
+	edt_scratch_init(&s.es);
+	/* only an axis-aligned grid (rotations by quarter turns, mirrors) has
+	 * rows and columns that are lines of the printer frame */
+	if (!c->fill_map_set || !(L > 0) ||
+	    !((m->a[0][1] == 0 && m->a[1][0] == 0) || (m->a[0][0] == 0 && m->a[1][1] == 0)))
+		return 0;
+	for (size_t i = 0; i < part->nv; i++)
+		box3_add(&bb, part->v[i]);
+	n = (int)ceil(bb.hi.z / L - 1e-9);
+	if (n < 1)
+		return 0;
+	rc = grid_of(part, m, &r, &g.px, &g.py, e);
+	if (rc)
+		return rc;
+	r.n = n;
+	r.layer_mm = L;
+	r.map = *m;
+	g.pmax = fmax(g.px, g.py);
+	g.dd = L * tan(c->alpha_rad - c->margin_rad);
+	g.dg = L * tan(c->alpha_rad) + 0.98 * g.pmax;
+	g.wall = c->wall_next_mm;
+	pad = (int)ceil((g.wall + 2 * g.dg + 2 * g.pmax) / fmin(g.px, g.py)) + 2;
+	gm = *m;
+	gm.b[0] -= r.u0;
+	gm.b[1] -= r.v0;
+	r.layer = mem_calloc((size_t)n, sizeof *r.layer);
+	C = mem_calloc((size_t)n, sizeof *C);
+	vup = mem_calloc((size_t)r.w * (size_t)r.h, 1);
+	sig = mem_alloc((size_t)r.w * (size_t)r.h * sizeof *sig);
+	if (!r.layer || !C || !vup || !sig || !win_init(&s, (size_t)r.w * (size_t)r.h)) {
+		rc = ERR_SET(e, ERR_NOMEM, "hollow: out of memory (fill)");
 		goto out;
 	}
-	for (int k = 0; k < stack_count; k++) {
-		paths_init(&r.layer[k]);
-		paths_init(&C[k]);
-	}
-	rc = offset_stack(part, solid, c, stack_count, C, e);
-	for (int k = stack_count - 1; !rc && k >= 0; k--) {
-		static const struct paths none;
-		const struct paths *up = k + 1 < stack_count ? &r.layer[k + 1] : &none;
-		if (!C[k].n)
-			continue;
+	for (size_t i = 0; i < (size_t)r.w * (size_t)r.h; i++)
+		sig[i] = INFINITY;
+	rc = offset_stack(part, solid, c, &gm, r.w, r.h, n, C, e);
+	for (int k = n - 1; !rc && k >= 0; k--) {
+		int x0 = INT32_MAX, y0 = INT32_MAX, x1 = -1, y1 = -1, ww = 0, wh = 0;
+		size_t cap = 0;
 		if (prog && k % 16 == 0) {
-			rc = progress_update(prog, f0 + (f1 - f0) * (stack_count - k) / stack_count, e);
+			rc = progress_update(prog, f0 + (f1 - f0) * (n - k) / n, e);
 			if (rc)
 				break;
 		}
-		rc = layer_below(&C[k], up, d_nm, 0.02 * px_nm, 0.25 * px2,
-				 (double)geom_mm_to_nm(0.01 * c->pixel_mm), &r.layer[k], e);
-		if (!rc && up->n && r.layer[k].n)
-			rc = keep_apart(&r.layer[k], up, d_nm, wall_nm, &r.layer[k], e);
-		paths_fini(&C[k]);
-	}
-	/* the written void: V eroded by w (V itself drove the layers below) */
-	for (int k = 0; !rc && k < stack_count; k++)
-		if (r.layer[k].n) {
-			rc = clip_offset(&r.layer[k], -w_nm, CLIP_JOIN_ROUND, 0, 0.05 * w_nm,
-					 &r.layer[k], e);
-			if (!rc) {
-				drop_small(&r.layer[k], 0.25 * px2);
-				rc = clip_union(&r.layer[k], CLIP_FILL_POSITIVE, &r.layer[k], e);
+		for (size_t i = 0; i < C[k].n; i++) {
+			x0 = C[k].run[i].x0 < x0 ? C[k].run[i].x0 : x0;
+			x1 = C[k].run[i].x1 > x1 ? C[k].run[i].x1 : x1;
+			y0 = C[k].run[i].y < y0 ? C[k].run[i].y : y0;
+			y1 = C[k].run[i].y > y1 ? C[k].run[i].y : y1;
+		}
+		if (x1 >= 0) {
+			x0 = x0 - pad < 0 ? 0 : x0 - pad;
+			y0 = y0 - pad < 0 ? 0 : y0 - pad;
+			x1 = x1 + pad + 1 > r.w ? r.w : x1 + pad + 1;
+			y1 = y1 + pad + 1 > r.h ? r.h : y1 + pad + 1;
+			ww = x1 - x0;
+			wh = y1 - y0;
+			memset(s.cm, 0, (size_t)ww * (size_t)wh);
+			for (size_t i = 0; i < C[k].n; i++)
+				memset(s.cm + (size_t)(C[k].run[i].y - y0) * (size_t)ww +
+					       (C[k].run[i].x0 - x0),
+				       1, (size_t)(C[k].run[i].x1 - C[k].run[i].x0 + 1));
+			for (int y = 0; y < wh; y++) {
+				memcpy(s.vw + (size_t)y * (size_t)ww,
+				       vup + (size_t)(y + y0) * (size_t)r.w + x0, (size_t)ww);
+				memcpy(s.sw + (size_t)y * (size_t)ww,
+				       sig + (size_t)(y + y0) * (size_t)r.w + x0,
+				       (size_t)ww * sizeof *sig);
+			}
+			rc = layer_below(&s, ww, wh, &g, e);
+			if (!rc)
+				rc = keep_apart(&s, ww, wh, &g, e);
+			if (!rc)
+				rc = support_islands(&s, ww, wh, e);
+			if (!rc)
+				rc = hl_grid_runs(s.v, ww, 0, 0, ww, wh, &r.layer[k].run, &r.layer[k].n,
+						  &cap, e);
+			for (size_t i = 0; !rc && i < r.layer[k].n; i++) {
+				r.layer[k].run[i].y += y0;
+				r.layer[k].run[i].x0 += x0;
+				r.layer[k].run[i].x1 += x0;
 			}
 		}
+		/* the state for layer k - 1: V(k) and the core's inside distance */
+		for (int y = py0; y < py1; y++) {
+			memset(vup + (size_t)y * (size_t)r.w + px0, 0, (size_t)(px1 - px0));
+			for (int x = px0; x < px1; x++)
+				sig[(size_t)y * (size_t)r.w + (size_t)x] = INFINITY;
+		}
+		px0 = py0 = px1 = py1 = 0;
+		if (rc || x1 < 0)
+			continue;
+		for (int y = y0; y < y1; y++) {
+			memcpy(vup + (size_t)y * (size_t)r.w + x0, s.v + (size_t)(y - y0) * (size_t)ww,
+			       (size_t)ww);
+			memcpy(sig + (size_t)y * (size_t)r.w + x0, s.sn + (size_t)(y - y0) * (size_t)ww,
+			       (size_t)ww * sizeof *sig);
+		}
+		px0 = x0;
+		py0 = y0;
+		px1 = x1;
+		py1 = y1;
+		mem_free(C[k].run);
+		C[k].run = NULL;
+		C[k].n = 0;
+	}
 	if (!rc)
-		rc = components(&r, c->min_void_mm3, e);
+		rc = components(&r, c->min_void_mm3, g.px * g.py, e);
 	if (!rc) {
 		hl_fill_fini(f);
 		*f = r;
 		memset(&r, 0, sizeof r);
 	}
 out:
-	for (int k = 0; C && k < stack_count; k++)
-		paths_fini(&C[k]);
+	for (int k = 0; C && k < n; k++)
+		mem_free(C[k].run);
 	mem_free(C);
+	mem_free(vup);
+	mem_free(sig);
+	win_fini(&s);
 	hl_fill_fini(&r);
 	return rc;
 }

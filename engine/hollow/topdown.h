@@ -1,7 +1,7 @@
 /* topdown.h - the top-down support-free fill (topdown.c): the largest
  * void a greedy top-down construction fits inside the offset stack,
- * layer by layer, used where the optimiser left space unhollowed.
- * Design: docs/hollow.md "Top-down fill".
+ * print layer by print layer on the verifier's pixel grid, used where the
+ * optimiser left space unhollowed.  Design: docs/hollow.md "Top-down fill".
  */
 #ifndef INFILLD_HOLLOW_TOPDOWN_H
 #define INFILLD_HOLLOW_TOPDOWN_H
@@ -9,18 +9,27 @@
 #include <stddef.h>
 
 #include "engine/geom/path.h"
+#include "engine/geom/raster.h"
+#include "engine/hollow/grid.h"
 
 struct mesh;
 struct err;
 struct hl_config;
 struct progress;
 
+struct hl_fill_layer {
+	struct hl_run *run; /* void pixels, grid coordinates, row-major */
+	size_t n;
+};
+
 struct hl_fill {
-	struct paths *layer; /* n regions (nm, printer frame): the void of stack layer j,
-				the slab [j, j + 1] * layer_mm */
+	struct hl_fill_layer *layer; /* n print layers: layer j = slab [j, j + 1] * layer_mm */
 	int n;
-	double layer_mm;     /* stack layer height */
-	size_t voids;        /* 3D components kept (connected through consecutive layers) */
+	double layer_mm;     /* print layer height */
+	int u0, v0;          /* grid pixel (x, y) is image pixel (u0 + x, v0 + y) of the map */
+	int w, h;            /* grid size */
+	struct raster_map map; /* printer mm -> image pixels (the one the grid lies on) */
+	size_t voids;        /* 3D components kept (4-connected in a layer, linked vertically) */
 	size_t voids_small;  /* components dropped: below min_void_mm3 */
 	double volume_mm3;   /* of the kept components */
 };
@@ -29,17 +38,16 @@ void hl_fill_fini(struct hl_fill *f);
 
 /* Fill f with the top-down support-free void of the region that keeps
  * c->wall_mm from part's surface and, when solid != NULL (part minus the
- * optimised voids, one closed mesh), c->wall_next_mm from solid's surface.
- * Consecutive layers obey the overhang rule at c->alpha_rad - margin:
- * every non-void point of layer j + 1 lies within layer_mm tan(alpha) of
- * a non-void point of layer j (docs/hollow.md).  Components under
- * c->min_void_mm3 are dropped.  stack_count layers of c->stack_layer_mm.
+ * optimised voids, one closed mesh), c->wall_next_mm from solid's surface,
+ * designed on the pixels of c->fill_map (an axis-aligned printer-mm ->
+ * image-pixel map; the very pixels the verifier reads) and the print
+ * layers of c->print_layer_mm.  Consecutive layers obey the overhang rule
+ * (docs/hollow.md).  Components under c->min_void_mm3 are dropped.
  * prog (may be NULL) advances from f0 to f1 and can cancel.
- * Returns 0 (f replaced), ERR_NOMEM, ERR_LIMIT, ERR_CANCELLED or a slicer
- * error. */
+ * Returns 0 (f replaced; left empty when the map is not axis-aligned),
+ * ERR_NOMEM, ERR_LIMIT, ERR_CANCELLED or a slicer error. */
 int hl_fill_build(const struct mesh *part, const struct mesh *solid, const struct hl_config *c,
-		  int stack_count, struct progress *prog, double f0, double f1, struct hl_fill *f,
-		  struct err *e);
+		  struct progress *prog, double f0, double f1, struct hl_fill *f, struct err *e);
 
 /* Layer source for slice/erode.h over a slicer: layer k is the slice at
  * (k + 1/2) layer_mm.  ctx is a struct hl_src_ctx (borrowed). */
@@ -50,8 +58,17 @@ struct hl_src_ctx {
 };
 int hl_src_layer(void *ctx, int k, struct paths *region, struct err *e);
 
-/* The fill's region for a print layer whose mid-plane is at z_mm:
- * borrowed, NULL when there is none. */
-const struct paths *hl_fill_at(const struct hl_fill *f, double z_mm);
+/* The fill's layer for a print layer whose mid-plane is at z_mm:
+ * borrowed, NULL when it has no void pixels. */
+const struct hl_fill_layer *hl_fill_at(const struct hl_fill *f, double z_mm);
+
+/* Clear (set to 0) the fill's void pixels of layer l in image r, drawn
+ * through f->map: r must be an image of that map. */
+void hl_fill_clear(const struct hl_fill *f, const struct hl_fill_layer *l, struct raster *r);
+
+/* The fill's void of layer l as a region (nm, printer frame): contours at
+ * half way between void and solid pixel centres.  Replaces *region. */
+int hl_fill_region(const struct hl_fill *f, const struct hl_fill_layer *l, struct paths *region,
+		   struct err *e);
 
 #endif

@@ -4,7 +4,8 @@
 # the layer verifier: volume reduction, interior overhang (must be 0), voids,
 # rounds, time, peak RSS.  Paper's Table 1: 53-77 % reduction, 17-60 min.
 # normal: the top-down fill alone (rounds=0 fill=true) and the default
-# optimiser pipeline (rounds<=8); each run capped at CAP_S (300) seconds, reported.
+# pipeline (optimiser rounds<=8, then the fill); each run capped at CAP_S (300)
+# seconds, reported.  HOLLOW_MODELS="camel:y femur:z" picks models.
 # large: also alpha 30 and the standing objective on the letter P.
 set -uo pipefail
 BUILD=${1:?usage: hollow.sh BUILD [normal|large]}
@@ -18,7 +19,7 @@ mkdir -p "$TMP"
 CAP_S=${CAP_S:-300}
 
 run_one() { # name up alpha objective rounds fill
-	local name=$1 up=$2 alpha=$3 obj=$4 rounds=$5 fill=${6:-false} out="$TMP/$1_a$3_$4_r$5" rc
+	local name=$1 up=$2 alpha=$3 obj=$4 rounds=$5 fill=${6:-true} out="$TMP/$1_a$3_$4_r$5" rc
 	/usr/bin/time -f '%e %M' -o "$out.time" timeout -k 30 "$CAP_S" "$BIN" run \
 		"$SHARED/meshes/$name.off" -o "$out.sl1" --engine hollow --set height_mm=50 \
 		--set up="$up" --set alpha_deg="$alpha" --set objective="$obj" \
@@ -52,6 +53,11 @@ echo "model      alpha objective   rounds    reduction overhang  voids(opt+fill)
 
 status=0
 MODELS=("camel y" "cow z" "elephant z" "armadillo y" "femur z")
+# HOLLOW_MODELS="camel:y femur:z" runs a subset
+if [ -n "${HOLLOW_MODELS:-}" ]; then
+	MODELS=()
+	for m in $HOLLOW_MODELS; do MODELS+=("${m%%:*} ${m##*:}"); done
+fi
 for m in "${MODELS[@]}"; do
 	set -- $m
 	run_one "$1" "$2" 45 lightweight 0 true || status=1

@@ -58,6 +58,29 @@ class HollowTest(unittest.TestCase):
         # a smaller alpha never hollows more
         self.assertLessEqual(res[30]["volume_reduction"], res[45]["volume_reduction"] + 1e-9)
 
+    def test_cube_fill_alone_at_45_and_30(self):
+        # the top-down fill alone (rounds=0): support-free on the very
+        # pixels written, no islands, walls to the outside >= wall_mm less
+        # one pixel, and a smaller alpha never hollows more
+        res = {}
+        for a in (45, 30):
+            m = hollow(self.tmp.name, "misc/cube.ascii.stl", height_mm=12, alpha_deg=a,
+                       rounds=0, fill="true")
+            h = m["hollow"]
+            res[a] = h
+            self.assertGreaterEqual(h["voids_fill"], 1)
+            self.assertEqual(h["voids_optimised"], 0)
+            self.assertEqual(h["interior_overhang_mm2"], 0.0, h["verify"])
+            self.assertEqual(h["verify"]["islands"], 0)
+            self.assertGreaterEqual(h["verify"]["min_wall_mm"], 1.0 - 0.06)
+            self.assertGreaterEqual(h["verify"]["min_wall_vertical_mm"], 1.0 - 0.06)
+            # every fill void is enclosed: the checker finds all of it
+            self.assertAlmostEqual(h["verify"]["enclosed_void_mm3"], h["fill_volume_mm3"],
+                                   delta=1e-6 * h["fill_volume_mm3"])
+            self.assertGreater(h["volume_reduction"], 0.3)
+        self.assertLessEqual(res[30]["volume_reduction"], res[45]["volume_reduction"] + 1e-9)
+        self.assertLess(res[30]["volume_reduction"], res[45]["volume_reduction"])
+
     def test_too_thin_returns_part_with_note(self):
         m = hollow(self.tmp.name, "misc/tetrahedron.ascii.stl", fmt="stl", height_mm=3)
         h = m["hollow"]
