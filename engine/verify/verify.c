@@ -783,6 +783,7 @@ int verify_report_metrics(const struct verify_report *r, const char *prefix, str
 	rc |= metrics_num(m, KEY("island_mm2"), r->island_mm2);
 	rc |= metrics_int(m, KEY("first_island_layer"), r->first_island_layer);
 	rc |= metrics_num(m, KEY("min_wall_mm"), r->min_wall_mm);
+	rc |= metrics_int(m, KEY("min_wall_layer"), r->min_wall_layer);
 	rc |= metrics_num(m, KEY("min_wall_vertical_mm"), r->min_wall_vertical_mm);
 	rc |= metrics_num(m, KEY("enclosed_void_mm3"), r->enclosed_void_mm3);
 	rc |= metrics_int(m, KEY("specks"), r->specks);
