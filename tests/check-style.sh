@@ -4,6 +4,7 @@
 #  1. engine/ includes no HTTP, JSON or SQL headers; db/ includes nothing
 #     from api/ or service/; api/ nothing from service/ (one-way layers);
 #  2. every extern symbol of an object file carries a prefix of its module
+#     (C++ mangled _Z* and reserved __* names, e.g. ASan's __odr_asan.*, skipped)
 #     (table below, one line per directory; file-local helpers are static);
 #  3. .c/.cpp files stay under 1,000 lines and headers under 300
 #     (test fixtures under tests/ excepted).
@@ -49,7 +50,7 @@ if [ -d "$BUILD/obj" ]; then
 			[ $ok = 1 ] || say "$obj exports '$sym' without a $dir prefix ($allowed)"
 		done < <(for o in "$BUILD/obj/$dir"/*.o; do
 			nm -g --defined-only "$o" | awk -v o="${o#$BUILD/obj/}" \
-				'$2 ~ /^[TDRBC]$/ && $3 !~ /^_Z/ {print o, $3}'
+				'$2 ~ /^[TDRBC]$/ && $3 !~ /^_Z/ && $3 !~ /^__/ {print o, $3}'
 		done)
 	done
 	for d in $(cd "$BUILD/obj" && find . -mindepth 1 -type d -printf '%P\n'); do
