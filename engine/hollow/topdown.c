@@ -325,11 +325,19 @@ out:
 
 /* ---- the greedy top-down construction on the grid ---- */
 
+/* Beside a void of its region of C, a new void needs wall + dg + this
+ * much (mm) of room: each void costs walls of wall_next down to its
+ * floor, and within a few millimetres the neighbour's own growth (dd per
+ * layer) fills the space anyway.  3 mm: measured on the cube (one groin
+ * vault instead of five cells), camel, cow, elephant and armadillo
+ * (docs/hollow.md); 1.5 mm gave the cow 54 % instead of 59 %. */
+#define HL_FILL_LONE_MM 3.0
+
 /* Scratch of one layer's window (ww x wh pixels, row stride ww). */
 struct win {
 	uint8_t *cm, *seed, *vw, *u, *ex, *v;
 	float *dc2, *dv2, *su, *de2, *d1, *db2, *sn, *sw;
-	int32_t *lab, *near;
+	int32_t *lab, *near, *lv;
 	struct edt_scratch es;
 };
 
@@ -351,6 +359,7 @@ static void win_fini(struct win *s)
 	mem_free(s->sw);
 	mem_free(s->lab);
 	mem_free(s->near);
+	mem_free(s->lv);
 	edt_scratch_fini(&s->es);
 }
 
@@ -374,8 +383,9 @@ static int win_init(struct win *s, size_t np)
 	s->sw = mem_alloc(np * sizeof(float));
 	s->lab = mem_alloc(np * sizeof(int32_t));
 	s->near = mem_alloc(np * sizeof(int32_t));
+	s->lv = mem_alloc(np * sizeof(int32_t));
 	return s->cm && s->seed && s->vw && s->u && s->ex && s->v && s->dc2 && s->dv2 && s->su &&
-	       s->de2 && s->d1 && s->db2 && s->sn && s->sw && s->lab && s->near;
+	       s->de2 && s->d1 && s->db2 && s->sn && s->sw && s->lab && s->near && s->lv;
 }
 
 /* Squared distance transform of seed (nonzero), or all INFINITY when
@@ -395,61 +405,180 @@ struct geo {
 	double dd;    /* design shrink per layer: layer tan(alpha - margin) */
 	double dg;    /* discrete reach: the verifier's layer tan(alpha) + 1 px, less 2 % px */
 	double wall;  /* wall_next_mm between fill voids */
+	double birth; /* inside distance of the free region a new void needs */
+	int mv;       /* layers in wall_next: the vertical wall between voids */
+	double lone;  /* a new void beside others keeps wall + dg + lone from them */
 	double px, py, pmax;
 };
 
 /*
  * One layer: V(k) on the window from C(k) (s->cm) and V(k + 1) (s->vw),
- * s->sw = the inside distance of the design's solid core of layer k + 1
- * (mm, INFINITY where unknown).  Pixel sets throughout; Q(k) = the
- * non-void of layer k.  The verifier's rule: every pixel of Q(k + 1)
- * over a void pixel of layer k lies within dg of Q(k) (centre to centre).
- *   U = pixels of Q(k + 1) farther than dg from the complement of C(k)
- *       (the rest is covered by that complement, solid in the image: it
- *       lies >= wall_next_mm inside the part's material);
- *   E = the design's erosion of U by dd: pixels whose inside distance
- *       su = min(dist(not C) - dd, dist(V(k + 1)), sig) exceeds dd; sig
- *       carries the core's inside distance down the layers, so the core
- *       shrinks by dd per layer on average even when dd is under a pixel
- *       (a sub-pixel slope, drawn as a staircase);
- *   R = pixels of U farther than dg from E (thin parts, the staircase's
- *       corners): kept solid, so dilate(E u R, dg) covers U exactly on
- *       the pixels, whatever E is;
+ * s->sw = the inside distance of the design's solid of layer k + 1 (mm,
+ * INFINITY where unknown).  Pixel sets throughout.  The verifier's rule:
+ * every solid pixel of layer k + 1 over a void pixel of layer k lies
+ * within dg of a solid pixel of layer k (centre to centre).  Voids only
+ * grow here (births are born_cells()):
+ *   E = pixels of C(k), solid in layer k + 1, whose inside distance
+ *       su = min(dist(V(k + 1)), sig) exceeds dd: the solid the voids
+ *       above cannot reach in one layer at the design slope; sig carries
+ *       su down the layers, so the solid recedes by dd per layer on
+ *       average even when dd is under a pixel (a sub-pixel slope, drawn
+ *       as a staircase);
+ *   R = pixels of C(k), solid in layer k + 1 and not in E, farther than
+ *       dg from E u not C(k) (thin solid between voids, staircase
+ *       corners): kept solid, so every solid pixel of layer k + 1 over a
+ *       void of layer k is within dg of solid, exactly on the pixels;
  *   V(k) = C(k) \ (E u R), then kept apart (keep_apart).
- * Any subset of V(k) keeps the rule for layer k + 1 (void turned solid only
- * adds support), and layer k - 1 is built from the result.
+ * The material outside C(k) supports but never turns void: a void does
+ * not creep along a ceiling flatter than alpha (that left hair-thin fins
+ * between a creeping band and the void it outran: docs/hollow.md).
+ * Any subset of V(k) keeps the rule for layer k + 1 (void turned solid
+ * only adds support), and layer k - 1 is built from the result.
  */
 static int layer_below(struct win *s, int ww, int wh, const struct geo *g,
 		       struct err *e)
 {
 	size_t np = (size_t)ww * (size_t)wh;
-	int anyv = 0, anye = 0, rc;
+	int anyv = 0, rc;
 
-	for (size_t i = 0; i < np; i++) {
-		s->seed[i] = !s->cm[i];
+	for (size_t i = 0; i < np; i++)
 		anyv |= s->vw[i];
-	}
-	rc = dist2(s, s->seed, 1, ww, wh, g->px, g->py, s->dc2, e);
-	if (!rc)
-		rc = dist2(s, s->vw, anyv, ww, wh, g->px, g->py, s->dv2, e);
+	rc = dist2(s, s->vw, anyv, ww, wh, g->px, g->py, s->dv2, e);
 	if (rc)
 		return rc;
 	for (size_t i = 0; i < np; i++) {
-		double dc = sqrt(s->dc2[i]), su;
-		s->u[i] = s->cm[i] && !s->vw[i] && dc > g->dg;
-		su = fmin(fmin(dc - g->dd, sqrt(s->dv2[i])), s->sw[i]);
+		double su = fmin(sqrt(s->dv2[i]), s->sw[i]);
 		s->su[i] = (float)su;
-		s->ex[i] = s->u[i] && su > g->dd;
-		anye |= s->ex[i];
+		s->ex[i] = s->cm[i] && !s->vw[i] && su > g->dd;
+		s->seed[i] = s->ex[i] || !s->cm[i];
 	}
-	rc = dist2(s, s->ex, anye, ww, wh, g->px, g->py, s->de2, e);
+	rc = dist2(s, s->seed, 1, ww, wh, g->px, g->py, s->de2, e);
 	if (rc)
 		return rc;
 	for (size_t i = 0; i < np; i++) {
-		int t = s->ex[i] || (s->u[i] && s->de2[i] > g->dg * g->dg);
+		int t = s->ex[i] || (s->cm[i] && !s->vw[i] && s->de2[i] > g->dg * g->dg);
 		s->v[i] = s->cm[i] && !t;
 		s->sn[i] = t ? (float)fmax(0, s->su[i] - g->dd) : INFINITY;
 	}
+	return 0;
+}
+
+/*
+ * Vertical walls (on s->v): a pixel void in layer k and in some layer
+ * k + 2 .. k + mv but solid in between would leave a horizontal wall
+ * thinner than wall_next between two voids (a floor over a ceiling): it
+ * stays solid.  A subset: safe.  O(pixels).
+ */
+static void vertical_walls(struct win *s, size_t np, const struct geo *g, int k)
+{
+	for (size_t i = 0; i < np; i++)
+		if (s->v[i] && !s->vw[i] && s->lv[i] >= k + 2 && s->lv[i] <= k + g->mv) {
+			s->v[i] = 0;
+			s->sn[i] = 0;
+		}
+}
+
+/* out[i] = allow[i] && pixel i lies on a ridge of the distance map d2
+ * (squared, mm^2): d >= dmin and, along one of the four pixel directions,
+ * neither neighbour is higher by more than px / 4 while the two together
+ * are lower by at least px / 2 (a strict maximum across the ridge; a
+ * straight edge, where neighbours along it are equal, is not a ridge).
+ * The medial axis of a region, one or two pixels wide: the diagonals of a
+ * square, the centre line of a strip.  Returns whether any pixel is set. */
+static int ridge(const float *d2, const uint8_t *allow, int ww, int wh, double dmin, double px,
+		 uint8_t *out)
+{
+	static const int dir[4][2] = {{1, 0}, {0, 1}, {1, 1}, {1, -1}};
+	int any = 0;
+
+	for (int y = 0; y < wh; y++)
+		for (int x = 0; x < ww; x++) {
+			size_t i = (size_t)y * (size_t)ww + (size_t)x;
+			double d = sqrt(d2[i]);
+			int c = 0;
+			if (allow[i] && d >= dmin && x > 0 && y > 0 && x + 1 < ww && y + 1 < wh)
+				for (int q = 0; q < 4 && !c; q++) {
+					size_t a = (size_t)(y + dir[q][1]) * (size_t)ww +
+						   (size_t)(x + dir[q][0]);
+					size_t b = (size_t)(y - dir[q][1]) * (size_t)ww +
+						   (size_t)(x - dir[q][0]);
+					double da = sqrt(d2[a]), db = sqrt(d2[b]);
+					c = da <= d + 0.25 * px && db <= d + 0.25 * px &&
+					    (d - da) + (d - db) >= 0.5 * px;
+				}
+			out[i] = (uint8_t)c;
+			any |= c;
+		}
+	return any;
+}
+
+/*
+ * New voids (on s->v, after keep_apart).  F = pixels of C(k) farther than
+ * wall + dg from every void of layers k .. k + mv (s->lv holds each
+ * pixel's last void layer), or farther than wall + dg + lone where their
+ * component of C(k) already holds a void (its growth gets there first;
+ * without this a square's ridge and the four triangles beside it became
+ * five cells instead of one groin vault).  Where F's inside distance D is
+ * >= birth, a void is born on F's ridge (ridge(): its medial axis), the
+ * crest a groin vault's ceiling collapses to.  Each born pixel lies within
+ * dg of a pixel of the ridge's complement, solid in layers k and k + 1
+ * (pixels that do not stay solid), so the flat ceiling of the new void
+ * spans at most 2 dg: the verifier's rule holds.  Below, layer_below()
+ * widens it by dd per layer: a ceiling at the design slope, like the
+ * paper's voids.  O(pixels).
+ */
+static int born_cells(struct win *s, int ww, int wh, const struct geo *g, int k, struct err *e)
+{
+	size_t np = (size_t)ww * (size_t)wh;
+	double far = g->wall + g->dg, lone = far + g->lone;
+	int32_t nc = 0;
+	uint8_t *occ;
+	int any = 0, anyf = 0, anyb, rc;
+
+	for (size_t i = 0; i < np; i++) {
+		s->seed[i] = s->v[i] || s->vw[i] || s->lv[i] <= k + g->mv;
+		any |= s->seed[i];
+	}
+	rc = dist2(s, s->seed, any, ww, wh, g->px, g->py, s->de2, e);
+	if (rc)
+		return rc;
+	/* occupied components of C(k) (holding a void of layer k) take new
+	 * voids only beyond lone: closer, their own voids get there first */
+	rc = hl_grid_label(s->cm, ww, wh, s->lab, &nc, e);
+	if (rc)
+		return rc;
+	occ = mem_calloc((size_t)nc + 1, 1);
+	if (!occ)
+		return ERR_SET(e, ERR_NOMEM, "hollow: out of memory (fill births)");
+	for (size_t i = 0; i < np; i++)
+		if (s->v[i])
+			occ[s->lab[i]] = 1;
+	for (size_t i = 0; i < np; i++) {
+		double lim = occ[s->lab[i]] ? lone : far;
+		s->u[i] = !(s->cm[i] && s->de2[i] > lim * lim); /* not F */
+		anyf |= !s->u[i];
+	}
+	mem_free(occ);
+	if (!anyf)
+		return 0;
+	rc = dist2(s, s->u, 1, ww, wh, g->px, g->py, s->db2, e);
+	if (rc)
+		return rc;
+	for (size_t i = 0; i < np; i++)
+		s->seed[i] = !s->u[i];
+	anyb = ridge(s->db2, s->seed, ww, wh, g->birth, fmin(g->px, g->py), s->ex);
+	if (!anyb)
+		return 0;
+	for (size_t i = 0; i < np; i++)
+		s->seed[i] = !s->ex[i];
+	rc = dist2(s, s->seed, 1, ww, wh, g->px, g->py, s->d1, e);
+	if (rc)
+		return rc;
+	for (size_t i = 0; i < np; i++)
+		if (s->ex[i] && s->d1[i] <= g->dg * g->dg) {
+			s->v[i] = 1;
+			s->sn[i] = INFINITY;
+		}
 	return 0;
 }
 
@@ -579,6 +708,7 @@ int hl_fill_build(const struct mesh *part, const struct mesh *solid, const struc
 	struct box3 bb = box3_empty();
 	uint8_t *vup = NULL;
 	float *sig = NULL;
+	int32_t *lastv = NULL; /* per grid pixel: the lowest layer so far where it is void */
 	int px0 = 0, py0 = 0, px1 = 0, py1 = 0, pad, rc = 0, n;
 	double L = c->print_layer_mm;
 
@@ -605,6 +735,9 @@ int hl_fill_build(const struct mesh *part, const struct mesh *solid, const struc
 	g.dd = L * tan(c->alpha_rad - c->margin_rad);
 	g.dg = L * tan(c->alpha_rad) + 0.98 * g.pmax;
 	g.wall = c->wall_next_mm;
+	g.mv = (int)ceil(g.wall / L - 1e-9);
+	g.birth = 0.5 * g.wall;
+	g.lone = HL_FILL_LONE_MM;
 	pad = (int)ceil((g.wall + 2 * g.dg + 2 * g.pmax) / fmin(g.px, g.py)) + 2;
 	gm = *m;
 	gm.b[0] -= r.u0;
@@ -613,12 +746,15 @@ int hl_fill_build(const struct mesh *part, const struct mesh *solid, const struc
 	C = mem_calloc((size_t)n, sizeof *C);
 	vup = mem_calloc((size_t)r.w * (size_t)r.h, 1);
 	sig = mem_alloc((size_t)r.w * (size_t)r.h * sizeof *sig);
-	if (!r.layer || !C || !vup || !sig || !win_init(&s, (size_t)r.w * (size_t)r.h)) {
+	lastv = mem_alloc((size_t)r.w * (size_t)r.h * sizeof *lastv);
+	if (!r.layer || !C || !vup || !sig || !lastv || !win_init(&s, (size_t)r.w * (size_t)r.h)) {
 		rc = ERR_SET(e, ERR_NOMEM, "hollow: out of memory (fill)");
 		goto out;
 	}
-	for (size_t i = 0; i < (size_t)r.w * (size_t)r.h; i++)
+	for (size_t i = 0; i < (size_t)r.w * (size_t)r.h; i++) {
 		sig[i] = INFINITY;
+		lastv[i] = INT32_MAX;
+	}
 	rc = offset_stack(part, solid, c, &gm, r.w, r.h, n, C, e);
 	for (int k = n - 1; !rc && k >= 0; k--) {
 		int x0 = INT32_MAX, y0 = INT32_MAX, x1 = -1, y1 = -1, ww = 0, wh = 0;
@@ -652,10 +788,17 @@ int hl_fill_build(const struct mesh *part, const struct mesh *solid, const struc
 				memcpy(s.sw + (size_t)y * (size_t)ww,
 				       sig + (size_t)(y + y0) * (size_t)r.w + x0,
 				       (size_t)ww * sizeof *sig);
+				memcpy(s.lv + (size_t)y * (size_t)ww,
+				       lastv + (size_t)(y + y0) * (size_t)r.w + x0,
+				       (size_t)ww * sizeof *lastv);
 			}
 			rc = layer_below(&s, ww, wh, &g, e);
 			if (!rc)
 				rc = keep_apart(&s, ww, wh, &g, e);
+			if (!rc) {
+				vertical_walls(&s, (size_t)ww * (size_t)wh, &g, k);
+				rc = born_cells(&s, ww, wh, &g, k, e);
+			}
 			if (!rc)
 				rc = support_islands(&s, ww, wh, e);
 			if (!rc)
@@ -681,6 +824,9 @@ int hl_fill_build(const struct mesh *part, const struct mesh *solid, const struc
 			       (size_t)ww);
 			memcpy(sig + (size_t)y * (size_t)r.w + x0, s.sn + (size_t)(y - y0) * (size_t)ww,
 			       (size_t)ww * sizeof *sig);
+			for (int x = x0; x < x1; x++)
+				if (s.v[(size_t)(y - y0) * (size_t)ww + (size_t)(x - x0)])
+					lastv[(size_t)y * (size_t)r.w + (size_t)x] = k;
 		}
 		px0 = x0;
 		py0 = y0;
@@ -703,6 +849,7 @@ out:
 	mem_free(C);
 	mem_free(vup);
 	mem_free(sig);
+	mem_free(lastv);
 	win_fini(&s);
 	hl_fill_fini(&r);
 	return rc;
