@@ -71,6 +71,7 @@ struct api_server {
 	struct api_waiter *waiting;
 	pthread_t ticker;
 	atomic_int stopping;
+	atomic_int quiesced; /* draining: new connections are closed at accept */
 
 	/* Mesh analysis: a small pool running sandboxed children. */
 	pthread_mutex_t an_mu;
