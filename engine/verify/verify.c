@@ -273,6 +273,7 @@ static int vwall_add(struct verify *v, uint32_t a, uint32_t b, int layer, double
 	return rec_add2(&v->vwall, a, b, layer, t_mm);
 }
 
+/* Scratch growth: the old contents are dropped, not copied. */
 static int grow_bytes(void **p, size_t *cap, size_t need)
 {
 	if (need <= *cap)
@@ -362,7 +363,9 @@ static int label_voids(struct verify *v, uint32_t *ncomp)
 						return ERR_NOMEM;
 				}
 			}
-			if (grow_bytes((void **)&v->enc, &v->enc_cap, n + 1))
+			/* keeps the flags of the components labelled so far
+			 * (grow_bytes would drop them) */
+			if (mem_grow((void **)&v->enc, &v->enc_cap, n + 1, 1))
 				return ERR_NOMEM;
 			v->enc[n] = !touch;
 			if (touch)

@@ -3,7 +3,8 @@
  * whose walls are a known number of pixels; a void meeting the outside
  * only at a pixel corner (the outside, not an enclosed void); anti-aliased
  * edges (one threshold: gray >= 128 is solid); rasterisation specks
- * (counted apart from the wall minimum).
+ * (counted apart from the wall minimum); many cavities in one layer (the
+ * per-component enclosure flags survive the growth of their array).
  */
 #include "harness.h"
 
@@ -230,6 +231,34 @@ static void test_open_pocket_is_no_wall(void)
 	verify_report_fini(&rep);
 }
 
+/* The box with 8 x 8 cavities of 2 x 2 px, 2 px apart, filling
+ * [20, 50) x [20, 50): the first cavity layer has 65 void components, more
+ * than any layer before it, so the enclosure flags are grown while
+ * labelling.  Walls to the outside: 10 px left/top, 4 px right/bottom.
+ * A cavity taken for the outside would read a 2 px wall to its neighbour. */
+static uint8_t grid(int i, int j, int k, int cavity, const void *arg)
+{
+	(void)arg;
+	(void)k;
+	if (!in_sq(i, j, 10, 54))
+		return 0;
+	if (cavity && in_sq(i, j, 20, 50) && (i - 20) % 4 < 2 && (j - 20) % 4 < 2)
+		return 0;
+	return 255;
+}
+
+static void test_many_cavities(void)
+{
+	struct verify_report rep;
+
+	run_box(grid, NULL, 0, &rep);
+	CHECK_NEAR(rep.enclosed_void_mm3, 64 * 4 * MID * PX * PX * LAYER, 1e-9);
+	CHECK_NEAR(rep.min_wall_mm, 4 * PX, 1e-6);
+	CHECK_NEAR(rep.min_wall_vertical_mm, FLOOR * LAYER, 1e-9);
+	CHECK_EQ_INT(rep.specks, 0);
+	verify_report_fini(&rep);
+}
+
 int main(void)
 {
 	RUN(test_ring_walls);
@@ -237,5 +266,6 @@ int main(void)
 	RUN(test_antialiased_edges);
 	RUN(test_specks);
 	RUN(test_open_pocket_is_no_wall);
+	RUN(test_many_cavities);
 	return harness_report();
 }
