@@ -29,6 +29,7 @@ struct hollow_params {
 	double sample_mm;
 	double margin_deg;
 	int fill;
+	double optimise_s;
 };
 
 static const char *const objective_names[] = {"lightweight", "stability", NULL};
@@ -74,9 +75,16 @@ static const struct param_desc hollow_desc[] = {
 	 .unit = "deg", .help = "Safety taken off alpha in the optimisation's constraints."},
 	{.name = "fill", .type = PARAM_BOOL, .offset = offsetof(struct hollow_params, fill),
 	 .min = 0, .max = 1, .def = 1, .unit = "",
-	 .help = "lightweight: after the optimised voids, hollow the space they left with the "
-		 "top-down support-free fill, designed on the layer pixels (docs/hollow.md; layer "
-		 "outputs only: mesh outputs carry the optimised voids alone)."},
+	 .help = "After the optimised voids, hollow the space they left with the top-down "
+		 "support-free fill, designed on the layer pixels (docs/hollow.md; layer outputs "
+		 "only: mesh outputs carry the optimised voids alone). stability: only behind the "
+		 "centre of mass, away from the contact area."},
+	{.name = "optimise_s", .type = PARAM_NUM,
+	 .offset = offsetof(struct hollow_params, optimise_s), .min = 0, .max = 86400, .def = 60,
+	 .unit = "s",
+	 .help = "Time budget of the optimisation rounds: voids not optimised within it keep their "
+		 "support-free starting shape and no further round starts (the fill then hollows "
+		 "what is left). 0 = no limit."},
 };
 
 /* stability: weight of the lightweight term once the part stands */
@@ -227,6 +235,7 @@ static int hollow_prepare(const struct engine_ctx *ctx, const void *params, void
 					: fmin(0.5, fmax(0.1, 0.5 * h * tan(c->alpha_rad - c->margin_rad)));
 	c->min_void_mm3 = p->min_void_mm3;
 	c->rounds = p->rounds;
+	c->optimise_s = p->optimise_s;
 	c->threads = ctx->threads > 0 ? ctx->threads : 1;
 	c->objective = p->objective == 1 ? HL_OBJ_STABILITY : HL_OBJ_LIGHTWEIGHT;
 	c->light_weight = HOLLOW_LIGHT_WEIGHT;
@@ -371,6 +380,10 @@ static int hollow_metrics(void *state, struct metrics *m, struct err *e)
 	rc |= metrics_int(m, "hollow.voids_fallback", (long long)o->voids_fallback);
 	rc |= metrics_int(m, "hollow.groups_failed", (long long)o->groups_failed);
 	rc |= metrics_int(m, "hollow.groups_small", (long long)o->groups_small);
+	rc |= metrics_num(m, "hollow.optimise_s", s->cfg.optimise_s);
+	if (o->has_com)
+		rc |= metrics_int(m, "hollow.voids_against_com", (long long)o->voids_against_com);
+	rc |= metrics_bool(m, "hollow.budget_spent", o->budget_spent);
 	rc |= metrics_num(m, "hollow.seconds.offset", o->s_offset);
 	rc |= metrics_num(m, "hollow.seconds.groups", o->s_groups);
 	rc |= metrics_num(m, "hollow.seconds.optimise", o->s_solve);

@@ -806,6 +806,19 @@ static void aux_from(struct nlp *P, double *x)
 	x[G + 2] = f * My;
 }
 
+/* Ipopt's max_cpu_time (s) for one solve: 600, or what is left of the
+ * time budget (at least 0.5 s: Ipopt needs a positive limit; the caller
+ * does not start a solve past the deadline). */
+static double cpu_limit_s(const struct hl_nlp_opts *o)
+{
+	double left;
+
+	if (!(o->deadline_s > 0))
+		return 600;
+	left = o->deadline_s - progress_now_s();
+	return left < 0.5 ? 0.5 : left > 600 ? 600 : left;
+}
+
 static int solve_once(struct nlp *P, double *x, int *app_status, struct err *e)
 {
 	size_t m = P->nf + P->nact + P->nceil + (P->stab ? 3 * P->nloops + 3 : 0), r = 0;
@@ -866,7 +879,7 @@ static int solve_once(struct nlp *P, double *x, int *app_status, struct err *e)
 		AddIpoptIntOption(ip, (char *)"mumps_mem_percent", atoi(getenv("HL_MEMPCT")));
 	AddIpoptNumOption(ip, (char *)"constr_viol_tol", 1e-6);
 	AddIpoptNumOption(ip, (char *)"acceptable_tol", 1e-4);
-	AddIpoptNumOption(ip, (char *)"max_cpu_time", 600);
+	AddIpoptNumOption(ip, (char *)"max_cpu_time", cpu_limit_s(P->o));
 	SetIntermediateCallback(ip, cb_iter);
 	*app_status = IpoptSolve(ip, x, NULL, NULL, NULL, NULL, NULL, P);
 	if (P->cancelled)
@@ -914,8 +927,9 @@ int hl_nlp_solve(struct hl_void *v, size_t n, const struct hl_nlp_opts *o, struc
 		if (rc)
 			break;
 		/* eq. 5's sign gate at the new point: add newly facing-down edges;
-		 * solve again only if one of them is violated */
-		if (gate_edges(&P, x, 1e-6) == 0)
+		 * solve again only if one of them is violated (and time is left) */
+		if (gate_edges(&P, x, 1e-6) == 0 ||
+		    (o->deadline_s > 0 && progress_now_s() >= o->deadline_s))
 			break;
 		if (P.stab)
 			aux_from(&P, x);

@@ -36,6 +36,9 @@ struct hl_nlp_opts {
 	const struct hull_pt *target; /* convex CCW region the COM must reach */
 	size_t ntarget;
 	double light_weight;        /* weight of the lightweight term (>= 0) */
+	/* time budget: progress_now_s() instant (s) after which no solve goes
+	 * on; Ipopt's max_cpu_time is cut to what is left.  0 = none */
+	double deadline_s;
 	/* cooperative cancellation (inline solves only); may be NULL */
 	int (*cancelled)(void *ctx);
 	void *cancel_ctx;

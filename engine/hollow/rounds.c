@@ -401,6 +401,111 @@ out:
 	return rc;
 }
 
+/* (x, y) centroid of void v at its offsets v->l in eq. 12's prism
+ * approximation (loop first moments over loop areas).  -1 when degenerate. */
+static int void_centroid(const struct hl_void *v, double cxy[2])
+{
+	double A = 0, Mx = 0, My = 0;
+
+	for (size_t k = 0; k < v->nloops; k++) {
+		double a, mx, my;
+		hl_loop_moments(v, k, v->l, &a, &mx, &my);
+		A += a;
+		Mx += mx;
+		My += my;
+	}
+	if (!(fabs(A) > 0))
+		return -1;
+	cxy[0] = Mx / A;
+	cxy[1] = My / A;
+	return 0;
+}
+
+/* Standing fill: at most this many passes of the half-plane's fixed
+ * point, stopping when the centre of mass moved less than the step (mm). */
+#define HL_STAND_PASSES 4
+#define HL_STAND_STEP_MM 0.05
+
+/* (x, y) of the centre of mass of o's part: its mesh (part less the
+ * optimised voids) less the fill's void. */
+static struct hull_pt com_after(const struct hl_outcome *o)
+{
+	double vm, cm[3], vf, cf[2];
+	struct hull_pt q;
+
+	hl_mesh_mass(o->mesh, &vm, cm);
+	hl_fill_mass(&o->fill, &vf, cf);
+	q.x = cm[0];
+	q.y = cm[1];
+	if (vf > 0 && vm - vf > 0) {
+		q.x = (vm * cm[0] - vf * cf[0]) / (vm - vf);
+		q.y = (vm * cm[1] - vf * cf[1]) / (vm - vf);
+	}
+	return q;
+}
+
+/* The top-down fill of what the optimiser left (o->mesh holds its voids).
+ * Lightweight: everywhere.  Stability (target: the goal region, hull: the
+ * contact hull, r: its offset): removing mass at p moves the centre of
+ * mass c along c - p, so while c is outside the target the fill keeps to
+ * the half-plane behind c, away from the target's closest point q (the
+ * raster counterpart of eq. 13-14's gradient); when c already stands, the
+ * fill goes everywhere and is redone behind c only if it would tip the
+ * part out of the offset hull H_r. */
+static int fill_run(const struct mesh *part, const struct hl_config *c,
+		    const struct hull_pt *target, size_t ntarget, const struct hull_pt *hull,
+		    size_t nhull, double r_mm, struct progress *prog, struct hl_outcome *o,
+		    struct err *e)
+{
+	const struct mesh *solid = o->voids ? o->mesh : NULL;
+	struct hl_config fc = *c;
+	struct hull_pt q = com_after(o), t;
+	int edge, vertex, rc;
+	double d;
+
+	fc.fill_keep_set = 0;
+	if (ntarget < 3)
+		return hl_fill_build(part, solid, &fc, prog, 0.9, 1.0, &o->fill, e);
+	d = hull_closest_mm(target, ntarget, q, &t, &edge, &vertex);
+	if (!(d > 0)) {
+		struct hull_pt *hr = NULL;
+		size_t nhr = 0;
+		rc = hl_fill_build(part, solid, &fc, prog, 0.9, 0.95, &o->fill, e);
+		if (!rc)
+			rc = hull_offset_in(hull, nhull, r_mm, &hr, &nhr, e);
+		if (rc || (nhr >= 3 && hull_signed_distance_mm(hr, nhr, com_after(o)) > 0)) {
+			mem_free(hr);
+			return rc;
+		}
+		mem_free(hr);
+		hl_fill_fini(&o->fill);
+		/* behind c, away from the target's inscribed centre */
+		hull_inradius_mm(target, ntarget, &t);
+		d = hypot(t.x - q.x, t.y - q.y);
+		if (!(d > 0))
+			return 0;
+	}
+	/* c moves along n as the fill removes mass behind it, and then more
+	 * mass lies behind it: the half-plane follows c (a fixed point) */
+	fc.fill_keep_set = 1;
+	fc.fill_keep[0] = (t.x - q.x) / d;
+	fc.fill_keep[1] = (t.y - q.y) / d;
+	for (int it = 0; it < HL_STAND_PASSES; it++) {
+		double shift;
+		fc.fill_keep[2] = fc.fill_keep[0] * q.x + fc.fill_keep[1] * q.y;
+		rc = hl_fill_build(part, solid, &fc, prog, 0.95, 1.0, &o->fill, e);
+		if (rc)
+			return rc;
+		t = com_after(o);
+		shift = fc.fill_keep[0] * (t.x - q.x) + fc.fill_keep[1] * (t.y - q.y);
+		q = t;
+		if (!(shift > HL_STAND_STEP_MM) || !(hull_closest_mm(target, ntarget, q, &t, &edge,
+								      &vertex) > 0))
+			break;
+	}
+	return 0;
+}
+
 int hl_run(const struct mesh *part, const struct hl_config *c, struct progress *prog,
 	   struct hl_outcome *o, struct err *e)
 {
@@ -438,6 +543,7 @@ int hl_run(const struct mesh *part, const struct hl_config *c, struct progress *
 	nlp.gate_tau = 1e-3;
 	nlp.max_iter = 400;
 	nlp.max_outer = 4;
+	nlp.deadline_s = c->optimise_s > 0 ? progress_now_s() + c->optimise_s : 0;
 	nlp.objective = c->objective;
 	nlp.light_weight = c->light_weight;
 	if (c->objective == HL_OBJ_STABILITY) {
@@ -477,6 +583,10 @@ int hl_run(const struct mesh *part, const struct hl_config *c, struct progress *
 		size_t nvv = 0, kept = 0;
 		double f0 = (double)(r - 1) / c->rounds, f1 = (double)r / c->rounds, t0;
 
+		if (nlp.deadline_s > 0 && progress_now_s() >= nlp.deadline_s) {
+			res.budget_spent = 1;
+			break;
+		}
 		if (prog) {
 			rc = progress_update(prog, f0, e);
 			if (rc)
@@ -497,6 +607,7 @@ int hl_run(const struct mesh *part, const struct hl_config *c, struct progress *
 		t0 = progress_now_s();
 		rc = hl_solve_round(vv, nvv, &nlp, c->threads, prog, f0 + 0.2 * (f1 - f0), f1, e);
 		res.s_solve += progress_now_s() - t0;
+		res.budget_spent |= nlp.deadline_s > 0 && progress_now_s() >= nlp.deadline_s;
 		if (rc) {
 			voids_fini(vv, nvv);
 			goto out;
@@ -511,6 +622,29 @@ int hl_run(const struct mesh *part, const struct hl_config *c, struct progress *
 			if (vv[i].volume_mm3 < c->min_void_mm3) {
 				res.groups_small++;
 				continue;
+			}
+			/* stability: a void (solved jointly, or a fallback start) is
+			 * kept only if it does not move the centre of mass away from
+			 * the target (distance to it, 0 inside) */
+			if (nlp.objective == HL_OBJ_STABILITY) {
+				double p[2], vn = nlp.vol_mm3 - vv[i].volume_mm3, d0, d1;
+				struct hull_pt q0 = {nlp.com_xy[0], nlp.com_xy[1]}, q1, t;
+				int edge, vertex;
+				if (void_centroid(&vv[i], p) || !(vn > 0)) {
+					res.voids_against_com++;
+					continue;
+				}
+				q1.x = (nlp.vol_mm3 * q0.x - vv[i].volume_mm3 * p[0]) / vn;
+				q1.y = (nlp.vol_mm3 * q0.y - vv[i].volume_mm3 * p[1]) / vn;
+				d0 = hull_closest_mm(target, ntarget, q0, &t, &edge, &vertex);
+				d1 = hull_closest_mm(target, ntarget, q1, &t, &edge, &vertex);
+				if (d1 > d0 + 1e-9) {
+					res.voids_against_com++;
+					continue;
+				}
+				nlp.vol_mm3 = vn;
+				nlp.com_xy[0] = q1.x;
+				nlp.com_xy[1] = q1.y;
 			}
 			rc = append_void(res.mesh, &vv[i], e);
 			if (rc) {
@@ -529,9 +663,9 @@ int hl_run(const struct mesh *part, const struct hl_config *c, struct progress *
 		res.rounds = r;
 	}
 	res.voids_optimised = res.voids;
-	if (c->fill && c->objective == HL_OBJ_LIGHTWEIGHT) {
+	if (c->fill && (c->objective == HL_OBJ_LIGHTWEIGHT || ntarget >= 3)) {
 		double t0 = progress_now_s();
-		rc = hl_fill_build(part, res.voids ? res.mesh : NULL, c, prog, 0.9, 1.0, &res.fill, e);
+		rc = fill_run(part, c, target, ntarget, hull, nhull, res.hull_offset_mm, prog, &res, e);
 		if (rc)
 			goto out;
 		res.voids += res.fill.voids;
@@ -544,11 +678,7 @@ int hl_run(const struct mesh *part, const struct hl_config *c, struct progress *
 			 "%g mm wall; the part is returned unchanged",
 			 c->min_void_mm3, c->wall_mm);
 	if (res.has_com) {
-		double va, ca[3];
-		struct hull_pt q;
-		hl_mesh_mass(res.mesh, &va, ca);
-		q.x = ca[0];
-		q.y = ca[1];
+		struct hull_pt q = com_after(&res);
 		res.com_after_mm = hull_signed_distance_mm(hull, nhull, q);
 		{
 			struct hull_pt *hr = NULL;

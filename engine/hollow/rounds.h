@@ -27,6 +27,9 @@ struct hl_config {
 	double margin_rad;     /* safety subtracted from alpha in the constraints */
 	double min_void_mm3;
 	int rounds;            /* at most this many rounds */
+	double optimise_s;     /* time budget of the rounds (s, from hl_run's start);
+				* voids not solved in it keep their support-free
+				* start, later rounds do not start; 0 = none */
 	int threads;
 	enum hl_objective objective;
 	double light_weight;   /* stability: weight of the lightweight term */
@@ -34,16 +37,23 @@ struct hl_config {
 	int fill;              /* lightweight: top-down fill of what the optimiser left */
 	struct raster_map fill_map; /* printer mm -> pixels of the images the verifier reads */
 	int fill_map_set;      /* fill_map is set (else no fill) */
+	int fill_keep_set;     /* the fill keeps to the half-plane below (hl_run sets it
+				* for stability; callers leave it 0) */
+	double fill_keep[3];   /* pixel centre (x, y) in printer mm may be void only
+				* where keep[0] x + keep[1] y < keep[2] */
 };
 
 struct hl_outcome {
 	struct mesh *mesh;        /* outer surface + void surfaces (owned) */
 	int rounds;               /* rounds that added voids */
+	int budget_spent;         /* the optimise_s budget cut the rounds short */
 	size_t voids;             /* optimised (mesh) voids + fill components */
 	size_t voids_optimised;   /* of them: made by the optimiser (or its start) */
 	size_t voids_fallback;    /* voids kept at their support-free start */
 	size_t groups_failed;     /* optimised groups dropped (check failed) */
 	size_t groups_small;      /* dropped: below min_void_mm3 */
+	size_t voids_against_com; /* stability: optimised voids dropped because they
+				   * moved the centre of mass away from the target */
 	double part_volume_mm3;
 	double void_volume_mm3;
 	struct hl_fill fill;      /* top-down fill (topdown.h); empty when off */

@@ -127,6 +127,12 @@ static void slot_deliver(struct slot *s, struct hl_void *v)
 	v->ceil_eps_mm2 = h.ceil_eps_mm2;
 }
 
+/* The time budget is spent (Ipopt's own limit stops a running solve). */
+static int past_deadline(const struct hl_nlp_opts *o)
+{
+	return o->deadline_s > 0 && progress_now_s() >= o->deadline_s;
+}
+
 static int solve_forked(struct hl_void *v, size_t n, const size_t *order,
 			const struct hl_nlp_opts *o, int threads, struct progress *prog, double f0,
 			double f1, struct err *e)
@@ -142,12 +148,17 @@ static int solve_forked(struct hl_void *v, size_t n, const size_t *order,
 	while (done < n) {
 		struct pollfd pf[64];
 		int np = 0, map[64];
-		/* launch */
+		/* launch (none past the deadline: the rest keep their start) */
 		for (int i = 0; i < threads && next < n; i++) {
 			int p[2];
 			struct hl_void *V = &v[order[next]];
 			if (sl[i].pid > 0)
 				continue;
+			if (past_deadline(o)) {
+				for (; next < n; next++, done++)
+					v[order[next]].status = HL_STATUS_UNSOLVED;
+				break;
+			}
 			if (pipe(p) < 0) {
 				rc = ERR_SET(e, ERR_IO, "hollow: pipe: %s", strerror(errno));
 				goto out;
@@ -237,7 +248,11 @@ int hl_solve_round(struct hl_void *v, size_t n, const struct hl_nlp_opts *o, int
 	if (n == 0)
 		return 0;
 	if (o->objective == HL_OBJ_STABILITY) {
-		rc = hl_nlp_solve(v, n, o, e);
+		if (past_deadline(o))
+			for (size_t i = 0; i < n; i++)
+				v[i].status = HL_STATUS_UNSOLVED;
+		else
+			rc = hl_nlp_solve(v, n, o, e);
 	} else {
 		order = mem_alloc(n * sizeof *order);
 		if (!order)
@@ -253,6 +268,10 @@ int hl_solve_round(struct hl_void *v, size_t n, const struct hl_nlp_opts *o, int
 			rc = solve_forked(v, n, order, o, threads, prog, f0, f1, e);
 		} else {
 			for (size_t i = 0; i < n && !rc; i++) {
+				if (past_deadline(o)) {
+					v[order[i]].status = HL_STATUS_UNSOLVED;
+					continue;
+				}
 				rc = hl_nlp_solve(&v[order[i]], 1, o, e);
 				if (!rc && prog)
 					rc = progress_update(prog, f0 + (f1 - f0) * (double)(i + 1) / (double)n,

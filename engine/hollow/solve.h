@@ -9,10 +9,14 @@ struct progress;
 /* status of a void whose optimum failed its check but whose support-free
  * starting point passed and was used instead */
 #define HL_STATUS_FALLBACK 1
+/* status of a void not optimised: the time budget (o->deadline_s) was
+ * spent before its turn; it gets the support-free start like a failed one */
+#define HL_STATUS_UNSOLVED (-2000)
 
 /* Optimise v[0..n): lightweight voids each on their own, in up to
  * `threads` worker processes; stability as one problem.  Every void ends
- * with status 0 (optimum), HL_STATUS_FALLBACK, or < 0 (drop it).  prog
+ * with status 0 (optimum), HL_STATUS_FALLBACK, or < 0 (drop it); past
+ * o->deadline_s no solve starts and the rest take their start.  prog
  * (may be NULL) moves from stage fraction f0 to f1 as voids finish and
  * may cancel.
  * Returns 0, ERR_NOMEM, ERR_IO (pipe/poll) or ERR_CANCELLED. */

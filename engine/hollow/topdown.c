@@ -41,6 +41,45 @@ const struct hl_fill_layer *hl_fill_at(const struct hl_fill *f, double z_mm)
 	return &f->layer[j];
 }
 
+/* Printer mm of continuous image coordinates (u, v) through map m (its
+ * matrix is invertible: raster_map pitches are > 0). */
+static void map_inverse(const struct raster_map *m, double u, double v, double *x, double *y)
+{
+	double det = m->a[0][0] * m->a[1][1] - m->a[0][1] * m->a[1][0];
+	double du = u - m->b[0], dv = v - m->b[1];
+
+	*x = (m->a[1][1] * du - m->a[0][1] * dv) / det;
+	*y = (-m->a[1][0] * du + m->a[0][0] * dv) / det;
+}
+
+void hl_fill_mass(const struct hl_fill *f, double *vol_mm3, double cxy[2])
+{
+	double det = fabs(f->map.a[0][0] * f->map.a[1][1] - f->map.a[0][1] * f->map.a[1][0]);
+	double sx = 0, sy = 0, cnt = 0;
+
+	cxy[0] = cxy[1] = 0;
+	*vol_mm3 = 0;
+	if (!f->layer || !(det > 0))
+		return;
+	for (int j = 0; j < f->n; j++)
+		for (size_t i = 0; i < f->layer[j].n; i++) {
+			const struct hl_run *q = &f->layer[j].run[i];
+			double k = (double)(q->x1 - q->x0 + 1), x, y;
+			/* the centre of the run is the mean of its pixel centres */
+			map_inverse(&f->map, f->u0 + 0.5 * (q->x0 + q->x1) + 0.5, f->v0 + q->y + 0.5,
+				    &x, &y);
+			sx += k * x;
+			sy += k * y;
+			cnt += k;
+		}
+	if (cnt > 0) {
+		cxy[0] = sx / cnt;
+		cxy[1] = sy / cnt;
+	}
+	/* a pixel is 1 / det mm^2 */
+	*vol_mm3 = cnt / det * f->layer_mm;
+}
+
 void hl_fill_clear(const struct hl_fill *f, const struct hl_fill_layer *l, struct raster *r)
 {
 	for (size_t i = 0; i < l->n; i++) {
@@ -176,8 +215,14 @@ static int offset_stack(const struct mesh *part, const struct mesh *solid,
 			const uint8_t *a = ra->px + (size_t)y * ra->stride;
 			const uint8_t *b = rb ? rb->px + (size_t)y * rb->stride : a;
 			uint8_t *m = mask + (size_t)y * (size_t)w;
-			for (int x = 0; x < w; x++)
+			for (int x = 0; x < w; x++) {
+				double px, py;
 				m[x] = a[x] >= 128 && b[x] >= 128;
+				if (!m[x] || !c->fill_keep_set)
+					continue;
+				map_inverse(gm, x + 0.5, y + 0.5, &px, &py);
+				m[x] = c->fill_keep[0] * px + c->fill_keep[1] * py < c->fill_keep[2];
+			}
 		}
 		rc = hl_grid_runs(mask, w, 0, 0, w, h, &C[k].run, &C[k].n, &cap, e);
 	}

@@ -49,6 +49,10 @@ void hl_fill_fini(struct hl_fill *f);
 int hl_fill_build(const struct mesh *part, const struct mesh *solid, const struct hl_config *c,
 		  struct progress *prog, double f0, double f1, struct hl_fill *f, struct err *e);
 
+/* Volume (mm^3) of f's void and the (x, y) of its centroid (printer mm;
+ * 0, 0 when empty), from its pixel centres. */
+void hl_fill_mass(const struct hl_fill *f, double *vol_mm3, double cxy[2]);
+
 /* Layer source for slice/erode.h over a slicer: layer k is the slice at
  * (k + 1/2) layer_mm.  ctx is a struct hl_src_ctx (borrowed). */
 struct slicer;
