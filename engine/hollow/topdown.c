@@ -468,7 +468,12 @@ struct geo {
  *       above cannot reach in one layer at the design slope; sig carries
  *       su down the layers, so the solid recedes by dd per layer on
  *       average even when dd is under a pixel (a sub-pixel slope, drawn
- *       as a staircase);
+ *       as a staircase).  sig counts only while within 2 px of
+ *       dist(V(k + 1)): farther, the void it was measured from has
+ *       receded (a floor, keep_apart), and sig run down to 0 would turn
+ *       solid far from any void into void: ghost cells a pixel or two
+ *       wide, every layer, which keep_apart then walled off (the femur's
+ *       head lost most of its void to them: 21.7 % -> 41.7 % without);
  *   R = pixels of C(k), solid in layer k + 1 and not in E, farther than
  *       dg from E u not C(k) (thin solid between voids, staircase
  *       corners): kept solid, so every solid pixel of layer k + 1 over a
@@ -492,7 +497,8 @@ static int layer_below(struct win *s, int ww, int wh, const struct geo *g,
 	if (rc)
 		return rc;
 	for (size_t i = 0; i < np; i++) {
-		double su = fmin(sqrt(s->dv2[i]), s->sw[i]);
+		double dv = sqrt(s->dv2[i]);
+		double su = dv > s->sw[i] + 2 * g->pmax ? dv : fmin(dv, s->sw[i]);
 		s->su[i] = (float)su;
 		s->ex[i] = s->cm[i] && !s->vw[i] && su > g->dd;
 		s->seed[i] = s->ex[i] || !s->cm[i];
