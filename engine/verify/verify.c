@@ -15,7 +15,9 @@
  *     the outside is not interior);
  *  4. islands: solid components (8-connected) with no solid beneath;
  *  5. distance transforms: to this layer's solid (for the next layer's
- *     overhang test) and to its outside void (wall thickness).
+ *     overhang test) and to its outside void (wall thickness); fins:
+ *     solid runs of <= VX_FIN_PX pixels between 2D-enclosed voids,
+ *     counted per void component and resolved at the end like overhangs.
  *
  * Tolerance.  A print's layer images are the surface sampled at pixel
  * centres (or thresholded coverage): each layer's boundary is displaced
@@ -83,7 +85,7 @@ struct verify {
 	struct crop a, b, *prev, *cur;
 	uint32_t *uf;
 	size_t nuf, ufcap;
-	struct recs ov, wall, vol, vwall;
+	struct recs ov, wall, vol, vwall, fin;
 	uint16_t *col;        /* per image pixel: layer where its solid run began */
 	uint32_t *col_id;     /* per image pixel: void component under that run when
 			       * it was 2D-enclosed, else VX_OUT (outside, plate) */
@@ -102,6 +104,8 @@ struct verify {
 	size_t ext_cap;
 	double *cnt;          /* per-component pixel counts */
 	size_t cnt_cap;
+	double *fcnt;         /* per-component fin pixel counts */
+	size_t fcnt_cap;
 	size_t scratch_cap;
 	struct edt_scratch es;
 	struct verify_report r;
@@ -133,6 +137,8 @@ void verify_free(struct verify *v)
 	mem_free(v->wall.v);
 	mem_free(v->vol.v);
 	mem_free(v->vwall.v);
+	mem_free(v->fin.v);
+	mem_free(v->fcnt);
 	mem_free(v->col);
 	mem_free(v->col_id);
 	mem_free(v->enc);
@@ -440,6 +446,45 @@ static int prev_enclosed(const struct verify *v, uint32_t id)
 	       v->prev_enc[id - v->prev_first];
 }
 
+/* Void label of crop pixel (x, y), VX_OUT outside the crop, 0 on solid. */
+static uint32_t crop_void(const struct crop *c, int x, int y)
+{
+	size_t i;
+
+	if (x < 0 || y < 0 || x >= c->w || y >= c->h)
+		return VX_OUT;
+	i = (size_t)y * (size_t)c->w + (size_t)x;
+	return c->solid[i] ? 0 : c->lab[i];
+}
+
+/* Fins: whether solid crop pixel (x, y) lies in a solid run of at most
+ * VX_FIN_PX pixels along a row, a column or a diagonal whose two ends are
+ * void pixels of 2D-enclosed components; *end = one end's component. */
+#define VX_FIN_PX 2
+static int fin_pixel(const struct verify *v, const struct crop *c, int x, int y, uint32_t *end)
+{
+	static const int dir[4][2] = {{1, 0}, {0, 1}, {1, 1}, {1, -1}};
+
+	for (int q = 0; q < 4; q++) {
+		int dx = dir[q][0], dy = dir[q][1], b = 1, f = 1;
+		uint32_t la, lb;
+		while (b <= VX_FIN_PX && !crop_void(c, x - b * dx, y - b * dy))
+			b++;
+		while (f <= VX_FIN_PX && !crop_void(c, x + f * dx, y + f * dy))
+			f++;
+		if (b + f - 1 > VX_FIN_PX)
+			continue;
+		la = crop_void(c, x - b * dx, y - b * dy);
+		lb = crop_void(c, x + f * dx, y + f * dy);
+		if (la != VX_OUT && lb != VX_OUT && v->enc[la - v->cur_first] &&
+		    v->enc[lb - v->cur_first]) {
+			*end = la;
+			return 1;
+		}
+	}
+	return 0;
+}
+
 int verify_layer(struct verify *v, const struct raster *r, struct err *e)
 {
 	struct crop *c, *pc;
@@ -623,6 +668,23 @@ int verify_layer(struct verify *v, const struct raster *r, struct err *e)
 				if (rec_add(&v->vol, v->cur_first + k, layer, v->cnt[k]))
 					goto nomem;
 			}
+			/* fins: solid runs of <= VX_FIN_PX pixels between enclosed
+			 * voids (resolved in 3D in verify_finish) */
+			if (grow_bytes((void **)&v->fcnt, &v->fcnt_cap, ncomp * sizeof *v->fcnt))
+				goto nomem;
+			for (uint32_t k = 0; k < ncomp; k++)
+				v->fcnt[k] = 0;
+			for (int y = 0; y < c->h; y++)
+				for (int x = 0; x < c->w; x++) {
+					uint32_t end;
+					if (c->solid[(size_t)y * (size_t)c->w + (size_t)x] &&
+					    fin_pixel(v, c, x, y, &end))
+						v->fcnt[end - v->cur_first] += 1;
+				}
+			for (uint32_t k = 0; k < ncomp; k++)
+				if (v->fcnt[k] > 0 &&
+				    rec_add(&v->fin, v->cur_first + k, layer, v->fcnt[k]))
+					goto nomem;
 		}
 	}
 	/* 5c. walls along columns: solid runs with a 2D-enclosed void on at
@@ -735,6 +797,10 @@ int verify_finish(struct verify *v, struct verify_report *out, struct err *e)
 	for (uint32_t k = 2; k < v->nuf; k++)
 		if (uf_find(v, k) == k && vox[k] > 0 && vox[k] <= v->p.speck_voxels)
 			v->r.specks++;
+	for (size_t k = 0; k < v->fin.n; k++)
+		if (uf_find(v, v->fin.v[k].id) != VX_OUT)
+			v->r.fin_px += (long long)v->fin.v[k].val;
+	v->r.fin_mm3 = (double)v->r.fin_px * pa * v->p.layer_mm;
 	for (size_t k = 0; k < v->wall.n; k++) {
 		const struct rec *q = &v->wall.v[k];
 		uint32_t root = uf_find(v, q->id);
@@ -791,6 +857,8 @@ int verify_report_metrics(const struct verify_report *r, const char *prefix, str
 	rc |= metrics_num(m, KEY("enclosed_void_mm3"), r->enclosed_void_mm3);
 	rc |= metrics_int(m, KEY("specks"), r->specks);
 	rc |= metrics_num(m, KEY("speck_min_wall_mm"), r->speck_min_wall_mm);
+	rc |= metrics_int(m, KEY("fin_px"), r->fin_px);
+	rc |= metrics_num(m, KEY("fin_mm3"), r->fin_mm3);
 	rc |= metrics_int(m, KEY("layers"), r->layers);
 #undef KEY
 	return rc ? ERR_SET(e, ERR_NOMEM, "verify: out of memory recording metrics") : 0;

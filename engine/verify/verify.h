@@ -14,7 +14,8 @@
  *  - floating islands: solid components (8-connected) of layer i+1 with
  *    no pixel above layer i's solid;
  *  - minimum wall thickness between enclosed voids and the outside: in
- *    the layer plane (exact distance transform) and along columns.
+ *    the layer plane (exact distance transform) and along columns;
+ *  - fins: solid one or two pixels thick between enclosed voids.
  * Memory: two layers of per-pixel state over the layers' bounding boxes,
  * plus a 16-bit run start and a 32-bit void id per image pixel.  Design and the
  * tolerance argument: docs/verify.md.
@@ -69,6 +70,12 @@ struct verify_report {
 	double enclosed_void_mm3;     /* volume of enclosed voids, specks included */
 	long long specks;             /* enclosed 3D void components of <= speck_voxels voxels */
 	double speck_min_wall_mm;     /* smallest in-layer wall around a speck; INFINITY if none */
+	/* fins: solid pixels in a run of at most 2 pixels (along a row, a
+	 * column or a diagonal) with enclosed void at both ends: solid too
+	 * thin to print standing between cavities (or between two parts of
+	 * one); a convex tip of thicker solid adds a pixel or two */
+	long long fin_px;
+	double fin_mm3;               /* fin_px as volume (pixel area x layer height) */
 };
 
 void verify_report_fini(struct verify_report *r);

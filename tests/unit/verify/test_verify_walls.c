@@ -4,7 +4,8 @@
  * only at a pixel corner (the outside, not an enclosed void); anti-aliased
  * edges (one threshold: gray >= 128 is solid); rasterisation specks
  * (counted apart from the wall minimum); many cavities in one layer (the
- * per-component enclosure flags survive the growth of their array).
+ * per-component enclosure flags survive the growth of their array); fins
+ * (solid one or two pixels thick between two cavities).
  */
 #include "harness.h"
 
@@ -73,6 +74,37 @@ static void test_ring_walls(void)
 		CHECK_NEAR(rep.enclosed_void_mm3, side * side * MID * PX * PX * LAYER, 1e-9);
 		CHECK_EQ_INT(rep.specks, 0);
 		CHECK_EQ_INT(rep.islands, 0);
+		/* a thin wall to the outside is a wall, not a fin */
+		CHECK_EQ_INT((int)rep.fin_px, 0);
+		verify_report_fini(&rep);
+	}
+}
+
+/* Box [10, 54)^2 with cavity [20, 44)^2 split by a partition of w pixel
+ * columns [31, 31 + w) over the cavity's rows: two cavities. */
+static uint8_t split(int i, int j, int k, int cavity, const void *arg)
+{
+	(void)k;
+	int w = *(const int *)arg;
+
+	if (!in_sq(i, j, 10, 54))
+		return 0;
+	if (!cavity || !in_sq(i, j, 20, 44) || (i >= 31 && i < 31 + w))
+		return 255;
+	return 0;
+}
+
+static void test_fins(void)
+{
+	for (int w = 1; w <= 4; w++) {
+		struct verify_report rep;
+		run_box(split, &w, 0, &rep);
+		/* every partition pixel on every cavity layer at w <= 2, none
+		 * from 3 pixels on (the box's own corners add none) */
+		CHECK_EQ_INT((int)rep.fin_px, w <= 2 ? w * 24 * MID : 0);
+		CHECK_NEAR(rep.fin_mm3, (double)rep.fin_px * PX * PX * LAYER, 1e-12);
+		CHECK_NEAR(rep.min_wall_mm, 10 * PX, 1e-6);
+		CHECK_NEAR(rep.enclosed_void_mm3, (24 - w) * 24 * MID * PX * PX * LAYER, 1e-9);
 		verify_report_fini(&rep);
 	}
 }
@@ -267,5 +299,6 @@ int main(void)
 	RUN(test_specks);
 	RUN(test_open_pocket_is_no_wall);
 	RUN(test_many_cavities);
+	RUN(test_fins);
 	return harness_report();
 }
