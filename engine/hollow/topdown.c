@@ -8,12 +8,14 @@
 #include "engine/hollow/topdown.h"
 
 #include <math.h>
+#include <stddef.h>
 #include <string.h>
 
 #include "engine/core/err.h"
 #include "engine/core/mem.h"
 #include "engine/core/progress.h"
 #include "engine/geom/edt.h"
+#include "engine/hollow/fillstep.h"
 #include "engine/hollow/rounds.h"
 #include "engine/mesh/mesh.h"
 #include "engine/slice/erode.h"
@@ -368,356 +370,6 @@ out:
 	return rc;
 }
 
-/* ---- the greedy top-down construction on the grid ---- */
-
-/* Beside a void of its region of C, a new void needs wall + dg + this
- * much (mm) of room: each void costs walls of wall_next down to its
- * floor, and within a few millimetres the neighbour's own growth (dd per
- * layer) fills the space anyway.  3 mm: measured on the cube (one groin
- * vault instead of five cells), camel, cow, elephant and armadillo
- * (docs/hollow.md); 1.5 mm gave the cow 54 % instead of 59 %. */
-#define HL_FILL_LONE_MM 3.0
-
-/* Scratch of one layer's window (ww x wh pixels, row stride ww). */
-struct win {
-	uint8_t *cm, *seed, *vw, *u, *ex, *v;
-	float *dc2, *dv2, *su, *de2, *d1, *db2, *sn, *sw;
-	int32_t *lab, *near, *lv;
-	struct edt_scratch es;
-};
-
-static void win_fini(struct win *s)
-{
-	mem_free(s->cm);
-	mem_free(s->seed);
-	mem_free(s->vw);
-	mem_free(s->u);
-	mem_free(s->ex);
-	mem_free(s->v);
-	mem_free(s->dc2);
-	mem_free(s->dv2);
-	mem_free(s->su);
-	mem_free(s->de2);
-	mem_free(s->d1);
-	mem_free(s->db2);
-	mem_free(s->sn);
-	mem_free(s->sw);
-	mem_free(s->lab);
-	mem_free(s->near);
-	mem_free(s->lv);
-	edt_scratch_fini(&s->es);
-}
-
-static int win_init(struct win *s, size_t np)
-{
-	memset(s, 0, sizeof *s);
-	edt_scratch_init(&s->es);
-	s->cm = mem_alloc(np);
-	s->seed = mem_alloc(np);
-	s->vw = mem_alloc(np);
-	s->u = mem_alloc(np);
-	s->ex = mem_alloc(np);
-	s->v = mem_alloc(np);
-	s->dc2 = mem_alloc(np * sizeof(float));
-	s->dv2 = mem_alloc(np * sizeof(float));
-	s->su = mem_alloc(np * sizeof(float));
-	s->de2 = mem_alloc(np * sizeof(float));
-	s->d1 = mem_alloc(np * sizeof(float));
-	s->db2 = mem_alloc(np * sizeof(float));
-	s->sn = mem_alloc(np * sizeof(float));
-	s->sw = mem_alloc(np * sizeof(float));
-	s->lab = mem_alloc(np * sizeof(int32_t));
-	s->near = mem_alloc(np * sizeof(int32_t));
-	s->lv = mem_alloc(np * sizeof(int32_t));
-	return s->cm && s->seed && s->vw && s->u && s->ex && s->v && s->dc2 && s->dv2 && s->su &&
-	       s->de2 && s->d1 && s->db2 && s->sn && s->sw && s->lab && s->near && s->lv;
-}
-
-/* Squared distance transform of seed (nonzero), or all INFINITY when
- * any == 0. */
-static int dist2(struct win *s, const uint8_t *seed, int any, int ww, int wh, double px,
-		 double py, float *out, struct err *e)
-{
-	if (!any) {
-		for (size_t i = 0; i < (size_t)ww * (size_t)wh; i++)
-			out[i] = INFINITY;
-		return 0;
-	}
-	return edt_sq(seed, (size_t)ww, ww, wh, px, py, out, &s->es, e);
-}
-
-struct geo {
-	double dd;    /* design shrink per layer: layer tan(alpha - margin) */
-	double dg;    /* discrete reach: the verifier's layer tan(alpha) + 1 px, less 2 % px */
-	double wall;  /* wall_next_mm between fill voids */
-	double birth; /* inside distance of the free region a new void needs */
-	int mv;       /* layers in wall_next: the vertical wall between voids */
-	double lone;  /* a new void beside others keeps wall + dg + lone from them */
-	double px, py, pmax;
-};
-
-/*
- * One layer: V(k) on the window from C(k) (s->cm) and V(k + 1) (s->vw),
- * s->sw = the inside distance of the design's solid of layer k + 1 (mm,
- * INFINITY where unknown).  Pixel sets throughout.  The verifier's rule:
- * every solid pixel of layer k + 1 over a void pixel of layer k lies
- * within dg of a solid pixel of layer k (centre to centre).  Voids only
- * grow here (births are born_cells()):
- *   E = pixels of C(k), solid in layer k + 1, whose inside distance
- *       su = min(dist(V(k + 1)), sig) exceeds dd: the solid the voids
- *       above cannot reach in one layer at the design slope; sig carries
- *       su down the layers, so the solid recedes by dd per layer on
- *       average even when dd is under a pixel (a sub-pixel slope, drawn
- *       as a staircase).  sig counts only while within 2 px of
- *       dist(V(k + 1)): farther, the void it was measured from has
- *       receded (a floor, keep_apart), and sig run down to 0 would turn
- *       solid far from any void into void: ghost cells a pixel or two
- *       wide, every layer, which keep_apart then walled off (the femur's
- *       head lost most of its void to them: 21.7 % -> 41.7 % without);
- *   R = pixels of C(k), solid in layer k + 1 and not in E, farther than
- *       dg from E u not C(k) (thin solid between voids, staircase
- *       corners): kept solid, so every solid pixel of layer k + 1 over a
- *       void of layer k is within dg of solid, exactly on the pixels;
- *   V(k) = C(k) \ (E u R), then kept apart (keep_apart).
- * The material outside C(k) supports but never turns void: a void does
- * not creep along a ceiling flatter than alpha (that left hair-thin fins
- * between a creeping band and the void it outran: docs/hollow.md).
- * Any subset of V(k) keeps the rule for layer k + 1 (void turned solid
- * only adds support), and layer k - 1 is built from the result.
- */
-static int layer_below(struct win *s, int ww, int wh, const struct geo *g,
-		       struct err *e)
-{
-	size_t np = (size_t)ww * (size_t)wh;
-	int anyv = 0, rc;
-
-	for (size_t i = 0; i < np; i++)
-		anyv |= s->vw[i];
-	rc = dist2(s, s->vw, anyv, ww, wh, g->px, g->py, s->dv2, e);
-	if (rc)
-		return rc;
-	for (size_t i = 0; i < np; i++) {
-		double dv = sqrt(s->dv2[i]);
-		double su = dv > s->sw[i] + 2 * g->pmax ? dv : fmin(dv, s->sw[i]);
-		s->su[i] = (float)su;
-		s->ex[i] = s->cm[i] && !s->vw[i] && su > g->dd;
-		s->seed[i] = s->ex[i] || !s->cm[i];
-	}
-	rc = dist2(s, s->seed, 1, ww, wh, g->px, g->py, s->de2, e);
-	if (rc)
-		return rc;
-	for (size_t i = 0; i < np; i++) {
-		int t = s->ex[i] || (s->cm[i] && !s->vw[i] && s->de2[i] > g->dg * g->dg);
-		s->v[i] = s->cm[i] && !t;
-		s->sn[i] = t ? (float)fmax(0, s->su[i] - g->dd) : INFINITY;
-	}
-	return 0;
-}
-
-/*
- * Vertical walls (on s->v): a pixel void in layer k and in some layer
- * k + 2 .. k + mv but solid in between would leave a horizontal wall
- * thinner than wall_next between two voids (a floor over a ceiling): it
- * stays solid.  A subset: safe.  O(pixels).
- */
-static void vertical_walls(struct win *s, size_t np, const struct geo *g, int k)
-{
-	for (size_t i = 0; i < np; i++)
-		if (s->v[i] && !s->vw[i] && s->lv[i] >= k + 2 && s->lv[i] <= k + g->mv) {
-			s->v[i] = 0;
-			s->sn[i] = 0;
-		}
-}
-
-/* out[i] = allow[i] && pixel i lies on a ridge of the distance map d2
- * (squared, mm^2): d >= dmin and, along one of the four pixel directions,
- * neither neighbour is higher by more than px / 4 while the two together
- * are lower by at least px / 2 (a strict maximum across the ridge; a
- * straight edge, where neighbours along it are equal, is not a ridge).
- * The medial axis of a region, one or two pixels wide: the diagonals of a
- * square, the centre line of a strip.  Returns whether any pixel is set. */
-static int ridge(const float *d2, const uint8_t *allow, int ww, int wh, double dmin, double px,
-		 uint8_t *out)
-{
-	static const int dir[4][2] = {{1, 0}, {0, 1}, {1, 1}, {1, -1}};
-	int any = 0;
-
-	for (int y = 0; y < wh; y++)
-		for (int x = 0; x < ww; x++) {
-			size_t i = (size_t)y * (size_t)ww + (size_t)x;
-			double d = sqrt(d2[i]);
-			int c = 0;
-			if (allow[i] && d >= dmin && x > 0 && y > 0 && x + 1 < ww && y + 1 < wh)
-				for (int q = 0; q < 4 && !c; q++) {
-					size_t a = (size_t)(y + dir[q][1]) * (size_t)ww +
-						   (size_t)(x + dir[q][0]);
-					size_t b = (size_t)(y - dir[q][1]) * (size_t)ww +
-						   (size_t)(x - dir[q][0]);
-					double da = sqrt(d2[a]), db = sqrt(d2[b]);
-					c = da <= d + 0.25 * px && db <= d + 0.25 * px &&
-					    (d - da) + (d - db) >= 0.5 * px;
-				}
-			out[i] = (uint8_t)c;
-			any |= c;
-		}
-	return any;
-}
-
-/*
- * New voids (on s->v, after keep_apart).  F = pixels of C(k) farther than
- * wall + dg from every void of layers k .. k + mv (s->lv holds each
- * pixel's last void layer), or farther than wall + dg + lone where their
- * component of C(k) already holds a void (its growth gets there first;
- * without this a square's ridge and the four triangles beside it became
- * five cells instead of one groin vault).  Where F's inside distance D is
- * >= birth, a void is born on F's ridge (ridge(): its medial axis), the
- * crest a groin vault's ceiling collapses to.  Each born pixel lies within
- * dg of a pixel of the ridge's complement, solid in layers k and k + 1
- * (pixels that do not stay solid), so the flat ceiling of the new void
- * spans at most 2 dg: the verifier's rule holds.  Below, layer_below()
- * widens it by dd per layer: a ceiling at the design slope, like the
- * paper's voids.  O(pixels).
- */
-static int born_cells(struct win *s, int ww, int wh, const struct geo *g, int k, struct err *e)
-{
-	size_t np = (size_t)ww * (size_t)wh;
-	double far = g->wall + g->dg, lone = far + g->lone;
-	int32_t nc = 0;
-	uint8_t *occ;
-	int any = 0, anyf = 0, anyb, rc;
-
-	for (size_t i = 0; i < np; i++) {
-		s->seed[i] = s->v[i] || s->vw[i] || s->lv[i] <= k + g->mv;
-		any |= s->seed[i];
-	}
-	rc = dist2(s, s->seed, any, ww, wh, g->px, g->py, s->de2, e);
-	if (rc)
-		return rc;
-	/* occupied components of C(k) (holding a void of layer k) take new
-	 * voids only beyond lone: closer, their own voids get there first */
-	rc = hl_grid_label(s->cm, ww, wh, s->lab, &nc, e);
-	if (rc)
-		return rc;
-	occ = mem_calloc((size_t)nc + 1, 1);
-	if (!occ)
-		return ERR_SET(e, ERR_NOMEM, "hollow: out of memory (fill births)");
-	for (size_t i = 0; i < np; i++)
-		if (s->v[i])
-			occ[s->lab[i]] = 1;
-	for (size_t i = 0; i < np; i++) {
-		double lim = occ[s->lab[i]] ? lone : far;
-		s->u[i] = !(s->cm[i] && s->de2[i] > lim * lim); /* not F */
-		anyf |= !s->u[i];
-	}
-	mem_free(occ);
-	if (!anyf)
-		return 0;
-	rc = dist2(s, s->u, 1, ww, wh, g->px, g->py, s->db2, e);
-	if (rc)
-		return rc;
-	for (size_t i = 0; i < np; i++)
-		s->seed[i] = !s->u[i];
-	anyb = ridge(s->db2, s->seed, ww, wh, g->birth, fmin(g->px, g->py), s->ex);
-	if (!anyb)
-		return 0;
-	for (size_t i = 0; i < np; i++)
-		s->seed[i] = !s->ex[i];
-	rc = dist2(s, s->seed, 1, ww, wh, g->px, g->py, s->d1, e);
-	if (rc)
-		return rc;
-	for (size_t i = 0; i < np; i++)
-		if (s->ex[i] && s->d1[i] <= g->dg * g->dg) {
-			s->v[i] = 1;
-			s->sn[i] = INFINITY;
-		}
-	return 0;
-}
-
-/*
- * Keep the voids apart (on s->v, given V(k + 1) = s->vw): without this the
- * greedy void grows into a foam of cells split by walls thinner than a
- * pixel (docs/hollow.md).  With d1 the distance to V(k + 1) and B the
- * pixels where the nearest component of V(k + 1) changes (its Voronoi
- * boundaries, where within reach), a void pixel stays void if
- *   - d1 >= wall + dg: a new cell, >= wall + dg from every component; or
- *   - d1 <= dg (growth of its nearest component) and it lies >= wall / 2
- *     + 1 px from B: two components stay >= wall apart, each on its side
- *     of their bisector.
- * Everything else turns solid (a subset: safe).  O(pixels).
- */
-static int keep_apart(struct win *s, int ww, int wh, const struct geo *g, struct err *e)
-{
-	size_t np = (size_t)ww * (size_t)wh;
-	double cut = g->wall + 2 * g->dg + 2 * g->pmax, half = 0.5 * g->wall + g->pmax;
-	int32_t count;
-	int anyb = 0, rc;
-
-	rc = hl_grid_label(s->vw, ww, wh, s->lab, &count, e);
-	if (!rc)
-		rc = hl_grid_nearest(s->lab, ww, wh, g->px, g->py, s->d1, s->near, e);
-	if (rc)
-		return rc;
-	for (int y = 0; y < wh; y++)
-		for (int x = 0; x < ww; x++) {
-			size_t i = (size_t)y * (size_t)ww + (size_t)x;
-			int32_t l = s->near[i];
-			s->seed[i] = l && s->d1[i] <= cut * cut &&
-				     ((x > 0 && s->near[i - 1] != l) ||
-				      (x + 1 < ww && s->near[i + 1] != l) ||
-				      (y > 0 && s->near[i - (size_t)ww] != l) ||
-				      (y + 1 < wh && s->near[i + (size_t)ww] != l));
-			anyb |= s->seed[i];
-		}
-	rc = dist2(s, s->seed, anyb, ww, wh, g->px, g->py, s->db2, e);
-	if (rc)
-		return rc;
-	for (size_t i = 0; i < np; i++) {
-		double d1;
-		if (!s->v[i])
-			continue;
-		d1 = sqrt(s->d1[i]);
-		if (d1 >= g->wall + g->dg || (d1 <= g->dg && s->db2[i] >= half * half))
-			continue;
-		s->v[i] = 0;
-		s->sn[i] = 0;
-	}
-	return 0;
-}
-
-/*
- * No floating islands: a solid component of layer k + 1 (8-connected, the
- * part's material and the outside counting as solid) with nothing solid
- * under any of its pixels would print onto liquid resin.  Its pixels stay
- * solid in layer k (on s->v): a pillar that the next layers carry down to
- * the floor (adding solid never breaks the overhang rule).  O(pixels).
- */
-static int support_islands(struct win *s, int ww, int wh, struct err *e)
-{
-	size_t np = (size_t)ww * (size_t)wh;
-	uint8_t *held = NULL;
-	int32_t count;
-	int rc;
-
-	for (size_t i = 0; i < np; i++)
-		s->seed[i] = !s->vw[i];
-	rc = hl_grid_label(s->seed, ww, wh, s->lab, &count, e);
-	if (rc)
-		return rc;
-	held = mem_calloc((size_t)count + 1, 1);
-	if (!held)
-		return ERR_SET(e, ERR_NOMEM, "hollow: out of memory (fill islands)");
-	for (size_t i = 0; i < np; i++)
-		if (s->lab[i] && !s->v[i])
-			held[s->lab[i]] = 1;
-	for (size_t i = 0; i < np; i++)
-		if (s->lab[i] && !held[s->lab[i]]) {
-			s->v[i] = 0;
-			s->sn[i] = 0;
-		}
-	mem_free(held);
-	return 0;
-}
-
 /* Grid of map m over the part's box: *u0, *v0, *w, *h; pitches. */
 static int grid_of(const struct mesh *part, const struct raster_map *m, struct hl_fill *f,
 		   double *px, double *py, struct err *e)
@@ -754,8 +406,8 @@ int hl_fill_build(const struct mesh *part, const struct mesh *solid, const struc
 	struct hl_fill r;
 	struct hl_fill_layer *C = NULL;
 	struct raster_map gm;
-	struct win s;
-	struct geo g;
+	struct hl_win s;
+	struct hl_geo g;
 	struct box3 bb = box3_empty();
 	uint8_t *vup = NULL;
 	float *sig = NULL;
@@ -798,7 +450,7 @@ int hl_fill_build(const struct mesh *part, const struct mesh *solid, const struc
 	vup = mem_calloc((size_t)r.w * (size_t)r.h, 1);
 	sig = mem_alloc((size_t)r.w * (size_t)r.h * sizeof *sig);
 	lastv = mem_alloc((size_t)r.w * (size_t)r.h * sizeof *lastv);
-	if (!r.layer || !C || !vup || !sig || !lastv || !win_init(&s, (size_t)r.w * (size_t)r.h)) {
+	if (!r.layer || !C || !vup || !sig || !lastv || !hl_win_init(&s, (size_t)r.w * (size_t)r.h)) {
 		rc = ERR_SET(e, ERR_NOMEM, "hollow: out of memory (fill)");
 		goto out;
 	}
@@ -843,15 +495,17 @@ int hl_fill_build(const struct mesh *part, const struct mesh *solid, const struc
 				       lastv + (size_t)(y + y0) * (size_t)r.w + x0,
 				       (size_t)ww * sizeof *lastv);
 			}
-			rc = layer_below(&s, ww, wh, &g, e);
+			rc = hl_step_grow(&s, ww, wh, &g, e);
 			if (!rc)
-				rc = keep_apart(&s, ww, wh, &g, e);
+				rc = hl_step_keep_apart(&s, ww, wh, &g, e);
 			if (!rc) {
-				vertical_walls(&s, (size_t)ww * (size_t)wh, &g, k);
-				rc = born_cells(&s, ww, wh, &g, k, e);
+				rc = hl_step_vertical_walls(&s, ww, wh, &g, k, e);
+			}
+			if (!rc) {
+				rc = hl_step_born(&s, ww, wh, &g, k, e);
 			}
 			if (!rc)
-				rc = support_islands(&s, ww, wh, e);
+				rc = hl_step_islands(&s, ww, wh, e);
 			if (!rc)
 				rc = hl_grid_runs(s.v, ww, 0, 0, ww, wh, &r.layer[k].run, &r.layer[k].n,
 						  &cap, e);
@@ -901,7 +555,7 @@ out:
 	mem_free(vup);
 	mem_free(sig);
 	mem_free(lastv);
-	win_fini(&s);
+	hl_win_fini(&s);
 	hl_fill_fini(&r);
 	return rc;
 }

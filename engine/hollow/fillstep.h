@@ -1,0 +1,65 @@
+/* fillstep.h - the per-layer steps of the top-down fill (fillstep.c):
+ * from the void of print layer k + 1, the void of layer k on a window of
+ * the fill's pixel grid.  topdown.c drives them layer by layer, top-down.
+ * Rules and measurements: docs/hollow.md "Top-down fill".  Internal to
+ * engine/hollow.
+ */
+#ifndef INFILLD_HOLLOW_FILLSTEP_H
+#define INFILLD_HOLLOW_FILLSTEP_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "engine/geom/edt.h"
+
+struct err;
+
+/* Beside a void of its region of C, a new void needs wall + dg + this
+ * much (mm) of room: each void costs walls of wall_next down to its
+ * floor, and within a few millimetres the neighbour's own growth (dd per
+ * layer) fills the space anyway.  3 mm: measured on the cube (one groin
+ * vault instead of five cells), camel, cow, elephant and armadillo
+ * (docs/hollow.md); 1.5 mm gave the cow 54 % instead of 59 %. */
+#define HL_FILL_LONE_MM 3.0
+
+/* Scratch of one layer's window (ww x wh pixels, row stride ww). */
+struct hl_win {
+	uint8_t *cm, *seed, *vw, *u, *ex, *v;
+	float *dc2, *dv2, *su, *de2, *d1, *db2, *sn, *sw;
+	int32_t *lab, *near, *lv, *hd, *hq;
+	struct edt_scratch es;
+};
+
+/* Free the scratch (s zeroed or initialised). */
+void hl_win_fini(struct hl_win *s);
+/* Scratch for windows of up to np pixels; 1 = ok, 0 = out of memory
+ * (s then holds what was allocated: hl_win_fini frees it). */
+int hl_win_init(struct hl_win *s, size_t np);
+
+/* The geometry of the rule, mm (pixel pitches px along x, py along y). */
+struct hl_geo {
+	double dd;    /* design shrink per layer: layer tan(alpha - margin) */
+	double dg;    /* discrete reach: the verifier's layer tan(alpha) + 1 px, less 2 % px */
+	double wall;  /* wall_next_mm between fill voids */
+	double birth; /* inside distance of the free region a new void needs */
+	int mv;       /* layers in wall_next: the vertical wall between voids */
+	double lone;  /* a new void beside others keeps wall + dg + lone from them */
+	double px, py, pmax;
+};
+
+/* The steps, in the order topdown.c runs them on one window (ww x wh):
+ * inputs s->cm = C(k), s->vw = V(k + 1), s->sw = carried inside
+ * distance, s->lv = lowest void layer per pixel; output s->v = V(k) and
+ * s->sn (the distance to carry).  Each returns 0, ERR_NOMEM or an EDT
+ * error.  Keep-apart, vertical walls and islands only turn void solid;
+ * births add void that keeps solid within dg; so the rule of
+ * hl_step_grow() holds on the result. */
+int hl_step_grow(struct hl_win *s, int ww, int wh, const struct hl_geo *g, struct err *e);
+int hl_step_keep_apart(struct hl_win *s, int ww, int wh, const struct hl_geo *g, struct err *e);
+int hl_step_vertical_walls(struct hl_win *s, int ww, int wh, const struct hl_geo *g, int k,
+			   struct err *e);
+int hl_step_born(struct hl_win *s, int ww, int wh, const struct hl_geo *g, int k,
+		 struct err *e);
+int hl_step_islands(struct hl_win *s, int ww, int wh, struct err *e);
+
+#endif
