@@ -43,12 +43,15 @@ class HollowTest(unittest.TestCase):
     def test_cube_support_free_at_45_and_30(self):
         res = {}
         for a in (45, 30):
+            # optimise_s=0: no time budget, so what is checked does not depend
+            # on the machine's speed (under ASan on shared cores the round
+            # once outran the default 60 s)
             m = hollow(self.tmp.name, "misc/cube.ascii.stl", height_mm=12, alpha_deg=a,
-                       rounds=1)
+                       rounds=1, optimise_s=0)
             h = m["hollow"]
             res[a] = h
             self.assertGreaterEqual(h["voids"], 1)
-            self.assertFalse(h["budget_spent"])  # one round of ~2 s in 60 s
+            self.assertFalse(h["budget_spent"])
             self.assertEqual(h["interior_overhang_mm2"], 0.0, h["verify"])
             self.assertEqual(h["verify"]["islands"], 0)
             # walls never thinner than allowed (1 pixel of rasterisation)
