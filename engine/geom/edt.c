@@ -18,11 +18,14 @@ void edt_scratch_fini(struct edt_scratch *s)
 	mem_free(s->d);
 	mem_free(s->z);
 	mem_free(s->v);
+	mem_free(s->a);
 	memset(s, 0, sizeof *s);
 }
 
-/* 1D: d[q] = min_p (sp*(q-p))^2 + f[p] over n samples (f may be INF). */
-static void edt_1d(const float *f, float *d, int n, double sp, int *v, double *z)
+/* 1D: d[q] = min_p (sp*(q-p))^2 + f[p] over n samples (f may be INF);
+ * arg (may be NULL): arg[q] = that p (the lower p on ties), -1 when every
+ * f is INF. */
+static void edt_1d(const float *f, float *d, int n, double sp, int *v, double *z, int *arg)
 {
 	int k = -1;
 	double s2 = sp * sp;
@@ -50,8 +53,11 @@ static void edt_1d(const float *f, float *d, int n, double sp, int *v, double *z
 			z[0] = -INFINITY;
 	}
 	if (k < 0) {
-		for (int q = 0; q < n; q++)
+		for (int q = 0; q < n; q++) {
 			d[q] = INFINITY;
+			if (arg)
+				arg[q] = -1;
+		}
 		return;
 	}
 	for (int q = 0, j = 0; q < n; q++) {
@@ -59,40 +65,85 @@ static void edt_1d(const float *f, float *d, int n, double sp, int *v, double *z
 			j++;
 		double dq = sp * (q - v[j]);
 		d[q] = (float)(dq * dq + f[v[j]]);
+		if (arg)
+			arg[q] = v[j];
 	}
+}
+
+/* Scratch for lines of n samples. */
+static int scratch_need(struct edt_scratch *s, size_t n, struct err *e)
+{
+	if (n + 1 <= s->cap)
+		return 0;
+	edt_scratch_fini(s);
+	s->f = mem_alloc((n + 1) * sizeof *s->f);
+	s->d = mem_alloc((n + 1) * sizeof *s->d);
+	s->z = mem_alloc((n + 2) * sizeof *s->z);
+	s->v = mem_alloc((n + 1) * sizeof *s->v);
+	s->a = mem_alloc((n + 1) * sizeof *s->a);
+	if (!s->f || !s->d || !s->z || !s->v || !s->a) {
+		edt_scratch_fini(s);
+		return ERR_SET(e, ERR_NOMEM, "distance transform: out of memory");
+	}
+	s->cap = n + 1;
+	return 0;
 }
 
 int edt_sq(const uint8_t *seed, size_t stride, int w, int h, double px_mm, double py_mm,
 	   float *out, struct edt_scratch *s, struct err *e)
 {
-	size_t n = (size_t)(w > h ? w : h);
+	return edt_nearest_sq(seed, stride, w, h, px_mm, py_mm, out, NULL, s, e);
+}
 
-	if (n + 1 > s->cap) {
-		edt_scratch_fini(s);
-		s->f = mem_alloc((n + 1) * sizeof *s->f);
-		s->d = mem_alloc((n + 1) * sizeof *s->d);
-		s->z = mem_alloc((n + 2) * sizeof *s->z);
-		s->v = mem_alloc((n + 1) * sizeof *s->v);
-		if (!s->f || !s->d || !s->z || !s->v) {
-			edt_scratch_fini(s);
-			return ERR_SET(e, ERR_NOMEM, "distance transform: out of memory");
-		}
-		s->cap = n + 1;
-	}
-	/* rows: along x */
+int edt_nearest_sq(const uint8_t *seed, size_t stride, int w, int h, double px_mm,
+		   double py_mm, float *out, int32_t *near, struct edt_scratch *s, struct err *e)
+{
+	if (scratch_need(s, (size_t)(w > h ? w : h), e))
+		return ERR_NOMEM;
+	/* rows: along x, the nearest seed column by a left and a right scan
+	 * (the left one on ties); near holds that column for now */
 	for (int y = 0; y < h; y++) {
 		const uint8_t *r = seed + (size_t)y * stride;
-		for (int x = 0; x < w; x++)
-			s->f[x] = r[x] ? 0.0f : INFINITY;
-		edt_1d(s->f, out + (size_t)y * (size_t)w, w, px_mm, s->v, s->z);
+		float *o = out + (size_t)y * (size_t)w;
+		int last = -1;
+		for (int x = 0; x < w; x++) {
+			if (r[x])
+				last = x;
+			s->a[x] = last;
+		}
+		last = -1;
+		for (int x = w - 1; x >= 0; x--) {
+			if (r[x])
+				last = x;
+			if (last >= 0 && (s->a[x] < 0 || last - x < x - s->a[x]))
+				s->a[x] = last;
+			o[x] = s->a[x] < 0 ? INFINITY
+					   : (float)((double)(x - s->a[x]) * (x - s->a[x]) * px_mm * px_mm);
+		}
+		if (near)
+			for (int x = 0; x < w; x++)
+				near[(size_t)y * (size_t)w + (size_t)x] = s->a[x];
 	}
-	/* columns: along y */
+	/* columns: along y; the row chosen picks that row's column */
 	for (int x = 0; x < w; x++) {
 		for (int y = 0; y < h; y++)
 			s->f[y] = out[(size_t)y * (size_t)w + (size_t)x];
-		edt_1d(s->f, s->d, h, py_mm, s->v, s->z);
+		edt_1d(s->f, s->d, h, py_mm, s->v, s->z, near ? s->a : NULL);
 		for (int y = 0; y < h; y++)
 			out[(size_t)y * (size_t)w + (size_t)x] = s->d[y];
+		if (!near)
+			continue;
+		/* near[q][x] of every row q is read before row y is written:
+		 * stash the column in v (edt_1d is done with it) */
+		for (int y = 0; y < h; y++)
+			s->v[y] = near[(size_t)y * (size_t)w + (size_t)x];
+		for (int y = 0; y < h; y++) {
+			int q = s->a[y];
+			near[(size_t)y * (size_t)w + (size_t)x] =
+				q < 0 || s->v[q] < 0
+					? -1
+					: (int32_t)((size_t)q * (size_t)w + (size_t)s->v[q]);
+		}
 	}
 	return 0;
 }

@@ -9,6 +9,7 @@
 
 #include "engine/core/err.h"
 #include "engine/core/mem.h"
+#include "engine/geom/edt.h"
 
 int hl_grid_runs(const uint8_t *mask, int w, int x0, int y0, int x1, int y1,
 		 struct hl_run **runs, size_t *n, size_t *cap, struct err *e)
@@ -128,86 +129,24 @@ int hl_grid_nearest(const int32_t *lab, int w, int h, double px_mm, double py_mm
 		    int32_t *near, struct err *e)
 {
 	size_t np = (size_t)w * (size_t)h;
-	float *g = mem_alloc((np + 1) * sizeof *g);
-	int32_t *ax = mem_alloc((np + 1) * sizeof *ax);
-	int *v = mem_alloc(((size_t)h + 1) * sizeof *v);
-	double *z = mem_alloc(((size_t)h + 2) * sizeof *z);
-	double py2 = py_mm * py_mm;
+	uint8_t *seed = mem_alloc(np + 1);
+	int32_t *idx = mem_alloc((np + 1) * sizeof *idx);
+	struct edt_scratch es;
+	int rc;
 
-	if (!g || !ax || !v || !z) {
-		mem_free(g);
-		mem_free(ax);
-		mem_free(v);
-		mem_free(z);
+	edt_scratch_init(&es);
+	if (!seed || !idx) {
+		mem_free(seed);
+		mem_free(idx);
 		return ERR_SET(e, ERR_NOMEM, "hollow: out of memory (fill distances)");
 	}
-	/* rows: nearest seed column by a left and a right scan */
-	for (int y = 0; y < h; y++) {
-		const int32_t *l = lab + (size_t)y * (size_t)w;
-		float *gr = g + (size_t)y * (size_t)w;
-		int32_t *ar = ax + (size_t)y * (size_t)w;
-		int last = -1;
-		for (int x = 0; x < w; x++) {
-			if (l[x])
-				last = x;
-			ar[x] = last;
-		}
-		last = -1;
-		for (int x = w - 1; x >= 0; x--) {
-			if (l[x])
-				last = x;
-			if (last >= 0 && (ar[x] < 0 || last - x < x - ar[x]))
-				ar[x] = last;
-			gr[x] = ar[x] < 0 ? INFINITY
-					  : (float)((x - ar[x]) * (x - ar[x]) * px_mm * px_mm);
-		}
-	}
-	/* columns: lower envelope of the parabolas g(q) + py^2 (y - q)^2 */
-	for (int x = 0; x < w; x++) {
-		int k = -1;
-		for (int q = 0; q < h; q++) {
-			double fq = g[(size_t)q * (size_t)w + (size_t)x], s = 0;
-			if (!isfinite(fq))
-				continue;
-			while (k >= 0) {
-				int r = v[k];
-				double fr = g[(size_t)r * (size_t)w + (size_t)x];
-				s = ((fq + py2 * q * q) - (fr + py2 * r * r)) / (2 * py2 * (q - r));
-				if (s > z[k])
-					break;
-				k--;
-			}
-			if (k < 0) {
-				k = 0;
-				v[0] = q;
-				z[0] = -INFINITY;
-			} else {
-				k++;
-				v[k] = q;
-				z[k] = s;
-			}
-			z[k + 1] = INFINITY;
-		}
-		for (int y = 0, j = 0; y < h; y++) {
-			size_t i = (size_t)y * (size_t)w + (size_t)x;
-			if (k < 0) {
-				d2[i] = INFINITY;
-				near[i] = 0;
-				continue;
-			}
-			while (j < k && z[j + 1] < y)
-				j++;
-			{
-				int q = v[j];
-				size_t iq = (size_t)q * (size_t)w + (size_t)x;
-				d2[i] = (float)(g[iq] + py2 * (y - q) * (y - q));
-				near[i] = lab[(size_t)q * (size_t)w + (size_t)ax[iq]];
-			}
-		}
-	}
-	mem_free(g);
-	mem_free(ax);
-	mem_free(v);
-	mem_free(z);
-	return 0;
+	for (size_t i = 0; i < np; i++)
+		seed[i] = lab[i] != 0;
+	rc = edt_nearest_sq(seed, (size_t)w, w, h, px_mm, py_mm, d2, idx, &es, e);
+	for (size_t i = 0; !rc && i < np; i++)
+		near[i] = idx[i] < 0 ? 0 : lab[idx[i]];
+	edt_scratch_fini(&es);
+	mem_free(seed);
+	mem_free(idx);
+	return rc;
 }

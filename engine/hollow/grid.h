@@ -1,6 +1,6 @@
 /* grid.h - pixel-grid helpers of the top-down fill (topdown.c): row runs
  * of binary masks and the nearest-seed label transform (exact Euclidean,
- * Felzenszwalb-Huttenlocher with arguments kept).
+ * labels of the feature transform of geom/edt.h).
  */
 #ifndef INFILLD_HOLLOW_GRID_H
 #define INFILLD_HOLLOW_GRID_H
@@ -29,7 +29,8 @@ void hl_grid_paint(uint8_t *mask, int w, const struct hl_run *runs, size_t n, ui
  * pixel, d2 = squared distance (mm^2, pitches px_mm along x, py_mm along
  * y) between pixel centres to the nearest pixel with lab != 0, and
  * near = that pixel's lab (0 and INFINITY without seeds).  O(w h).
- * Scratch is allocated per call.  0 or ERR_NOMEM. */
+ * Scratch is allocated per call (edt_nearest_sq does the work).  0 or
+ * ERR_NOMEM. */
 int hl_grid_nearest(const int32_t *lab, int w, int h, double px_mm, double py_mm, float *d2,
 		    int32_t *near, struct err *e);
 

@@ -53,6 +53,7 @@
 #include "engine/core/mem.h"
 #include "engine/core/metrics.h"
 #include "engine/geom/edt.h"
+#include "engine/verify/between.h"
 
 #define VX_OUT 1u /* union-find id of the outside */
 
@@ -86,6 +87,10 @@ struct verify {
 	uint32_t *uf;
 	size_t nuf, ufcap;
 	struct recs ov, wall, vol, vwall, fin;
+	struct recs between;  /* in-layer walls between two 2D-enclosed voids */
+	struct verify_between vb;
+	uint32_t *wlab;       /* walls_between's window of void labels */
+	size_t wlab_cap;
 	uint16_t *col;        /* per image pixel: layer where its solid run began */
 	uint32_t *col_id;     /* per image pixel: void component under that run when
 			       * it was 2D-enclosed, else VX_OUT (outside, plate) */
@@ -138,6 +143,9 @@ void verify_free(struct verify *v)
 	mem_free(v->vol.v);
 	mem_free(v->vwall.v);
 	mem_free(v->fin.v);
+	mem_free(v->between.v);
+	verify_between_fini(&v->vb);
+	mem_free(v->wlab);
 	mem_free(v->fcnt);
 	mem_free(v->col);
 	mem_free(v->col_id);
@@ -188,12 +196,16 @@ int verify_new(const struct verify_params *p, struct verify **out, struct err *e
 	v->prev = &v->a;
 	v->cur = &v->b;
 	edt_scratch_init(&v->es);
+	verify_between_init(&v->vb);
 	v->r.worst_layer = -1;
 	v->r.first_island_layer = -1;
 	v->r.min_wall_mm = INFINITY;
 	v->r.min_wall_layer = -1;
 	v->r.min_wall_vertical_mm = INFINITY;
 	v->r.speck_min_wall_mm = INFINITY;
+	v->r.min_wall_between_mm = INFINITY;
+	v->r.min_wall_between_layer = -1;
+	v->r.min_wall_between_vertical_mm = INFINITY;
 	/* union-find: 0 unused, 1 = outside */
 	v->ufcap = 1024;
 	v->uf = mem_alloc(v->ufcap * sizeof *v->uf);
@@ -485,6 +497,56 @@ static int fin_pixel(const struct verify *v, const struct crop *c, int x, int y,
 	return 0;
 }
 
+/* In-layer walls between two 2D-enclosed void components of the current
+ * crop: every void pixel is a seed (the outside too, so two cavities
+ * with the outside between them are no pair); pairs of enclosed
+ * components get a record (centre distance minus one pixel, as walls to
+ * the outside), resolved in 3D in verify_finish.  The window is the
+ * bounding box of the enclosed void pixels: the nearest pair of two
+ * cavities and the midpoint between them lie in it, and seeds outside it
+ * could only hide pairs, never make one closer (between.c). */
+static int walls_between(struct verify *v, int layer, struct err *e)
+{
+	const struct crop *c = v->cur;
+	double pmin = fmin(v->p.pixel_x_mm, v->p.pixel_y_mm);
+	int x0 = c->w, y0 = c->h, x1 = -1, y1 = -1, ww, wh;
+
+	for (int y = 0; y < c->h; y++)
+		for (int x = 0; x < c->w; x++) {
+			size_t i = (size_t)y * (size_t)c->w + (size_t)x;
+			if (c->solid[i] || !v->enc[c->lab[i] - v->cur_first])
+				continue;
+			x0 = x < x0 ? x : x0;
+			x1 = x > x1 ? x : x1;
+			y0 = y < y0 ? y : y0;
+			y1 = y > y1 ? y : y1;
+		}
+	ww = x1 - x0 + 1;
+	wh = y1 - y0 + 1;
+	/* window copies: seeds in v->seed, labels in v->wlab */
+	if (grow_bytes((void **)&v->wlab, &v->wlab_cap, (size_t)ww * (size_t)wh * sizeof *v->wlab))
+		return ERR_SET(e, ERR_NOMEM, "verify: out of memory at layer %d", layer);
+	for (int y = 0; y < wh; y++)
+		for (int x = 0; x < ww; x++) {
+			size_t i = (size_t)(y + y0) * (size_t)c->w + (size_t)(x + x0);
+			size_t o = (size_t)y * (size_t)ww + (size_t)x;
+			v->seed[o] = !c->solid[i];
+			v->wlab[o] = c->lab[i];
+		}
+	if (verify_between_pairs(v->seed, v->wlab, ww, wh, v->p.pixel_x_mm, v->p.pixel_y_mm,
+				 &v->vb, e))
+		return e ? e->code : ERR_NOMEM;
+	for (size_t k = 0; k < v->vb.n; k++) {
+		const struct verify_pair *q = &v->vb.pairs[k];
+		if (q->a == VX_OUT || q->b == VX_OUT || !v->enc[q->a - v->cur_first] ||
+		    !v->enc[q->b - v->cur_first])
+			continue;
+		if (rec_add2(&v->between, q->a, q->b, layer, q->d_mm - pmin))
+			return ERR_SET(e, ERR_NOMEM, "verify: out of memory at layer %d", layer);
+	}
+	return 0;
+}
+
 int verify_layer(struct verify *v, const struct raster *r, struct err *e)
 {
 	struct crop *c, *pc;
@@ -630,7 +692,7 @@ int verify_layer(struct verify *v, const struct raster *r, struct err *e)
 	/* 5b. walls: distance from enclosed voids to this layer's outside void */
 	if (c->w && ncomp) {
 		size_t n = (size_t)c->w * (size_t)c->h;
-		int any = 0;
+		int any = 0, nenc = 0;
 		if (grow_bytes((void **)&v->seed, &v->scratch_cap, n) ||
 		    grow_bytes((void **)&v->agg, &v->agg_cap, ncomp * sizeof *v->agg) ||
 		    grow_bytes((void **)&v->cnt, &v->cnt_cap, ncomp * sizeof *v->cnt) ||
@@ -660,6 +722,7 @@ int verify_layer(struct verify *v, const struct raster *r, struct err *e)
 			for (uint32_t k = 0; k < ncomp; k++) {
 				if (!v->enc[k])
 					continue;
+				nenc++;
 				/* centre-to-centre distance minus the two half pixels */
 				if (isfinite(v->agg[k]) &&
 				    rec_add(&v->wall, v->cur_first + k, layer,
@@ -685,6 +748,8 @@ int verify_layer(struct verify *v, const struct raster *r, struct err *e)
 				if (v->fcnt[k] > 0 &&
 				    rec_add(&v->fin, v->cur_first + k, layer, v->fcnt[k]))
 					goto nomem;
+			if (nenc >= 2 && walls_between(v, layer, e))
+				goto fail;
 		}
 	}
 	/* 5c. walls along columns: solid runs with a 2D-enclosed void on at
@@ -815,12 +880,30 @@ int verify_finish(struct verify *v, struct verify_report *out, struct err *e)
 			v->r.min_wall_layer = q->layer;
 		}
 	}
+	/* walls between two cavities: both ends enclosed, in different 3D
+	 * components, neither a speck (a partition inside one cavity is not
+	 * counted here; thin ones are fins) */
+	for (size_t k = 0; k < v->between.n; k++) {
+		const struct rec *q = &v->between.v[k];
+		uint32_t ra = uf_find(v, q->id), rb = uf_find(v, q->id2);
+		if (ra == VX_OUT || rb == VX_OUT || ra == rb || vox[ra] <= v->p.speck_voxels ||
+		    vox[rb] <= v->p.speck_voxels)
+			continue;
+		if (q->val < v->r.min_wall_between_mm) {
+			v->r.min_wall_between_mm = q->val;
+			v->r.min_wall_between_layer = q->layer;
+		}
+	}
 	/* a vertical wall separates an enclosed void from the outside: exactly
-	 * one end's 3D component is enclosed (two enclosed ends = a wall
-	 * between two cavities, not to the outside) */
+	 * one end's 3D component is enclosed; two enclosed ends in different
+	 * cavities are a wall between them */
 	for (size_t k = 0; k < v->vwall.n; k++) {
 		const struct rec *q = &v->vwall.v[k];
 		uint32_t ra = uf_find(v, q->id), rb = uf_find(v, q->id2), in;
+		if (ra != VX_OUT && rb != VX_OUT && ra != rb && vox[ra] > v->p.speck_voxels &&
+		    vox[rb] > v->p.speck_voxels)
+			v->r.min_wall_between_vertical_mm =
+				fmin(v->r.min_wall_between_vertical_mm, q->val);
 		if ((ra == VX_OUT) == (rb == VX_OUT))
 			continue;
 		in = ra == VX_OUT ? rb : ra;
@@ -857,6 +940,9 @@ int verify_report_metrics(const struct verify_report *r, const char *prefix, str
 	rc |= metrics_num(m, KEY("enclosed_void_mm3"), r->enclosed_void_mm3);
 	rc |= metrics_int(m, KEY("specks"), r->specks);
 	rc |= metrics_num(m, KEY("speck_min_wall_mm"), r->speck_min_wall_mm);
+	rc |= metrics_num(m, KEY("min_wall_between_mm"), r->min_wall_between_mm);
+	rc |= metrics_int(m, KEY("min_wall_between_layer"), r->min_wall_between_layer);
+	rc |= metrics_num(m, KEY("min_wall_between_vertical_mm"), r->min_wall_between_vertical_mm);
 	rc |= metrics_int(m, KEY("fin_px"), r->fin_px);
 	rc |= metrics_num(m, KEY("fin_mm3"), r->fin_mm3);
 	rc |= metrics_int(m, KEY("layers"), r->layers);

@@ -13,8 +13,9 @@
  *    counted apart (ordinary, removable supports);
  *  - floating islands: solid components (8-connected) of layer i+1 with
  *    no pixel above layer i's solid;
- *  - minimum wall thickness between enclosed voids and the outside: in
- *    the layer plane (exact distance transform) and along columns;
+ *  - minimum wall thickness between enclosed voids and the outside, and
+ *    between two enclosed voids: in the layer plane (exact distance
+ *    transform) and along columns;
  *  - fins: solid one or two pixels thick between enclosed voids.
  * Memory: two layers of per-pixel state over the layers' bounding boxes,
  * plus a 16-bit run start and a 32-bit void id per image pixel.  Design and the
@@ -76,6 +77,14 @@ struct verify_report {
 	 * one); a convex tip of thicker solid adds a pixel or two */
 	long long fin_px;
 	double fin_mm3;               /* fin_px as volume (pixel area x layer height) */
+	/* walls between two cavities (enclosed 3D void components, neither
+	 * a speck; a partition inside one cavity is not one): in-layer, the
+	 * centre distance between their nearest pixels less one pixel, an
+	 * upper bound exact along rows and columns (between.h); along
+	 * columns, solid runs with the two cavities at its ends */
+	double min_wall_between_mm;   /* INFINITY when no layer holds two cavities */
+	int min_wall_between_layer;   /* 0-based layer of that minimum, -1 if none */
+	double min_wall_between_vertical_mm; /* INFINITY if none */
 };
 
 void verify_report_fini(struct verify_report *r);

@@ -33,6 +33,15 @@ def hollow(tmp, mesh, fmt="sl1", **sets):
         return json.load(f)
 
 
+def between_walls_ok(t, v):
+    """Walls between two voids (verify min_wall_between_mm: in the layer and
+    along columns; null when no layer holds two voids) >= wall_next_mm 0.8
+    less one pixel or layer of rasterisation."""
+    for k in ("min_wall_between_mm", "min_wall_between_vertical_mm"):
+        if v[k] is not None:
+            t.assertGreaterEqual(v[k], 0.8 - 0.06, (k, v))
+
+
 class HollowTest(unittest.TestCase):
     def setUp(self):
         self.tmp = tempfile.TemporaryDirectory()
@@ -57,6 +66,7 @@ class HollowTest(unittest.TestCase):
             # walls never thinner than allowed (1 pixel of rasterisation)
             self.assertGreaterEqual(h["min_wall_3d_mm"], 0.8 - 0.06)
             self.assertGreaterEqual(h["verify"]["min_wall_vertical_mm"], 1.0 - 0.06)
+            between_walls_ok(self, h["verify"])
             self.assertGreater(h["volume_reduction"], 0.3)
             self.assertLess(h["volume_reduction"], 1.0)
         # a smaller alpha never hollows more
@@ -78,6 +88,7 @@ class HollowTest(unittest.TestCase):
             self.assertEqual(h["verify"]["islands"], 0)
             self.assertGreaterEqual(h["verify"]["min_wall_mm"], 1.0 - 0.06)
             self.assertGreaterEqual(h["verify"]["min_wall_vertical_mm"], 1.0 - 0.06)
+            between_walls_ok(self, h["verify"])
             # every fill void is enclosed: the checker finds all of it
             self.assertAlmostEqual(h["verify"]["enclosed_void_mm3"], h["fill_volume_mm3"],
                                    delta=1e-6 * h["fill_volume_mm3"])
@@ -130,6 +141,7 @@ class HollowTest(unittest.TestCase):
         self.assertEqual(h["verify"]["islands"], 0)
         self.assertGreaterEqual(h["min_wall_mm"], 1.0 - 0.06)
         self.assertGreaterEqual(h["verify"]["min_wall_vertical_mm"], 0.8 - 0.06)
+        between_walls_ok(self, h["verify"])
         # the lightweight objective hollows the stem too (more volume):
         # stability's fill is selective
         lw = hollow(self.tmp.name, "P.off", height_mm=50, up="y", rounds=0)["hollow"]

@@ -1,0 +1,130 @@
+/* test_edt.c - exact Euclidean distance and feature transforms (geom/edt.h)
+ * against brute force: random seed images of several densities and
+ * shapes, unequal pixel pitches, no seeds, one seed, a scratch reused
+ * across sizes.  The feature transform's pixel must be a seed at exactly
+ * the brute-force distance (any of them on ties).
+ */
+#include "harness.h"
+
+#include <math.h>
+
+#include "engine/core/err.h"
+#include "engine/core/mem.h"
+#include "engine/geom/edt.h"
+
+static uint64_t rng = 0x9e3779b97f4a7c15ULL;
+static uint64_t xs(void)
+{
+	rng ^= rng << 13;
+	rng ^= rng >> 7;
+	rng ^= rng << 17;
+	return rng;
+}
+
+/* Brute-force squared distance from (x, y) to the nearest seed, mm^2. */
+static double brute(const uint8_t *seed, int w, int h, int x, int y, double px, double py)
+{
+	double best = INFINITY;
+
+	for (int j = 0; j < h; j++)
+		for (int i = 0; i < w; i++)
+			if (seed[(size_t)j * (size_t)w + (size_t)i]) {
+				double dx = (i - x) * px, dy = (j - y) * py;
+				best = fmin(best, dx * dx + dy * dy);
+			}
+	return best;
+}
+
+static void check_image(const uint8_t *seed, int w, int h, double px, double py,
+			struct edt_scratch *s)
+{
+	size_t n = (size_t)w * (size_t)h;
+	float *d2 = mem_alloc(n * sizeof *d2), *d2b = mem_alloc(n * sizeof *d2b);
+	int32_t *near = mem_alloc(n * sizeof *near);
+	struct err e;
+	int bad = 0;
+
+	err_clear(&e);
+	REQUIRE(d2 && d2b && near);
+	REQUIRE_OK(edt_sq(seed, (size_t)w, w, h, px, py, d2, s, &e), &e);
+	REQUIRE_OK(edt_nearest_sq(seed, (size_t)w, w, h, px, py, d2b, near, s, &e), &e);
+	for (int y = 0; y < h && bad < 5; y++)
+		for (int x = 0; x < w && bad < 5; x++) {
+			size_t i = (size_t)y * (size_t)w + (size_t)x;
+			double b = brute(seed, w, h, x, y, px, py);
+			if (!isfinite(b)) {
+				CHECK(!isfinite(d2[i]) && !isfinite(d2b[i]) && near[i] == -1);
+				bad += !(!isfinite(d2[i]) && near[i] == -1);
+				continue;
+			}
+			/* float storage: relative 1e-6 */
+			if (fabs(d2[i] - b) > 1e-6 * b + 1e-12 || fabs(d2b[i] - b) > 1e-6 * b + 1e-12 ||
+			    near[i] < 0 || (size_t)near[i] >= n || !seed[near[i]]) {
+				CHECK_NEAR(d2[i], b, 1e-6 * b + 1e-12);
+				CHECK_NEAR(d2b[i], b, 1e-6 * b + 1e-12);
+				CHECK(near[i] >= 0 && (size_t)near[i] < n && seed[near[i]]);
+				bad++;
+				continue;
+			}
+			{
+				double dx = (near[i] % w - x) * px, dy = (near[i] / w - y) * py;
+				CHECK_NEAR(dx * dx + dy * dy, b, 1e-9 * b + 1e-15);
+				bad += fabs(dx * dx + dy * dy - b) > 1e-9 * b + 1e-15;
+			}
+		}
+	mem_free(d2);
+	mem_free(d2b);
+	mem_free(near);
+}
+
+static void test_random_images(void)
+{
+	static const int size[][2] = {{1, 1}, {1, 17}, {23, 1}, {31, 19}, {40, 40}, {64, 37}};
+	static const int permille[] = {0, 1, 20, 300, 950};
+	struct edt_scratch s;
+
+	edt_scratch_init(&s);
+	for (size_t k = 0; k < sizeof size / sizeof size[0]; k++)
+		for (size_t d = 0; d < sizeof permille / sizeof permille[0]; d++)
+			for (int pitch = 0; pitch < 2; pitch++) {
+				int w = size[k][0], h = size[k][1];
+				uint8_t *seed = mem_calloc((size_t)w * (size_t)h, 1);
+				REQUIRE(seed);
+				for (size_t i = 0; i < (size_t)w * (size_t)h; i++)
+					seed[i] = (int)(xs() % 1000) < permille[d];
+				check_image(seed, w, h, pitch ? 0.05 : 0.047, pitch ? 0.07 : 0.047,
+					    &s);
+				mem_free(seed);
+			}
+	edt_scratch_fini(&s);
+}
+
+/* One seed in a corner, and a ring: ties everywhere on the diagonal and
+ * the ring's centre. */
+static void test_shapes(void)
+{
+	enum { W = 45, H = 45 };
+	static uint8_t seed[W * H];
+	struct edt_scratch s;
+
+	edt_scratch_init(&s);
+	memset(seed, 0, sizeof seed);
+	seed[0] = 1;
+	check_image(seed, W, H, 0.1, 0.1, &s);
+	memset(seed, 0, sizeof seed);
+	for (int y = 0; y < H; y++)
+		for (int x = 0; x < W; x++) {
+			int r2 = (x - 22) * (x - 22) + (y - 22) * (y - 22);
+			seed[y * W + x] = r2 >= 15 * 15 && r2 < 17 * 17;
+		}
+	check_image(seed, W, H, 0.1, 0.1, &s);
+	check_image(seed, W, H, 0.03, 0.11, &s);
+	edt_scratch_fini(&s);
+}
+
+int main(void)
+{
+	RUN(test_random_images);
+	RUN(test_shapes);
+	return harness_report();
+}
