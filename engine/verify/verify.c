@@ -56,6 +56,7 @@
 #include "engine/verify/between.h"
 
 #define VX_OUT 1u /* union-find id of the outside */
+#define VX_FIN_PX 2 /* fins and shelves: solid runs of at most this many pixels / layers */
 
 struct crop {
 	int x0, y0, w, h; /* w == 0: empty */
@@ -88,6 +89,7 @@ struct verify {
 	size_t nuf, ufcap;
 	struct recs ov, wall, vol, vwall, fin;
 	struct recs between;  /* in-layer walls between two 2D-enclosed voids */
+	struct recs shelf;    /* column runs of <= VX_FIN_PX layers between them */
 	struct verify_between vb;
 	uint32_t *wlab;       /* walls_between's window of void labels */
 	size_t wlab_cap;
@@ -144,6 +146,7 @@ void verify_free(struct verify *v)
 	mem_free(v->vwall.v);
 	mem_free(v->fin.v);
 	mem_free(v->between.v);
+	mem_free(v->shelf.v);
 	verify_between_fini(&v->vb);
 	mem_free(v->wlab);
 	mem_free(v->fcnt);
@@ -289,6 +292,20 @@ static int vwall_add(struct verify *v, uint32_t a, uint32_t b, int layer, double
 		return 0;
 	}
 	return rec_add2(&v->vwall, a, b, layer, t_mm);
+}
+
+/* Shelves: n solid voxels in column runs of <= VX_FIN_PX layers between
+ * 2D-enclosed void components a (above) and b (below); consecutive
+ * columns of one row between the same two collapse into one record. */
+static int shelf_add(struct verify *v, uint32_t a, uint32_t b, int layer, double n)
+{
+	struct rec *q = v->shelf.n ? &v->shelf.v[v->shelf.n - 1] : NULL;
+
+	if (q && q->id == a && q->id2 == b && q->layer == layer) {
+		q->val += n;
+		return 0;
+	}
+	return rec_add2(&v->shelf, a, b, layer, n);
 }
 
 /* Scratch growth: the old contents are dropped, not copied. */
@@ -472,7 +489,6 @@ static uint32_t crop_void(const struct crop *c, int x, int y)
 /* Fins: whether solid crop pixel (x, y) lies in a solid run of at most
  * VX_FIN_PX pixels along a row, a column or a diagonal whose two ends are
  * void pixels of 2D-enclosed components; *end = one end's component. */
-#define VX_FIN_PX 2
 static int fin_pixel(const struct verify *v, const struct crop *c, int x, int y, uint32_t *end)
 {
 	static const int dir[4][2] = {{1, 0}, {0, 1}, {1, 1}, {1, -1}};
@@ -780,6 +796,10 @@ int verify_layer(struct verify *v, const struct raster *r, struct err *e)
 				    vwall_add(v, enc_now ? c->lab[i] : VX_OUT, v->col_id[gi], layer,
 					      (layer - v->col[gi]) * v->p.layer_mm))
 					goto nomem;
+				if (enc_now && v->col_id[gi] != VX_OUT &&
+				    layer - v->col[gi] <= VX_FIN_PX &&
+				    shelf_add(v, c->lab[i], v->col_id[gi], layer, layer - v->col[gi]))
+					goto nomem;
 			}
 	}
 	v->next++;
@@ -866,6 +886,10 @@ int verify_finish(struct verify *v, struct verify_report *out, struct err *e)
 		if (uf_find(v, v->fin.v[k].id) != VX_OUT)
 			v->r.fin_px += (long long)v->fin.v[k].val;
 	v->r.fin_mm3 = (double)v->r.fin_px * pa * v->p.layer_mm;
+	for (size_t k = 0; k < v->shelf.n; k++)
+		if (uf_find(v, v->shelf.v[k].id) != VX_OUT && uf_find(v, v->shelf.v[k].id2) != VX_OUT)
+			v->r.shelf_px += (long long)v->shelf.v[k].val;
+	v->r.shelf_mm3 = (double)v->r.shelf_px * pa * v->p.layer_mm;
 	for (size_t k = 0; k < v->wall.n; k++) {
 		const struct rec *q = &v->wall.v[k];
 		uint32_t root = uf_find(v, q->id);
@@ -945,6 +969,8 @@ int verify_report_metrics(const struct verify_report *r, const char *prefix, str
 	rc |= metrics_num(m, KEY("min_wall_between_vertical_mm"), r->min_wall_between_vertical_mm);
 	rc |= metrics_int(m, KEY("fin_px"), r->fin_px);
 	rc |= metrics_num(m, KEY("fin_mm3"), r->fin_mm3);
+	rc |= metrics_int(m, KEY("shelf_px"), r->shelf_px);
+	rc |= metrics_num(m, KEY("shelf_mm3"), r->shelf_mm3);
 	rc |= metrics_int(m, KEY("layers"), r->layers);
 #undef KEY
 	return rc ? ERR_SET(e, ERR_NOMEM, "verify: out of memory recording metrics") : 0;

@@ -85,6 +85,11 @@ struct verify_report {
 	double min_wall_between_mm;   /* INFINITY when no layer holds two cavities */
 	int min_wall_between_layer;   /* 0-based layer of that minimum, -1 if none */
 	double min_wall_between_vertical_mm; /* INFINITY if none */
+	/* shelves: solid voxels in column runs of at most 2 layers with
+	 * enclosed void at both ends (one cavity or two): the vertical
+	 * counterpart of fins */
+	long long shelf_px;
+	double shelf_mm3;             /* shelf_px as volume */
 };
 
 void verify_report_fini(struct verify_report *r);

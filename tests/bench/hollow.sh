@@ -3,7 +3,8 @@
 # shared meshes at 50 mm, alpha 45, walls 1.0 / 0.8 mm, SL1 output checked by
 # the layer verifier: volume reduction, interior overhang (must be 0), voids,
 # rounds, minimum wall (to the outside; between two voids in the layer, verify
-# min_wall_between_mm), fins (verify fin_mm3: solid 1-2 px thick between voids), time,
+# min_wall_between_mm), fins (verify fin_mm3: solid 1-2 px thick between voids) and
+# shelves (shelf_mm3: 1-2 layers thick between voids), time,
 # peak RSS.  Paper's Table 1: 53-77 % reduction, 17-60 min.
 # normal: the top-down fill alone (rounds=0 fill=true) and the default
 # pipeline (optimiser rounds<=8, then the fill); each run capped at CAP_S (300)
@@ -42,18 +43,18 @@ extra = ""
 if "com_before_mm" in h:
     extra = " com %+.2f -> %+.2f mm inside_hull %s" % (h["com_before_mm"], h["com_after_mm"], h["com_inside_hull"])
 between = h["verify"]["min_wall_between_mm"]
-print("%-10s a=%-2s %-11s rounds<=%-2s %5.1f %%  %9.4f  %3d (%3d+%3d)  %6d  %5.2f %5s  %6.2f  %7.1f (opt %6.1f fill %6.1f)  %5d%s%s"
+print("%-10s a=%-2s %-11s rounds<=%-2s %5.1f %%  %9.4f  %3d (%3d+%3d)  %6d  %5.2f %5s  %6.2f %6.3f  %7.1f (opt %6.1f fill %6.1f)  %5d%s%s"
       % (sys.argv[3], sys.argv[4], sys.argv[5], sys.argv[6], 100 * h["volume_reduction"],
          h["interior_overhang_mm2"], h["voids"], h["voids_optimised"], h["voids_fill"],
          h["rounds"], h["min_wall_mm"], "-" if between is None else "%.2f" % between,
-         h["verify"]["fin_mm3"], float(wall), h["seconds"]["optimise"],
+         h["verify"]["fin_mm3"], h["verify"]["shelf_mm3"], float(wall), h["seconds"]["optimise"],
          h["seconds"]["fill"], int(rss) // 1024,
          extra, ("  note: " + h["note"]) if "note" in h else ""))
 PY
 }
 
 echo "50 mm, walls t = 1.0 / 0.8 mm, SL1, 2 threads; overhang by engine/verify on the layers"
-echo "model      alpha objective   rounds    reduction overhang  voids(opt+fill) rounds minwall between fin mm3 time s                        RSS MB"
+echo "model      alpha objective   rounds    reduction overhang  voids(opt+fill) rounds minwall between fin shelf mm3 time s                        RSS MB"
 
 status=0
 # cow and elephant stand on +y (their z-up placement is wider than the SL1 display)

@@ -87,6 +87,8 @@ class HollowMeshTest(unittest.TestCase):
             # fins (docs/verify.md): 0.14 mm3 while kept R pixels and
             # staircase patches stood to the floor, 0.03 since they recede
             self.assertLess(res[45]["verify"]["fin_mm3"], 0.08, res[45]["verify"])
+            # shelves (fins' vertical counterpart): 0.0004 mm3 measured
+            self.assertLess(res[45]["verify"]["shelf_mm3"], 0.01, res[45]["verify"])
             self.assertLessEqual(res[30]["volume_reduction"], res[45]["volume_reduction"])
 
     def test_femur_fill(self):
@@ -103,6 +105,7 @@ class HollowMeshTest(unittest.TestCase):
             self.assertGreater(h["volume_reduction"], 0.38)
             # fins: 1.32 mm3 before they receded, 0.08 since
             self.assertLess(v["fin_mm3"], 0.3, v)
+            self.assertLess(v["shelf_mm3"], 0.02, v)  # 0.004 measured
             check_between(self, v, required=True)
 
 

@@ -3,7 +3,8 @@
  * pixels between two cavities reads N pixels; cavities joined above are
  * one cavity (no wall between); cavities with the outside between them
  * are no pair; a cavity over another with a floor of N layers reads N
- * layers; a speck beside a cavity is kept out; random discs read the
+ * layers and, up to 2 layers, is a shelf; a speck beside a cavity is
+ * kept out; random discs read the
  * brute-force nearest pixel pair's distance.
  */
 #include "harness.h"
@@ -104,6 +105,8 @@ static void test_joined_is_one_cavity(void)
 	CHECK_EQ_INT(rep.min_wall_between_layer, -1);
 	CHECK(isinf(rep.min_wall_between_vertical_mm));
 	CHECK_NEAR(rep.enclosed_void_mm3, (40 * 40 + 5 * 40 * 36) * PX * PX * LAYER, 1e-9);
+	/* the partition's top layer is solid under nothing: no shelf */
+	CHECK_EQ_INT((int)rep.shelf_px, 0);
 	verify_report_fini(&rep);
 }
 
@@ -149,11 +152,37 @@ static void test_floor_between(void)
 		struct verify_report rep;
 		run_stack(stacked, &f, 13 + f, &rep);
 		CHECK_NEAR(rep.min_wall_between_vertical_mm, f * LAYER, 1e-9);
+		/* a floor of 1 or 2 layers between cavities is a shelf */
+		CHECK_EQ_INT((int)rep.shelf_px, f <= 2 ? f * 40 * 40 : 0);
+		CHECK_NEAR(rep.shelf_mm3, (double)rep.shelf_px * PX * PX * LAYER, 1e-12);
 		CHECK(isinf(rep.min_wall_between_mm));
 		/* to the outside: the 2-layer floor and 3-layer roof */
 		CHECK_NEAR(rep.min_wall_vertical_mm, 2 * LAYER, 1e-9);
 		verify_report_fini(&rep);
 	}
+}
+
+/* One cavity on layers 2..9 with a plate of one layer (layer 5) over half
+ * its footprint: a shelf inside one cavity, no wall between cavities. */
+static int plate(int i, int j, int k, const void *arg)
+{
+	(void)arg;
+	if (!in_box(i, j, 10, 10, 70, 70))
+		return 0;
+	if (!in_box(i, j, 20, 20, 60, 60) || k < 2 || k > 9)
+		return 1;
+	return k == 5 && i < 40;
+}
+
+static void test_shelf_in_one_cavity(void)
+{
+	struct verify_report rep;
+
+	run_stack(plate, NULL, 12, &rep);
+	CHECK_EQ_INT((int)rep.shelf_px, 20 * 40);
+	CHECK(isinf(rep.min_wall_between_vertical_mm));
+	CHECK(isinf(rep.min_wall_between_mm));
+	verify_report_fini(&rep);
 }
 
 /* A 2 x 2 x 1 speck (4 voxels) 2 px from a cavity: not a cavity. */
@@ -257,6 +286,7 @@ int main(void)
 	RUN(test_joined_is_one_cavity);
 	RUN(test_outside_between);
 	RUN(test_floor_between);
+	RUN(test_shelf_in_one_cavity);
 	RUN(test_speck_is_no_cavity);
 	RUN(test_random_discs);
 	return harness_report();
