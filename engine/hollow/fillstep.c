@@ -417,14 +417,18 @@ int hl_step_born(struct hl_win *s, int ww, int wh, const struct hl_geo *g, int k
  * boundaries, where within reach), a void pixel stays void if
  *   - d1 >= wall + dg: a new cell, >= wall + dg from every component; or
  *   - d1 <= dg (growth of its nearest component) and it lies >= wall / 2
- *     + 1 px from B: two components stay >= wall apart, each on its side
- *     of their bisector.
+ *     from B: B holds the pixels on both sides of the bisector (each
+ *     within half a pixel of it), so a void pixel's centre lies >= wall / 2
+ *     + 1/2 px from the bisector and two components' pixel centres stay
+ *     >= wall + 1 px apart: a wall of wall_next between their pixels'
+ *     edges, as the verifier reads it (min_wall_between_mm; 0.789-0.835
+ *     mm for 0.8 on the 50 mm models: the bisector is a staircase).
  * Everything else turns solid (a subset: safe).  O(pixels).
  */
 int hl_step_keep_apart(struct hl_win *s, int ww, int wh, const struct hl_geo *g, struct err *e)
 {
 	size_t np = (size_t)ww * (size_t)wh;
-	double cut = g->wall + 2 * g->dg + 2 * g->pmax, half = 0.5 * g->wall + g->pmax;
+	double cut = g->wall + 2 * g->dg + 2 * g->pmax, half = 0.5 * g->wall;
 	int32_t count;
 	int anyb = 0, rc;
 
