@@ -621,6 +621,12 @@ static Bool cb_iter(Index alg_mod, Index iter, Number obj, Number inf_pr, Number
 		P->cancelled = 1;
 		return FALSE;
 	}
+	/* the time budget is wall-clock; max_cpu_time counts CPU seconds,
+	 * which fall behind the wall when the cores are shared (Ipopt 3.11
+	 * has no max_wall_time): stop here, the point reached is checked
+	 * like any other (hl_nlp_solve) */
+	if (P->o->deadline_s > 0 && progress_now_s() >= P->o->deadline_s)
+		return FALSE;
 	return TRUE;
 }
 
