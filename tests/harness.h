@@ -16,6 +16,15 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* xorshift64 (Marsaglia 13, 7, 17): deterministic test data; *s != 0. */
+static inline uint64_t harness_xorshift64(uint64_t *s)
+{
+	*s ^= *s << 13;
+	*s ^= *s >> 7;
+	*s ^= *s << 17;
+	return *s;
+}
+
 static int harness_failed_checks;
 static int harness_failed_tests;
 static int harness_tests;

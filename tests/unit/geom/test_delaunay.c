@@ -18,10 +18,7 @@
 static uint64_t rng = 88172645463325252ULL;
 static uint64_t xs(void)
 {
-	rng ^= rng << 13;
-	rng ^= rng >> 7;
-	rng ^= rng << 17;
-	return rng;
+	return harness_xorshift64(&rng);
 }
 
 static __int128 area2(struct pt2 a, struct pt2 b, struct pt2 c)

@@ -15,10 +15,7 @@
 static uint64_t rng = 0x9e3779b97f4a7c15ULL;
 static uint64_t xs(void)
 {
-	rng ^= rng << 13;
-	rng ^= rng >> 7;
-	rng ^= rng << 17;
-	return rng;
+	return harness_xorshift64(&rng);
 }
 
 /* Brute-force squared distance from (x, y) to the nearest seed, mm^2. */

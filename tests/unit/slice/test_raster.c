@@ -15,10 +15,7 @@ static uint64_t rng = 0x2545F4914F6CDD1Dull;
 
 static double urand(void) /* [0, 1) */
 {
-	rng ^= rng << 13;
-	rng ^= rng >> 7;
-	rng ^= rng << 17;
-	return (double)(rng >> 11) / 9007199254740992.0;
+	return (double)(harness_xorshift64(&rng) >> 11) / 9007199254740992.0;
 }
 
 /* Star-shaped (hence simple) random polygon around (cx, cy) mm, CCW. */
