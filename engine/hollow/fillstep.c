@@ -79,11 +79,6 @@ static int dist2(struct hl_win *s, const uint8_t *seed, int any, int ww, int wh,
 }
 
 
-/* What hl_step_grow() keeps solid of the solid of layer k + 1 (s->u). */
-#define HL_KEEP_E 1      /* E: inside distance > dd */
-#define HL_KEEP_R 2      /* R: no solid of layer k within dg */
-#define HL_KEEP_BRIDGE 3 /* ties kept R to the walls */
-
 /* Neighbour j (0..7) of pixel (x, y) in a ww x wh window, or -1. */
 static const int HL_DX[8] = {1, -1, 0, 0, 1, 1, -1, -1};
 static const int HL_DY[8] = {0, 0, 1, -1, 1, -1, 1, -1};
@@ -417,7 +412,7 @@ int hl_step_born(struct hl_win *s, int ww, int wh, const struct hl_geo *g, int k
  * boundaries, where within reach), a void pixel stays void if
  *   - d1 >= wall + dg: a new cell, >= wall + dg from every component; or
  *   - d1 <= dg (growth of its nearest component) and it lies >= wall / 2
- *     from B: B holds the pixels on both sides of the bisector (each
+ *     from B (standing walls; g->lean: fillwall.c): B holds the pixels on both sides of the bisector (each
  *     within half a pixel of it), so a void pixel's centre lies >= wall / 2
  *     + 1/2 px from the bisector and two components' pixel centres stay
  *     >= wall + 1 px apart: a wall of wall_next between their pixels'
@@ -430,6 +425,9 @@ int hl_step_keep_apart(struct hl_win *s, int ww, int wh, const struct hl_geo *g,
 	size_t np = (size_t)ww * (size_t)wh;
 	double cut = g->wall + 2 * g->dg + 2 * g->pmax, half = 0.5 * g->wall;
 	int32_t count;
+
+	if (g->lean)
+		return hl_step_keep_apart_lean(s, ww, wh, g, e);
 	int anyb = 0, rc;
 
 	rc = hl_grid_label(s->vw, ww, wh, s->lab, &count, e);

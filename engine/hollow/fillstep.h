@@ -22,6 +22,11 @@ struct err;
  * (docs/hollow.md); 1.5 mm gave the cow 54 % instead of 59 %. */
 #define HL_FILL_LONE_MM 3.0
 
+/* What hl_step_grow() keeps solid of the solid of layer k + 1 (s->u). */
+#define HL_KEEP_E 1      /* E: inside distance > dd */
+#define HL_KEEP_R 2      /* R: no solid of layer k within dg */
+#define HL_KEEP_BRIDGE 3 /* ties kept R to the walls */
+
 /* Scratch of one layer's window (ww x wh pixels, row stride ww). */
 struct hl_win {
 	uint8_t *cm, *seed, *vw, *u, *ex, *v;
@@ -44,6 +49,8 @@ struct hl_geo {
 	double birth; /* inside distance of the free region a new void needs */
 	int mv;       /* layers in wall_next: the vertical wall between voids */
 	double lone;  /* a new void beside others keeps wall + dg + lone from them */
+	int lean;     /* walls between voids lean at the design slope (else stand) */
+	double half;  /* lean: a void pixel centre from the bisector pixels, wall / 2 / cos */
 	double px, py, pmax;
 };
 
@@ -60,6 +67,10 @@ int hl_step_vertical_walls(struct hl_win *s, int ww, int wh, const struct hl_geo
 			   struct err *e);
 int hl_step_born(struct hl_win *s, int ww, int wh, const struct hl_geo *g, int k,
 		 struct err *e);
+/* fillwall.c: leaning walls between voids (g->lean) */
+int hl_step_keep_apart_lean(struct hl_win *s, int ww, int wh, const struct hl_geo *g,
+			    struct err *e);
+int hl_step_prune(struct hl_win *s, int ww, int wh, const struct hl_geo *g, int k);
 int hl_step_islands(struct hl_win *s, int ww, int wh, struct err *e);
 
 #endif

@@ -29,6 +29,7 @@ struct hollow_params {
 	double sample_mm;
 	double margin_deg;
 	int fill;
+	int lean_walls;
 	double optimise_s;
 };
 
@@ -79,6 +80,12 @@ static const struct param_desc hollow_desc[] = {
 		 "support-free fill, designed on the layer pixels (docs/hollow.md; layer outputs "
 		 "only: mesh outputs carry the optimised voids alone). stability: only behind the "
 		 "centre of mass, away from the contact area."},
+	{.name = "lean_walls", .type = PARAM_BOOL,
+	 .offset = offsetof(struct hollow_params, lean_walls), .min = 0, .max = 1, .def = 1,
+	 .unit = "",
+	 .help = "Fill: a wall between two voids leans at alpha over the larger and ends on the "
+		 "smaller one's floor (more volume removed; one-pixel bumps along the leaning walls' "
+		 "undersides); false: it stands vertical down to a floor (docs/hollow.md)."},
 	{.name = "optimise_s", .type = PARAM_NUM,
 	 .offset = offsetof(struct hollow_params, optimise_s), .min = 0, .max = 86400, .def = 60,
 	 .unit = "s",
@@ -242,6 +249,7 @@ static int hollow_prepare(const struct engine_ctx *ctx, const void *params, void
 	c->print_layer_mm = ctx->layer_mm;
 	/* the fill lives in the layers: a mesh output could not carry it */
 	c->fill = p->fill && (ctx->want_raster || ctx->want_region);
+	c->fill_lean = p->lean_walls;
 	/* the fill is designed on the pixels the verifier reads */
 	if (s->map)
 		c->fill_map = *s->map;

@@ -35,6 +35,7 @@ struct hl_config {
 	double light_weight;   /* stability: weight of the lightweight term */
 	double print_layer_mm; /* the job's layer (contact layer for stability) */
 	int fill;              /* lightweight: top-down fill of what the optimiser left */
+	int fill_lean;         /* fill: walls between voids lean (else they stand) */
 	struct raster_map fill_map; /* printer mm -> pixels of the images the verifier reads */
 	int fill_map_set;      /* fill_map is set (else no fill) */
 	int fill_keep_set;     /* the fill keeps to the half-plane below (hl_run sets it

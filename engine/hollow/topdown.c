@@ -441,6 +441,8 @@ int hl_fill_build(const struct mesh *part, const struct mesh *solid, const struc
 	g.mv = (int)ceil(g.wall / L - 1e-9);
 	g.birth = 0.5 * g.wall;
 	g.lone = HL_FILL_LONE_MM;
+	g.lean = c->fill_lean;
+	g.half = 0.5 * g.wall / cos(c->alpha_rad - c->margin_rad);
 	pad = (int)ceil((g.wall + 2 * g.dg + 2 * g.pmax) / fmin(g.px, g.py)) + 2;
 	gm = *m;
 	gm.b[0] -= r.u0;
@@ -501,6 +503,8 @@ int hl_fill_build(const struct mesh *part, const struct mesh *solid, const struc
 			if (!rc) {
 				rc = hl_step_vertical_walls(&s, ww, wh, &g, k, e);
 			}
+			if (!rc && g.lean)
+				rc = hl_step_prune(&s, ww, wh, &g, k);
 			if (!rc) {
 				rc = hl_step_born(&s, ww, wh, &g, k, e);
 			}

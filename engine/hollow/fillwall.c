@@ -1,0 +1,217 @@
+/* fillwall.c - leaning walls between the top-down fill's voids
+ * (`lean_walls`, on by default; fillstep.h, docs/hollow.md "Top-down
+ * fill"): keep-apart that moves the wall between two voids towards the
+ * smaller one by dd per layer, and the pruning of the pixels such a
+ * moving wall would leave behind.
+ */
+#include "engine/hollow/fillstep.h"
+
+#include <math.h>
+#include <stddef.h>
+#include <string.h>
+
+#include "engine/core/err.h"
+#include "engine/core/mem.h"
+#include "engine/hollow/grid.h"
+
+/*
+ * Keep the voids apart, leaning (on s->v, given V(k + 1) = s->vw).  Each
+ * void pixel belongs to its nearest component l of V(k + 1) (8-connected
+ * in the layer), at distance d1 (s->d1 squared):
+ *   - d1 >= wall + dg: a new cell, >= wall + dg from every component; kept;
+ *   - dg < d1 < wall + dg: neither growth nor a cell: solid;
+ *   - d1 <= dg: growth of l, kept at >= half - dd from the bisector pixels
+ *     (where the nearest component changes) on the side of the larger
+ *     component (pixel count in layer k + 1), >= half + dd on the
+ *     smaller's.
+ * So the bisector between two voids moves by dd per layer towards the
+ * smaller: the larger advances, the smaller recedes (a floor), and the
+ * wall between them leans at the design slope over the larger (its
+ * underside is the larger's ceiling) until the smaller is used up,
+ * instead of standing down to a floor.  half = wall / 2 / cos(alpha -
+ * margin) keeps wall_next across the leaning wall, normal to it.  Out:
+ * s->hd = 1 or 2 for the side of the nearest bisector pixel (larger,
+ * smaller; 0 without one), s->db2 its squared distance, s->d1: both read
+ * by hl_step_prune.  Everything dropped turns solid (a subset: safe).
+ * O(pixels + components^2).
+ */
+int hl_step_keep_apart_lean(struct hl_win *s, int ww, int wh, const struct hl_geo *g,
+			    struct err *e)
+{
+	static const int nb[4][2] = {{-1, 0}, {1, 0}, {0, -1}, {0, 1}};
+	size_t np = (size_t)ww * (size_t)wh;
+	double cut = g->wall + 2 * g->dg + 2 * g->pmax;
+	int32_t count = 0, *rank = NULL, *side = s->hd;
+	size_t *area = NULL;
+	int anyb = 0, rc;
+
+	rc = hl_grid_label(s->vw, ww, wh, s->lab, &count, e);
+	if (!rc)
+		rc = hl_grid_nearest(s->lab, ww, wh, g->px, g->py, s->d1, s->near, e);
+	if (rc)
+		return rc;
+	rank = mem_alloc(((size_t)count + 1) * sizeof *rank);
+	area = mem_calloc((size_t)count + 1, sizeof *area);
+	if (!rank || !area) {
+		rc = ERR_SET(e, ERR_NOMEM, "hollow: out of memory (fill walls)");
+		goto out;
+	}
+	for (size_t i = 0; i < np; i++)
+		area[s->lab[i]]++;
+	/* rank 0 = the largest (ties: the lower label); the components of one
+	 * layer's window are few */
+	for (int32_t l = 1; l <= count; l++) {
+		rank[l] = 0;
+		for (int32_t m = 1; m <= count; m++)
+			rank[l] += area[m] > area[l] || (area[m] == area[l] && m < l);
+	}
+	/* bisector pixels (in s->lab): 1 where every other side ranks below,
+	 * 2 where some other side ranks above */
+	for (int y = 0; y < wh; y++)
+		for (int x = 0; x < ww; x++) {
+			size_t i = (size_t)y * (size_t)ww + (size_t)x;
+			int32_t l = s->near[i], f = 0;
+			if (l && s->d1[i] <= cut * cut)
+				for (int q = 0; q < 4; q++) {
+					int xn = x + nb[q][0], yn = y + nb[q][1];
+					int32_t m;
+					if (xn < 0 || yn < 0 || xn >= ww || yn >= wh)
+						continue;
+					m = s->near[(size_t)yn * (size_t)ww + (size_t)xn];
+					if (m && m != l)
+						f = rank[m] < rank[l] ? 2 : (f ? f : 1);
+				}
+			s->lab[i] = f;
+			anyb |= f != 0;
+		}
+	if (anyb)
+		rc = hl_grid_nearest(s->lab, ww, wh, g->px, g->py, s->db2, side, e);
+	else
+		memset(side, 0, np * sizeof *side);
+	if (rc)
+		goto out;
+	for (size_t i = 0; i < np; i++) {
+		double d1, h;
+		if (!s->v[i])
+			continue;
+		d1 = sqrt(s->d1[i]);
+		if (d1 >= g->wall + g->dg)
+			continue;
+		if (d1 <= g->dg) {
+			if (!anyb)
+				continue;
+			h = side[i] == 2 ? g->half + g->dd : g->half - g->dd;
+			if (s->db2[i] >= h * h)
+				continue;
+		}
+		s->v[i] = 0;
+		s->sn[i] = INFINITY; /* solid: reached from V(k) only, at dd per layer */
+	}
+out:
+	mem_free(rank);
+	mem_free(area);
+	return rc;
+}
+
+/* The solid 8-neighbours of pixel (x, y) (outside the window: solid), as
+ * the number of 8-connected groups they make on the ring round it:
+ * turning a pixel with at most one group void disconnects nothing. */
+static int ring_groups(const uint8_t *v, int ww, int wh, int x, int y)
+{
+	static const int ring[8][2] = {{1, 0},  {1, 1},   {0, 1},  {-1, 1},
+				       {-1, 0}, {-1, -1}, {0, -1}, {1, -1}};
+	int sol[8], groups = 0, any = 0;
+
+	for (int q = 0; q < 8; q++) {
+		int xn = x + ring[q][0], yn = y + ring[q][1];
+		sol[q] = xn < 0 || yn < 0 || xn >= ww || yn >= wh ||
+			 !v[(size_t)yn * (size_t)ww + (size_t)xn];
+		any |= sol[q];
+	}
+	if (!any)
+		return 0;
+	/* consecutive ring pixels are 8-adjacent, and so are two edge pixels
+	 * (even q) two apart: a group starts at a solid pixel whose
+	 * predecessor is void, unless it is an edge pixel whose edge
+	 * predecessor (q - 2) is solid */
+	for (int q = 0; q < 8; q++)
+		if (sol[q] && !sol[(q + 7) % 8] && !(q % 2 == 0 && sol[(q + 6) % 8]))
+			groups++;
+	return groups ? groups : 1;
+}
+
+/*
+ * Prune (on s->v, after keep-apart and the vertical walls; lean walls
+ * only).  A pixel hl_step_grow() kept solid (R, or a bridge) because the
+ * pixel above had no solid of layer k within dg may have some now: the
+ * wall band keep-apart added.  Kept anyway, it is left behind by the
+ * moving wall: the next layer keeps it as R again and its bridge to the
+ * wall grows, an icicle a pixel wide under the leaning wall (the cow, 50
+ * mm: fin_mm3 2.09 without this).  It turns void, pixel by pixel on the
+ * current state, where
+ *   - its solid 8-neighbours make at most one group (nothing is cut
+ *     off: a cut-off pixel would stand to the floor as an island);
+ *   - it would pass keep-apart as void and is not a floor under a void
+ *     of layers k + 2 .. k + mv (the vertical walls' rule);
+ *   - every solid pixel of layer k + 1 within dg of it that is void
+ *     below (itself included) keeps another solid pixel of layer k
+ *     within dg: the rule of hl_step_grow() holds.
+ * Repeated until nothing changes (icicles peel from their tips), at most
+ * 32 passes.  O(R pixels x (dg / pixel)^4) per pass.
+ */
+int hl_step_prune(struct hl_win *s, int ww, int wh, const struct hl_geo *g, int k)
+{
+	int rx = (int)floor(g->dg / g->px), ry = (int)floor(g->dg / g->py), changed = 1;
+	double dg2 = g->dg * g->dg;
+
+	for (int pass = 0; changed && pass < 32; pass++) {
+		changed = 0;
+		for (int y = 0; y < wh; y++)
+			for (int x = 0; x < ww; x++) {
+				size_t i = (size_t)y * (size_t)ww + (size_t)x;
+				int ok = 1;
+				double h;
+				if (s->v[i] || !s->cm[i] || s->vw[i] ||
+				    (s->u[i] != HL_KEEP_R && s->u[i] != HL_KEEP_BRIDGE))
+					continue;
+				if (s->d1[i] > dg2 || (s->lv[i] >= k + 2 && s->lv[i] <= k + g->mv))
+					continue;
+				h = s->hd[i] == 2 ? g->half + g->dd : g->half - g->dd;
+				if ((s->hd[i] && s->db2[i] < h * h) ||
+				    ring_groups(s->v, ww, wh, x, y) > 1)
+					continue;
+				/* every Q near it, solid at k + 1 and void at k once it is */
+				for (int qy = y - ry; ok && qy <= y + ry; qy++)
+					for (int qx = x - rx; ok && qx <= x + rx; qx++) {
+						double dx = (qx - x) * g->px, dy = (qy - y) * g->py;
+						int sup = 0;
+						size_t q;
+						if (qx < 0 || qy < 0 || qx >= ww || qy >= wh ||
+						    dx * dx + dy * dy > dg2)
+							continue;
+						q = (size_t)qy * (size_t)ww + (size_t)qx;
+						if (!s->cm[q] || s->vw[q] || (q != i && !s->v[q]))
+							continue;
+						for (int sy = qy - ry; !sup && sy <= qy + ry; sy++)
+							for (int sx = qx - rx; !sup && sx <= qx + rx;
+							     sx++) {
+								double ex = (sx - qx) * g->px;
+								double ey = (sy - qy) * g->py;
+								size_t t;
+								if (sx < 0 || sy < 0 || sx >= ww ||
+								    sy >= wh || ex * ex + ey * ey > dg2)
+									continue;
+								t = (size_t)sy * (size_t)ww + (size_t)sx;
+								sup = t != i && !s->v[t];
+							}
+						ok = sup;
+					}
+				if (!ok)
+					continue;
+				s->v[i] = 1;
+				s->sn[i] = INFINITY;
+				changed = 1;
+			}
+	}
+	return 0;
+}
