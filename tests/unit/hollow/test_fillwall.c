@@ -100,6 +100,17 @@ static int all_attached(const struct hl_win *s)
 	return 1;
 }
 
+/* Layer k + 1: the wall rows and, with icicle set, a line 9 px long
+ * hanging from it at x = 20. */
+static void wall_above(uint8_t *up, int icicle)
+{
+	memset(up, 0, W * H);
+	for (int i = 0; i < 3 * W; i++)
+		up[i] = 1;
+	for (int y = 3; icicle && y < 12; y++)
+		up[y * W + 20] = 1;
+}
+
 static void test_icicle_peels_to_support(void)
 {
 	struct hl_geo g = geo();
@@ -107,12 +118,7 @@ static void test_icicle_peels_to_support(void)
 	uint8_t up[W * H];
 
 	REQUIRE(hl_win_init(&s, W * H));
-	memset(up, 0, sizeof up);
-	for (int y = 0; y < 3; y++)
-		for (int x = 0; x < W; x++)
-			up[y * W + x] = 1;
-	for (int y = 3; y < 12; y++)
-		up[y * W + 20] = 1; /* an icicle 9 px long */
+	wall_above(up, 1);
 	setup(&s, up);
 	CHECK(rule_holds(&s, g.dg));
 	CHECK_EQ_INT(hl_step_prune(&s, W, H, &g, 100), 0);
@@ -142,11 +148,7 @@ static void test_only_r_pruned(void)
 	uint8_t up[W * H];
 
 	REQUIRE(hl_win_init(&s, W * H));
-	memset(up, 0, sizeof up);
-	for (int i = 0; i < 3 * W; i++)
-		up[i] = 1;
-	for (int y = 3; y < 12; y++)
-		up[y * W + 20] = 1;
+	wall_above(up, 1);
 	setup(&s, up);
 	for (int y = 3; y < 12; y++)
 		s.u[y * W + 20] = HL_KEEP_E;
@@ -167,9 +169,7 @@ static void test_random_forests(void)
 		struct hl_win s;
 		uint8_t up[W * H];
 		REQUIRE(hl_win_init(&s, W * H));
-		memset(up, 0, sizeof up);
-		for (int i = 0; i < 3 * W; i++)
-			up[i] = 1;
+		wall_above(up, 0);
 		/* random walks down from the wall */
 		for (int w = 0; w < 6; w++) {
 			int x = 2 + (int)(harness_xorshift64(&rng) % (W - 4)), y = 3;
