@@ -9,7 +9,8 @@
 # normal: the top-down fill alone (rounds=0 fill=true) and the default
 # pipeline (optimiser rounds<=8, then the fill); each run capped at CAP_S (300)
 # seconds, reported.  HOLLOW_MODELS="camel:y femur:z" picks models.
-# large: also alpha 30 and the standing objective on the letter P.
+# large: also alpha 30 and the standing objective on the letter P (50 and
+# 100 mm tall).
 set -uo pipefail
 BUILD=${1:?usage: hollow.sh BUILD [normal|large]}
 MODE=${2:-normal}
@@ -21,10 +22,11 @@ mkdir -p "$TMP"
 
 CAP_S=${CAP_S:-300}
 
-run_one() { # name up alpha objective rounds fill
-	local name=$1 up=$2 alpha=$3 obj=$4 rounds=$5 fill=${6:-true} out="$TMP/$1_a$3_$4_r$5" rc
+run_one() { # name up alpha objective rounds fill [height_mm]
+	local name=$1 up=$2 alpha=$3 obj=$4 rounds=$5 fill=${6:-true} height=${7:-50}
+	local out="$TMP/$1_a$3_$4_r$5_h$height" rc
 	/usr/bin/time -f '%e %M' -o "$out.time" timeout -k 30 "$CAP_S" "$BIN" run \
-		"$SHARED/meshes/$name.off" -o "$out.sl1" --engine hollow --set height_mm=50 \
+		"$SHARED/meshes/$name.off" -o "$out.sl1" --engine hollow --set height_mm="$height" \
 		--set up="$up" --set alpha_deg="$alpha" --set objective="$obj" \
 		--set rounds="$rounds" --set fill="$fill" --set wall_mm=1.0 --set wall_next_mm=0.8 --threads 2 \
 		--quiet --metrics "$out.json"
@@ -35,7 +37,8 @@ run_one() { # name up alpha objective rounds fill
 		return 0
 	fi
 	[ $rc -eq 0 ] || { echo "$name: run failed ($rc)"; return 1; }
-	python3 - "$out.json" "$out.time" "$name" "$alpha" "$obj" "$rounds" <<'PY'
+	local label=$name; [ "$height" = 50 ] || label="$name@${height}mm"
+	python3 - "$out.json" "$out.time" "$label" "$alpha" "$obj" "$rounds" <<'PY'
 import json, sys
 m = json.load(open(sys.argv[1])); h = m["hollow"]
 wall, rss = open(sys.argv[2]).read().split()[-2:]
@@ -78,5 +81,7 @@ if [ "$MODE" = large ]; then
 		run_one "$1" "$2" 30 lightweight 0 true || status=1
 	done
 	run_one P y 45 stability 1 || status=1
+	# at 100 mm the letter reaches the offset hull H_r (docs/hollow.md)
+	run_one P y 45 stability 1 true 100 || status=1
 fi
 exit $status

@@ -3,7 +3,7 @@
 Drives the real binary (env INFILLD_BIN) and reads its metrics; the
 interior-overhang figure comes from engine/verify, which checks the very
 layer images written (independent of the optimiser).  Kept small for
-`make test`: a 12 mm cube, the letter P and a too-thin tetrahedron; the
+`make test`: a 12 mm cube, the letter P (50 and 100 mm) and a too-thin tetrahedron; the
 50 mm models run in `make bench` (tests/bench/hollow.sh).
 Standalone: python3 tests/hollow/test_hollow.py
 """
@@ -146,6 +146,26 @@ class HollowTest(unittest.TestCase):
         # stability's fill is selective
         lw = hollow(self.tmp.name, "P.off", height_mm=50, up="y", rounds=0)["hollow"]
         self.assertGreater(lw["volume_reduction"], h["volume_reduction"] + 0.1)
+
+    # The same letter at 100 mm: with 1 mm walls now half as thick relative
+    # to the letter, stability moves the projected centre of mass past the
+    # offset hull H_r (r = half the contact hull's inradius, the paper's
+    # margin), which the 50 mm letter cannot reach (docs/hollow.md).
+    # The fill alone (rounds=0) keeps the run short; it is the part of the
+    # pipeline that moves the centre of mass on this letter.
+    def test_P_reaches_offset_hull_at_100mm(self):
+        m = hollow(self.tmp.name, "P.off", height_mm=100, up="y", objective="stability",
+                   rounds=0)
+        h = m["hollow"]
+        self.assertFalse(h["stands_before"])
+        self.assertLess(h["com_before_mm"], 0)
+        self.assertTrue(h["com_inside_hull"], h)
+        self.assertGreater(h["com_after_mm"], h["hull_offset_mm"], h)
+        self.assertGreater(h["hull_offset_mm"], 4.0)
+        self.assertEqual(h["interior_overhang_mm2"], 0.0, h["verify"])
+        self.assertEqual(h["verify"]["islands"], 0)
+        self.assertGreaterEqual(h["min_wall_mm"], 1.0 - 0.06)
+        between_walls_ok(self, h["verify"])
 
 
 if __name__ == "__main__":
