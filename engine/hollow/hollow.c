@@ -12,6 +12,7 @@
 
 #include "engine/core/mem.h"
 #include "engine/geom/clip.h"
+#include "engine/hollow/fragments.h"
 #include "engine/hollow/rounds.h"
 #include "engine/mesh/mesh.h"
 #include "engine/slice/slice.h"
@@ -112,6 +113,7 @@ struct hollow_state {
 	struct raster_map own_map;
 	double layer_mm, alpha_deg, t_prepare, t_verify;
 	double min_wall_3d_mm;       /* void vertices to the outer surface */
+	struct hl_fill frag;         /* beads of the optimised voids, painted solid */
 	struct hl_config cfg;
 	int objective;
 };
@@ -263,6 +265,12 @@ static int hollow_prepare(const struct engine_ctx *ctx, const void *params, void
 		rc = slice_new(s->out.mesh, &s->slicer, e);
 	if (!rc)
 		rc = start_verify(s, s->out.mesh, e);
+	/* layer outputs print the pixels: beads split off the optimised voids
+	 * there are dropped like voids under min_void_mm3 (fragments.h) */
+	if (!rc && s->out.voids_optimised > 0 && (ctx->want_raster || ctx->want_region))
+		rc = hl_fragments_find(s->out.mesh, ctx->mesh->nv, ctx->mesh->nt,
+				       s->map ? s->map : &s->own_map, s->map ? s->antialias : 0,
+				       VERIFY_THRESHOLD, s->layer_mm, c->min_void_mm3, &s->frag, e);
 	if (rc) {
 		hollow_release(s);
 		return rc;
@@ -275,7 +283,7 @@ static int hollow_prepare(const struct engine_ctx *ctx, const void *params, void
 static int hollow_layer(void *state, struct layer *ly, struct err *e)
 {
 	struct hollow_state *s = state;
-	const struct hl_fill_layer *fill;
+	const struct hl_fill_layer *fill, *frag;
 	double t0;
 	int rc;
 
@@ -283,6 +291,7 @@ static int hollow_layer(void *state, struct layer *ly, struct err *e)
 	if (rc)
 		return rc;
 	fill = ly->region.n ? hl_fill_at(&s->out.fill, ly->z_mm) : NULL;
+	frag = ly->region.n ? hl_fill_at(&s->frag, ly->z_mm) : NULL;
 	/* the material left is designed: deposit all of it */
 	ly->fill = s->out.voids ? LAYER_FILL_SOLID : LAYER_FILL_PART;
 	t0 = progress_now_s();
@@ -290,8 +299,10 @@ static int hollow_layer(void *state, struct layer *ly, struct err *e)
 		/* render it here, as the writer would, so the check sees the
 		 * very pixels that are written */
 		rc = slice_rasterize(&ly->region, s->map, s->antialias, ly->raster, e);
+		if (!rc && frag)
+			hl_fill_paint(&s->frag, frag, ly->raster, 255);
 		if (!rc && fill)
-			hl_fill_clear(&s->out.fill, fill, ly->raster);
+			hl_fill_paint(&s->out.fill, fill, ly->raster, 0);
 		if (rc)
 			return rc;
 		ly->raster_ready = 1;
@@ -299,12 +310,24 @@ static int hollow_layer(void *state, struct layer *ly, struct err *e)
 	} else {
 		raster_clear(s->own);
 		rc = slice_rasterize(&ly->region, &s->own_map, 0, s->own, e);
+		if (!rc && frag)
+			hl_fill_paint(&s->frag, frag, s->own, 255);
 		if (!rc && fill)
-			hl_fill_clear(&s->out.fill, fill, s->own);
+			hl_fill_paint(&s->out.fill, fill, s->own, 0);
 		if (!rc)
 			rc = verify_layer(s->ver, s->own, e);
 	}
-	/* the region handed on (G-code, area metrics) loses the fill too */
+	/* the region handed on (G-code, area metrics) gains the fragments
+	 * and loses the fill too */
+	if (!rc && frag) {
+		struct paths fr;
+		paths_init(&fr);
+		rc = hl_fill_region(&s->frag, frag, &fr, e);
+		if (!rc)
+			rc = clip_boolean(CLIP_UNION, &ly->region, &fr, CLIP_FILL_NONZERO,
+					  &ly->region, e);
+		paths_fini(&fr);
+	}
 	if (!rc && fill) {
 		struct paths fr;
 		paths_init(&fr);
@@ -368,9 +391,14 @@ static int hollow_metrics(void *state, struct metrics *m, struct err *e)
 	}
 	rc |= metrics_int(m, "hollow.voids", (long long)o->voids);
 	rc |= metrics_int(m, "hollow.rounds", o->rounds);
+	/* the beads painted solid are not voids of what is printed */
 	rc |= metrics_num(m, "hollow.volume_reduction",
-			  o->part_volume_mm3 > 0 ? o->void_volume_mm3 / o->part_volume_mm3 : 0);
-	rc |= metrics_num(m, "hollow.void_volume_mm3", o->void_volume_mm3);
+			  o->part_volume_mm3 > 0
+				  ? (o->void_volume_mm3 - s->frag.volume_mm3) / o->part_volume_mm3
+				  : 0);
+	rc |= metrics_num(m, "hollow.void_volume_mm3", o->void_volume_mm3 - s->frag.volume_mm3);
+	rc |= metrics_int(m, "hollow.fragments", (long long)s->frag.voids);
+	rc |= metrics_num(m, "hollow.fragment_mm3", s->frag.volume_mm3);
 	rc |= metrics_num(m, "hollow.part_volume_mm3", o->part_volume_mm3);
 	rc |= metrics_num(m, "hollow.interior_overhang_mm2", s->rep.interior_overhang_mm2);
 	rc |= metrics_num(m, "hollow.min_wall_mm", fmin(s->rep.min_wall_mm, s->min_wall_3d_mm));
@@ -388,6 +416,11 @@ static int hollow_metrics(void *state, struct metrics *m, struct err *e)
 	rc |= metrics_int(m, "hollow.voids_fallback", (long long)o->voids_fallback);
 	rc |= metrics_int(m, "hollow.groups_failed", (long long)o->groups_failed);
 	rc |= metrics_int(m, "hollow.groups_small", (long long)o->groups_small);
+	rc |= metrics_int(m, "hollow.voids_too_close", (long long)o->voids_too_close);
+	rc |= metrics_num(m, "hollow.optimised_volume_mm3", o->opt_volume_mm3);
+	rc |= metrics_num(m, "hollow.fill_alone_volume_mm3", o->fill_alone_mm3);
+	rc |= metrics_num(m, "hollow.optimised_and_fill_volume_mm3", o->opt_fill_mm3);
+	rc |= metrics_int(m, "hollow.voids_dropped_for_fill", (long long)o->voids_dropped_for_fill);
 	rc |= metrics_num(m, "hollow.optimise_s", s->cfg.optimise_s);
 	if (o->has_com)
 		rc |= metrics_int(m, "hollow.voids_against_com", (long long)o->voids_against_com);
@@ -429,6 +462,7 @@ static void hollow_release(void *state)
 	if (!s)
 		return;
 	hl_outcome_fini(&s->out);
+	hl_fill_fini(&s->frag);
 	slice_free(s->slicer);
 	verify_free(s->ver);
 	verify_report_fini(&s->rep);

@@ -97,6 +97,7 @@ struct hl_void {
 	struct hl_xedge *xe;  /* cross edges between consecutive loops */
 	size_t nxe;
 	double *l;            /* nv: optimised offsets (mm), NULL before solving */
+	double *start;        /* nv: support-free start (restrip.c), NULL: start.c's sweep */
 	/* solver record */
 	int status;           /* 0 solved; < 0 failed (void dropped) */
 	int iterations;

@@ -750,7 +750,7 @@ static int nlp_setup(struct nlp *P, struct hl_void *v, size_t nvoid,
 			if (nn < 1e-12)
 				nn = 1e-12;
 			P->fsig[t] = 1 / nn;
-			P->fdel[t] = (getenv("HL_DEL") ? atof(getenv("HL_DEL")) : 1e-3) * nn;
+			P->fdel[t] = 1e-3 * nn;
 		}
 		P->vref = 0;
 		for (size_t k = 0; k < nloops; k++) {
@@ -866,23 +866,11 @@ static int solve_once(struct nlp *P, double *x, int *app_status, struct err *e)
 		goto out;
 	}
 	AddIpoptStrOption(ip, (char *)"sb", (char *)"yes");
-	AddIpoptIntOption(ip, (char *)"print_level", getenv("HL_DEBUG") ? 5 : 0);
+	AddIpoptIntOption(ip, (char *)"print_level", 0);
 	AddIpoptStrOption(ip, (char *)"linear_solver", (char *)"mumps");
 	AddIpoptStrOption(ip, (char *)"mu_strategy", (char *)"adaptive");
 	AddIpoptIntOption(ip, (char *)"max_iter", P->o->max_iter);
 	AddIpoptNumOption(ip, (char *)"tol", 1e-6);
-	if (getenv("HL_DERIV")) {
-		AddIpoptStrOption(ip, (char *)"derivative_test", (char *)"second-order");
-		AddIpoptIntOption(ip, (char *)"derivative_test_first_index", 0);
-		AddIpoptNumOption(ip, (char *)"derivative_test_perturbation", 1e-7);
-		AddIpoptNumOption(ip, (char *)"point_perturbation_radius", 0.1);
-	}
-	if (getenv("HL_TIMING"))
-		AddIpoptStrOption(ip, (char *)"print_timing_statistics", (char *)"yes");
-	if (getenv("HL_ORDER"))
-		AddIpoptIntOption(ip, (char *)"mumps_pivot_order", atoi(getenv("HL_ORDER")));
-	if (getenv("HL_MEMPCT"))
-		AddIpoptIntOption(ip, (char *)"mumps_mem_percent", atoi(getenv("HL_MEMPCT")));
 	AddIpoptNumOption(ip, (char *)"constr_viol_tol", 1e-6);
 	AddIpoptNumOption(ip, (char *)"acceptable_tol", 1e-4);
 	AddIpoptNumOption(ip, (char *)"max_cpu_time", cpu_limit_s(P->o));

@@ -21,6 +21,7 @@
 
 #include <math.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "engine/core/err.h"
@@ -30,6 +31,7 @@
 #include "engine/geom/polytri.h"
 #include "engine/hollow/hollow_int.h"
 #include "engine/hollow/solve.h"
+#include "engine/hollow/start.h"
 #include "engine/hollow/void.h"
 #include "engine/mesh/mesh.h"
 #include "engine/slice/erode.h"
@@ -243,6 +245,58 @@ static void voids_fini(struct hl_void *v, size_t n)
 }
 
 /* Steps 1-3: the voids of one round, unoptimised. */
+/* Voids of chain[a, b) (loops bottom to top): void.c builds upward until
+ * a pair of loops has no strip at offset 0 (the rest is the next void);
+ * restrip.c may then end a void higher up, and the loops below it, less
+ * `gap` loops under its floor (so the wall between the two voids is at
+ * least wall_next_mm), are a chain of their own. */
+struct chain_ctx {
+	const struct hl_block *blk;
+	double reach_mm;
+	size_t gap;
+	struct hl_void *vv;
+	size_t nvv, vcap;
+};
+
+static int chain_voids(struct chain_ctx *x, const struct hl_loop **chain, size_t a, size_t b,
+		       struct err *e)
+{
+	while (a + 1 < b) {
+		size_t used = 0, first = 0;
+		struct hl_void V;
+		void *arr;
+		int rc;
+		hl_void_init(&V);
+		rc = hl_void_build(chain + a, b - a, x->blk, &V, &used, e);
+		if (rc < 0)
+			return rc;
+		if (rc == 0)
+			rc = hl_void_restrip(&V, x->reach_mm, x->blk, &first, e);
+		if (rc < 0) {
+			hl_void_fini(&V);
+			return rc;
+		}
+		if (rc == 0) {
+			arr = x->vv;
+			if (mem_grow(&arr, &x->vcap, x->nvv + 1, sizeof *x->vv)) {
+				hl_void_fini(&V);
+				return ERR_SET(e, ERR_NOMEM, "hollow: out of memory");
+			}
+			x->vv = arr;
+			x->vv[x->nvv++] = V;
+		} else {
+			hl_void_fini(&V);
+		}
+		if (first >= x->gap + 2) {
+			rc = chain_voids(x, chain, a, a + first - x->gap, e);
+			if (rc)
+				return rc;
+		}
+		a += used > 0 ? used : 1;
+	}
+	return 0;
+}
+
 static int round_voids(const struct round_in *in, struct hl_outcome *o, struct hl_void **vout,
 		       size_t *nvout, struct err *e)
 {
@@ -344,39 +398,31 @@ static int round_voids(const struct round_in *in, struct hl_outcome *o, struct h
 		struct block_ctx bx = {bvh, in->wall, c->pixel_mm, 0.5 * in->wall};
 		struct hl_block blk = {blocked, &bx};
 		const struct hl_loop **chain = mem_alloc(((size_t)in->nslices + 1) * sizeof *chain);
+		struct chain_ctx cx = {&blk, 0.95 * in->nlp->h_mm * tan(in->nlp->alpha_rad), 0, vv,
+				       nvv, vcap};
+		double g = ceil(c->wall_next_mm / in->nlp->h_mm - 1e-9) - 1;
+		cx.gap = g > 0 ? (size_t)g : 0;
 		if (!chain)
 			goto nomem;
 		for (int k = 0; k < in->nslices; k++)
 			for (size_t a = 0; a < sl[k].n; a++) {
-				size_t len = 0, pos = 0;
+				size_t len = 0;
 				if (down[k][a] >= 0)
 					continue; /* not the bottom of a chain */
 				for (int kk = k, aa = (int)a; aa >= 0 && kk < in->nslices;
 				     aa = kk + 1 < in->nslices ? up[kk][aa] : -1, kk++)
 					chain[len++] = &sl[kk].loop[aa];
-				while (pos + 1 < len) {
-					size_t used = 0;
-					struct hl_void V;
-					void *arr;
-					hl_void_init(&V);
-					rc = hl_void_build(chain + pos, len - pos, &blk, &V, &used, e);
-					if (rc < 0) {
-						mem_free(chain);
-						goto out;
-					}
-					pos += used > 0 ? used : 1;
-					if (rc == 1)
-						continue;
-					arr = vv;
-					if (mem_grow(&arr, &vcap, nvv + 1, sizeof *vv)) {
-						hl_void_fini(&V);
-						mem_free(chain);
-						goto nomem;
-					}
-					vv = arr;
-					vv[nvv++] = V;
-				}
+				rc = chain_voids(&cx, chain, 0, len, e);
+				if (rc)
+					break;
 			}
+		vv = cx.vv;
+		nvv = cx.nvv;
+		vcap = cx.vcap;
+		if (rc) {
+			mem_free(chain);
+			goto out;
+		}
 		mem_free(chain);
 		rc = 0;
 	}
@@ -399,6 +445,93 @@ out:
 	paths_fini(&reg);
 	paths_fini(&tmp);
 	return rc;
+}
+
+/* Would voids a and b (at their offsets ->l) leave a wall thinner than
+ * d_mm?  In a slice both cross: the distance between their loops (vertex
+ * to edge, both ways; a vertex inside the other loop counts 0).  Stacked
+ * (one's bottom loop less than d_mm above the other's top loop): their
+ * bounding boxes grown by d_mm overlap.  Loops from one slice's region can
+ * lie a neck's width apart (contour.c opens necks narrower than s). */
+static void loop_box(const struct hl_void *v, size_t k, double box[4])
+{
+	box[0] = box[1] = INFINITY;
+	box[2] = box[3] = -INFINITY;
+	for (size_t j = v->off[k]; j < v->off[k + 1]; j++) {
+		struct vec3 p = hl_void_pos(v, j, v->l[j]);
+		box[0] = fmin(box[0], p.x);
+		box[1] = fmin(box[1], p.y);
+		box[2] = fmax(box[2], p.x);
+		box[3] = fmax(box[3], p.y);
+	}
+}
+
+static double loop_gap_mm(const struct hl_void *a, size_t ka, const struct hl_void *b, size_t kb)
+{
+	double best = INFINITY;
+
+	for (int pass = 0; pass < 2; pass++) {
+		const struct hl_void *u = pass ? b : a, *w = pass ? a : b;
+		size_t ku = pass ? kb : ka, kw = pass ? ka : kb, n = w->off[kw + 1] - w->off[kw];
+		for (size_t i = u->off[ku]; i < u->off[ku + 1]; i++) {
+			struct vec3 p = hl_void_pos(u, i, u->l[i]);
+			int in = 0;
+			for (size_t j = 0; j < n; j++) {
+				size_t j0 = w->off[kw] + j, j1 = w->off[kw] + (j + 1) % n;
+				struct vec3 q0 = hl_void_pos(w, j0, w->l[j0]), q1 = hl_void_pos(w, j1, w->l[j1]);
+				double dx = q1.x - q0.x, dy = q1.y - q0.y, L2 = dx * dx + dy * dy, t;
+				t = L2 > 0 ? ((p.x - q0.x) * dx + (p.y - q0.y) * dy) / L2 : 0;
+				t = fmin(1, fmax(0, t));
+				best = fmin(best, hypot(q0.x + t * dx - p.x, q0.y + t * dy - p.y));
+				if ((q0.y > p.y) != (q1.y > p.y) &&
+				    p.x < q0.x + dx * (p.y - q0.y) / dy)
+					in = !in;
+			}
+			if (in)
+				return 0;
+		}
+	}
+	return best;
+}
+
+static int voids_too_close(const struct hl_void *a, const struct hl_void *b, double d_mm)
+{
+	for (int pass = 0; pass < 2; pass++) {
+		const struct hl_void *u = pass ? b : a, *w = pass ? a : b;
+		double bu[4], bw[4];
+		/* w stacked above u */
+		if (w->z[0] > u->z[u->nloops - 1] && w->z[0] - u->z[u->nloops - 1] < d_mm) {
+			loop_box(u, u->nloops - 1, bu);
+			loop_box(w, 0, bw);
+			if (bu[0] - d_mm < bw[2] && bw[0] - d_mm < bu[2] && bu[1] - d_mm < bw[3] &&
+			    bw[1] - d_mm < bu[3])
+				return 1;
+		}
+	}
+	for (size_t ka = 0; ka < a->nloops; ka++)
+		for (size_t kb = 0; kb < b->nloops; kb++) {
+			double ba[4], bb[4], dz = fabs(a->z[ka] - b->z[kb]), r;
+			if (dz >= d_mm)
+				continue;
+			/* in-plane gap that with dz still makes a wall of d_mm */
+			r = sqrt(d_mm * d_mm - dz * dz);
+			loop_box(a, ka, ba);
+			loop_box(b, kb, bb);
+			if (ba[0] - r >= bb[2] || bb[0] - r >= ba[2] || ba[1] - r >= bb[3] ||
+			    bb[1] - r >= ba[3])
+				continue;
+			if (loop_gap_mm(a, ka, b, kb) < r)
+				return 1;
+		}
+	return 0;
+}
+
+static int cmp_void_volume_desc(const void *x, const void *y)
+{
+	const struct hl_void *a = x, *b = y;
+	double va = a->status >= 0 ? a->volume_mm3 : -1, vb = b->status >= 0 ? b->volume_mm3 : -1;
+
+	return (va < vb) - (va > vb);
 }
 
 /* (x, y) centroid of void v at its offsets v->l in eq. 12's prism
@@ -581,6 +714,7 @@ int hl_run(const struct mesh *part, const struct hl_config *c, struct progress *
 				      stack_count, r == 1 ? NULL : base, r == 1 ? base : NULL, &nlp};
 		struct hl_void *vv = NULL;
 		size_t nvv = 0, kept = 0;
+		unsigned char *kept_mask = NULL;
 		double f0 = (double)(r - 1) / c->rounds, f1 = (double)r / c->rounds, t0;
 
 		if (nlp.deadline_s > 0 && progress_now_s() >= nlp.deadline_s) {
@@ -613,6 +747,14 @@ int hl_run(const struct mesh *part, const struct hl_config *c, struct progress *
 			goto out;
 		}
 		t0 = progress_now_s();
+		/* larger voids first: a void too close to a kept one is dropped */
+		qsort(vv, nvv, sizeof *vv, cmp_void_volume_desc);
+		kept_mask = mem_calloc(nvv + 1, 1);
+		if (!kept_mask) {
+			voids_fini(vv, nvv);
+			rc = ERR_SET(e, ERR_NOMEM, "hollow: out of memory");
+			goto out;
+		}
 		for (size_t i = 0; i < nvv; i++) {
 			res.iterations += vv[i].iterations;
 			if (vv[i].status < 0) {
@@ -622,6 +764,16 @@ int hl_run(const struct mesh *part, const struct hl_config *c, struct progress *
 			if (vv[i].volume_mm3 < c->min_void_mm3) {
 				res.groups_small++;
 				continue;
+			}
+			{
+				int close = 0;
+				for (size_t j = 0; j < i && !close; j++)
+					close = kept_mask[j] &&
+						voids_too_close(&vv[i], &vv[j], c->wall_next_mm);
+				if (close) {
+					res.voids_too_close++;
+					continue;
+				}
 			}
 			/* stability: a void (solved jointly, or a fallback start) is
 			 * kept only if it does not move the centre of mass away from
@@ -649,12 +801,16 @@ int hl_run(const struct mesh *part, const struct hl_config *c, struct progress *
 			rc = append_void(res.mesh, &vv[i], e);
 			if (rc) {
 				voids_fini(vv, nvv);
+				mem_free(kept_mask);
 				goto out;
 			}
 			res.voids_fallback += vv[i].status == HL_STATUS_FALLBACK;
 			res.void_volume_mm3 += vv[i].volume_mm3;
+			kept_mask[i] = 1;
 			kept++;
 		}
+		mem_free(kept_mask);
+		kept_mask = NULL;
 		res.s_mesh += progress_now_s() - t0;
 		voids_fini(vv, nvv);
 		if (!kept)
@@ -663,6 +819,7 @@ int hl_run(const struct mesh *part, const struct hl_config *c, struct progress *
 		res.rounds = r;
 	}
 	res.voids_optimised = res.voids;
+	res.opt_volume_mm3 = res.void_volume_mm3;
 	if (c->fill && (c->objective == HL_OBJ_LIGHTWEIGHT || ntarget >= 3)) {
 		double t0 = progress_now_s();
 		rc = fill_run(part, c, target, ntarget, hull, nhull, res.hull_offset_mm, prog, &res, e);
@@ -670,6 +827,36 @@ int hl_run(const struct mesh *part, const struct hl_config *c, struct progress *
 			goto out;
 		res.voids += res.fill.voids;
 		res.void_volume_mm3 += res.fill.volume_mm3;
+		/* lightweight: the fill keeps wall_next_mm from the optimised
+		 * voids, and where they are smaller than what the fill alone
+		 * would carve there the pair hollows less; keep the larger */
+		if (!rc && res.voids_optimised > 0 && c->objective == HL_OBJ_LIGHTWEIGHT) {
+			struct hl_fill alone;
+			memset(&alone, 0, sizeof alone);
+			rc = hl_fill_build(part, NULL, c, prog, 0.95, 1.0, &alone, e);
+			if (rc)
+				goto out;
+			res.fill_alone_mm3 = alone.volume_mm3;
+			res.opt_fill_mm3 = res.void_volume_mm3;
+			if (alone.volume_mm3 > res.void_volume_mm3) {
+				struct mesh *pm = mesh_clone(part);
+				if (!pm) {
+					hl_fill_fini(&alone);
+					rc = ERR_SET(e, ERR_NOMEM, "hollow: out of memory");
+					goto out;
+				}
+				mesh_free(res.mesh);
+				res.mesh = pm;
+				hl_fill_fini(&res.fill);
+				res.fill = alone;
+				res.voids_dropped_for_fill = res.voids_optimised;
+				res.voids = alone.voids;
+				res.voids_optimised = res.voids_fallback = 0;
+				res.void_volume_mm3 = alone.volume_mm3;
+			} else {
+				hl_fill_fini(&alone);
+			}
+		}
 		res.s_fill = progress_now_s() - t0;
 	}
 	if (!res.voids && !res.note[0])

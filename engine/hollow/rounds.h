@@ -53,10 +53,19 @@ struct hl_outcome {
 	size_t voids_fallback;    /* voids kept at their support-free start */
 	size_t groups_failed;     /* optimised groups dropped (check failed) */
 	size_t groups_small;      /* dropped: below min_void_mm3 */
+	size_t voids_too_close;   /* dropped: within wall_next_mm of a larger void */
 	size_t voids_against_com; /* stability: optimised voids dropped because they
 				   * moved the centre of mass away from the target */
 	double part_volume_mm3;
 	double void_volume_mm3;
+	double opt_volume_mm3;    /* of the optimised voids (before the choice below) */
+	/* lightweight with the fill: the fill alone's volume (0 when not
+	 * built: no optimised void), the optimised voids and the fill around
+	 * them together, and the optimised voids dropped because the fill
+	 * alone hollows more */
+	double fill_alone_mm3;
+	double opt_fill_mm3;
+	size_t voids_dropped_for_fill;
 	struct hl_fill fill;      /* top-down fill (topdown.h); empty when off */
 	double opt_layer_mm;      /* h actually used */
 	double sample_mm;

@@ -12,6 +12,7 @@
  * O(cross edges).
  */
 #include <math.h>
+#include <string.h>
 
 #include "engine/core/err.h"
 #include "engine/core/mem.h"
@@ -32,9 +33,14 @@ static int ray_disc(double wx, double wy, double rx, double ry, double D, double
 
 int hl_void_support_start(const struct hl_void *v, double reach_mm, double *l, struct err *e)
 {
-	size_t *cnt = mem_calloc(v->nv + 1, sizeof *cnt), *adj = NULL;
+	size_t *cnt, *adj = NULL;
 	size_t top = v->nloops - 1;
 
+	if (v->start) {
+		memcpy(l, v->start, v->nv * sizeof *l);
+		return 0;
+	}
+	cnt = mem_calloc(v->nv + 1, sizeof *cnt);
 	if (!cnt)
 		return ERR_SET(e, ERR_NOMEM, "hollow: out of memory");
 	/* CSR of upward neighbours per lower vertex */

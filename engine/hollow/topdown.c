@@ -82,7 +82,8 @@ void hl_fill_mass(const struct hl_fill *f, double *vol_mm3, double cxy[2])
 	*vol_mm3 = cnt / det * f->layer_mm;
 }
 
-void hl_fill_clear(const struct hl_fill *f, const struct hl_fill_layer *l, struct raster *r)
+void hl_fill_paint(const struct hl_fill *f, const struct hl_fill_layer *l, struct raster *r,
+		   uint8_t val)
 {
 	for (size_t i = 0; i < l->n; i++) {
 		int v = f->v0 + l->run[i].y;
@@ -92,7 +93,7 @@ void hl_fill_clear(const struct hl_fill *f, const struct hl_fill_layer *l, struc
 		a = a < 0 ? 0 : a;
 		b = b >= r->w ? r->w - 1 : b;
 		if (a <= b)
-			memset(r->px + (size_t)v * r->stride + a, 0, (size_t)(b - a + 1));
+			memset(r->px + (size_t)v * r->stride + a, val, (size_t)(b - a + 1));
 	}
 }
 
@@ -287,7 +288,8 @@ static void row_starts(const struct hl_run *r, size_t n, int h, size_t *rs)
 	}
 }
 
-static int components(struct hl_fill *f, double min_mm3, double px_area_mm2, struct err *e)
+int hl_fill_components(struct hl_fill *f, double min_mm3, double px_area_mm2, int keep_small,
+		       struct err *e)
 {
 	size_t total = 0, *rs0 = NULL, *rs1 = NULL;
 	struct hl_run **at = NULL;
@@ -344,20 +346,20 @@ static int components(struct hl_fill *f, double min_mm3, double px_area_mm2, str
 	for (size_t i = 0; i < total; i++) {
 		if (at[i]->comp != i)
 			continue;
-		if (vol[i] < min_mm3) {
+		if ((vol[i] < min_mm3) != (keep_small != 0)) {
 			f->voids_small++;
 		} else {
 			f->voids++;
 			f->volume_mm3 += vol[i];
 		}
 	}
-	/* drop the small components' runs (void turned solid: the safe side);
-	 * every comp is a root now, so compacting keeps it valid */
+	/* drop the other components' runs; every comp is a root now, so
+	 * compacting keeps it valid */
 	for (int k = 0; k < f->n; k++) {
 		struct hl_fill_layer *L = &f->layer[k];
 		size_t w = 0;
 		for (size_t i = 0; i < L->n; i++)
-			if (vol[L->run[i].comp] >= min_mm3)
+			if ((vol[L->run[i].comp] < min_mm3) == (keep_small != 0))
 				L->run[w++] = L->run[i];
 		L->n = w;
 	}
@@ -370,16 +372,15 @@ out:
 	return rc;
 }
 
-/* Grid of map m over the part's box: *u0, *v0, *w, *h; pitches. */
-static int grid_of(const struct mesh *part, const struct raster_map *m, struct hl_fill *f,
-		   double *px, double *py, struct err *e)
+int hl_fill_grid(const struct vec3 *pts, size_t nv, const struct raster_map *m, struct hl_fill *f,
+		 double *px, double *py, struct err *e)
 {
 	struct box3 bb = box3_empty();
 	double det = m->a[0][0] * m->a[1][1] - m->a[0][1] * m->a[1][0];
 	double umin = INFINITY, umax = -INFINITY, vmin = INFINITY, vmax = -INFINITY;
 
-	for (size_t i = 0; i < part->nv; i++)
-		box3_add(&bb, part->v[i]);
+	for (size_t i = 0; i < nv; i++)
+		box3_add(&bb, pts[i]);
 	*px = hypot(m->a[1][1], m->a[1][0]) / fabs(det);
 	*py = hypot(m->a[0][1], m->a[0][0]) / fabs(det);
 	for (int q = 0; q < 4; q++) {
@@ -428,7 +429,7 @@ int hl_fill_build(const struct mesh *part, const struct mesh *solid, const struc
 	n = (int)ceil(bb.hi.z / L - 1e-9);
 	if (n < 1)
 		return 0;
-	rc = grid_of(part, m, &r, &g.px, &g.py, e);
+	rc = hl_fill_grid(part->v, part->nv, m, &r, &g.px, &g.py, e);
 	if (rc)
 		return rc;
 	r.n = n;
@@ -546,7 +547,7 @@ int hl_fill_build(const struct mesh *part, const struct mesh *solid, const struc
 		C[k].n = 0;
 	}
 	if (!rc)
-		rc = components(&r, c->min_void_mm3, g.px * g.py, e);
+		rc = hl_fill_components(&r, c->min_void_mm3, g.px * g.py, 0, e);
 	if (!rc) {
 		hl_fill_fini(f);
 		*f = r;

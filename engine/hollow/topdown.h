@@ -7,6 +7,7 @@
 #define INFILLD_HOLLOW_TOPDOWN_H
 
 #include <stddef.h>
+#include <stdint.h>
 
 #include "engine/geom/path.h"
 #include "engine/geom/raster.h"
@@ -66,9 +67,28 @@ int hl_src_layer(void *ctx, int k, struct paths *region, struct err *e);
  * borrowed, NULL when it has no void pixels. */
 const struct hl_fill_layer *hl_fill_at(const struct hl_fill *f, double z_mm);
 
-/* Clear (set to 0) the fill's void pixels of layer l in image r, drawn
- * through f->map: r must be an image of that map. */
-void hl_fill_clear(const struct hl_fill *f, const struct hl_fill_layer *l, struct raster *r);
+/* Set the pixels of layer l to val in image r (0: the fill's void
+ * cleared; 255: fragments painted solid), drawn through f->map: r must
+ * be an image of that map. */
+void hl_fill_paint(const struct hl_fill *f, const struct hl_fill_layer *l, struct raster *r,
+		   uint8_t val);
+
+/* Grid of map m over the box of pts[0..nv): f->u0, v0, w, h (2 pixels of
+ * margin); *px, *py the pitches (mm).  ERR_LIMIT past 65535 pixels a side
+ * or 2^28 pixels. */
+struct vec3;
+int hl_fill_grid(const struct vec3 *pts, size_t nv, const struct raster_map *m, struct hl_fill *f,
+		 double *px, double *py, struct err *e);
+
+/* Group f's runs into 3D components (4-connected in a layer, linked to
+ * the runs directly above and below: the verifier's void connectivity;
+ * px_area_mm2 x f->layer_mm per pixel) and keep the components of at
+ * least min_mm3 (keep_small 0: the fill drops small voids, void turned
+ * solid) or only those under it (keep_small 1: fragments.c).  f->voids
+ * and f->volume_mm3 count the kept components, f->voids_small the
+ * others.  0, ERR_NOMEM or ERR_LIMIT (over 2^32 runs). */
+int hl_fill_components(struct hl_fill *f, double min_mm3, double px_area_mm2, int keep_small,
+		       struct err *e);
 
 /* The fill's void of layer l as a region (nm, printer frame): contours at
  * half way between void and solid pixel centres.  Replaces *region. */

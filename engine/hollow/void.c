@@ -38,6 +38,7 @@ void hl_void_fini(struct hl_void *v)
 	mem_free(v->tri);
 	mem_free(v->xe);
 	mem_free(v->l);
+	mem_free(v->start);
 	memset(v, 0, sizeof *v);
 }
 

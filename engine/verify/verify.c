@@ -189,7 +189,7 @@ int verify_new(const struct verify_params *p, struct verify **out, struct err *e
 	if (v->p.tolerance_px == 0)
 		v->p.tolerance_px = 1;
 	if (v->p.threshold == 0)
-		v->p.threshold = 128;
+		v->p.threshold = VERIFY_THRESHOLD;
 	if (v->p.speck_voxels == 0)
 		v->p.speck_voxels = VERIFY_SPECK_VOXELS;
 	pmin = fmin(p->pixel_x_mm, p->pixel_y_mm);

@@ -46,6 +46,8 @@ struct verify_params {
 
 /* Default speck size: a 2 x 2 x 2 voxel pocket. */
 #define VERIFY_SPECK_VOXELS 8
+/* Default threshold: gray >= 128 is solid. */
+#define VERIFY_THRESHOLD 128
 
 struct verify_report {
 	int layers;

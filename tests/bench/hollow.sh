@@ -45,6 +45,9 @@ wall, rss = open(sys.argv[2]).read().split()[-2:]
 extra = ""
 if "com_before_mm" in h:
     extra = " com %+.2f -> %+.2f mm inside_hull %s" % (h["com_before_mm"], h["com_after_mm"], h["com_inside_hull"])
+if h.get("voids_dropped_for_fill"):
+    extra += "  (optimiser's %d voids + fill: %.1f %%, fill alone kept)" % (
+        h["voids_dropped_for_fill"], 100 * h["optimised_and_fill_volume_mm3"] / h["part_volume_mm3"])
 between = h["verify"]["min_wall_between_mm"]
 print("%-10s a=%-2s %-11s rounds<=%-2s %5.1f %%  %9.4f  %3d (%3d+%3d)  %6d  %5.2f %5s  %6.2f %6.3f  %7.1f (opt %6.1f fill %6.1f)  %5d%s%s"
       % (sys.argv[3], sys.argv[4], sys.argv[5], sys.argv[6], 100 * h["volume_reduction"],
