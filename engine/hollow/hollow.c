@@ -79,7 +79,8 @@ static const struct param_desc hollow_desc[] = {
 	 .min = 0, .max = 1, .def = 1, .unit = "",
 	 .help = "After the optimised voids, hollow the space they left with the top-down "
 		 "support-free fill, designed on the layer pixels (docs/hollow.md; layer outputs "
-		 "only: mesh outputs carry the optimised voids alone). stability: only behind the "
+		 "only: mesh outputs carry the optimised voids alone). lightweight: the fill alone "
+		 "is built too, and kept when it hollows more. stability: only behind the "
 		 "centre of mass, away from the contact area."},
 	{.name = "lean_walls", .type = PARAM_BOOL,
 	 .offset = offsetof(struct hollow_params, lean_walls), .min = 0, .max = 1, .def = 1,
