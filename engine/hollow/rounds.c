@@ -850,6 +850,7 @@ int hl_run(const struct mesh *part, const struct hl_config *c, struct progress *
 				hl_fill_fini(&res.fill);
 				res.fill = alone;
 				res.voids_dropped_for_fill = res.voids_optimised;
+				res.rounds = 0; /* no optimised round is in the output */
 				res.voids = alone.voids;
 				res.voids_optimised = res.voids_fallback = 0;
 				res.void_volume_mm3 = alone.volume_mm3;

@@ -46,7 +46,7 @@ struct hl_config {
 
 struct hl_outcome {
 	struct mesh *mesh;        /* outer surface + void surfaces (owned) */
-	int rounds;               /* rounds that added voids */
+	int rounds;               /* rounds whose voids are in the output (0: fill alone kept) */
 	int budget_spent;         /* the optimise_s budget cut the rounds short */
 	size_t voids;             /* optimised (mesh) voids + fill components */
 	size_t voids_optimised;   /* of them: made by the optimiser (or its start) */

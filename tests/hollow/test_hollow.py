@@ -91,6 +91,7 @@ class HollowTest(unittest.TestCase):
         if alone > both:
             self.assertEqual(h["voids_optimised"], 0)
             self.assertGreaterEqual(h["voids_dropped_for_fill"], 1)
+            self.assertEqual(h["rounds"], 0)  # no optimised round is in the output
             self.assertAlmostEqual(h["volume_reduction"], alone / h["part_volume_mm3"],
                                    delta=1e-9)
         self.assertEqual(h["interior_overhang_mm2"], 0.0, h["verify"])
