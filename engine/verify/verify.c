@@ -54,6 +54,7 @@
 #include "engine/core/metrics.h"
 #include "engine/geom/edt.h"
 #include "engine/verify/between.h"
+#include "engine/verify/fins.h"
 
 #define VX_OUT 1u /* union-find id of the outside */
 #define VX_FIN_PX 2 /* fins and shelves: solid runs of at most this many pixels / layers */
@@ -111,7 +112,9 @@ struct verify {
 	size_t ext_cap;
 	double *cnt;          /* per-component pixel counts */
 	size_t cnt_cap;
-	double *fcnt;         /* per-component fin pixel counts */
+	double *fcnt;         /* per-component fin, then sliver, pixel counts */
+	struct verify_fins vf;
+	struct recs sliver;   /* fin pixels standing free (fins.h) */
 	size_t fcnt_cap;
 	size_t scratch_cap;
 	struct edt_scratch es;
@@ -145,6 +148,8 @@ void verify_free(struct verify *v)
 	mem_free(v->vol.v);
 	mem_free(v->vwall.v);
 	mem_free(v->fin.v);
+	mem_free(v->sliver.v);
+	verify_fins_fini(&v->vf);
 	mem_free(v->between.v);
 	mem_free(v->shelf.v);
 	verify_between_fini(&v->vb);
@@ -200,6 +205,7 @@ int verify_new(const struct verify_params *p, struct verify **out, struct err *e
 	v->cur = &v->b;
 	edt_scratch_init(&v->es);
 	verify_between_init(&v->vb);
+	verify_fins_init(&v->vf);
 	v->r.worst_layer = -1;
 	v->r.first_island_layer = -1;
 	v->r.min_wall_mm = INFINITY;
@@ -475,44 +481,6 @@ static int prev_enclosed(const struct verify *v, uint32_t id)
 	       v->prev_enc[id - v->prev_first];
 }
 
-/* Void label of crop pixel (x, y), VX_OUT outside the crop, 0 on solid. */
-static uint32_t crop_void(const struct crop *c, int x, int y)
-{
-	size_t i;
-
-	if (x < 0 || y < 0 || x >= c->w || y >= c->h)
-		return VX_OUT;
-	i = (size_t)y * (size_t)c->w + (size_t)x;
-	return c->solid[i] ? 0 : c->lab[i];
-}
-
-/* Fins: whether solid crop pixel (x, y) lies in a solid run of at most
- * VX_FIN_PX pixels along a row, a column or a diagonal whose two ends are
- * void pixels of 2D-enclosed components; *end = one end's component. */
-static int fin_pixel(const struct verify *v, const struct crop *c, int x, int y, uint32_t *end)
-{
-	static const int dir[4][2] = {{1, 0}, {0, 1}, {1, 1}, {1, -1}};
-
-	for (int q = 0; q < 4; q++) {
-		int dx = dir[q][0], dy = dir[q][1], b = 1, f = 1;
-		uint32_t la, lb;
-		while (b <= VX_FIN_PX && !crop_void(c, x - b * dx, y - b * dy))
-			b++;
-		while (f <= VX_FIN_PX && !crop_void(c, x + f * dx, y + f * dy))
-			f++;
-		if (b + f - 1 > VX_FIN_PX)
-			continue;
-		la = crop_void(c, x - b * dx, y - b * dy);
-		lb = crop_void(c, x + f * dx, y + f * dy);
-		if (la != VX_OUT && lb != VX_OUT && v->enc[la - v->cur_first] &&
-		    v->enc[lb - v->cur_first]) {
-			*end = la;
-			return 1;
-		}
-	}
-	return 0;
-}
-
 /* In-layer walls between two 2D-enclosed void components of the current
  * crop: every void pixel is a seed (the outside too, so two cavities
  * with the outside between them are no pair); pairs of enclosed
@@ -749,20 +717,18 @@ int verify_layer(struct verify *v, const struct raster *r, struct err *e)
 			}
 			/* fins: solid runs of <= VX_FIN_PX pixels between enclosed
 			 * voids (resolved in 3D in verify_finish) */
-			if (grow_bytes((void **)&v->fcnt, &v->fcnt_cap, ncomp * sizeof *v->fcnt))
+			if (grow_bytes((void **)&v->fcnt, &v->fcnt_cap, 2 * ncomp * sizeof *v->fcnt))
 				goto nomem;
-			for (uint32_t k = 0; k < ncomp; k++)
+			for (uint32_t k = 0; k < 2 * ncomp; k++)
 				v->fcnt[k] = 0;
-			for (int y = 0; y < c->h; y++)
-				for (int x = 0; x < c->w; x++) {
-					uint32_t end;
-					if (c->solid[(size_t)y * (size_t)c->w + (size_t)x] &&
-					    fin_pixel(v, c, x, y, &end))
-						v->fcnt[end - v->cur_first] += 1;
-				}
+			if (verify_fins(c->solid, c->lab, c->w, c->h, VX_OUT, v->enc, v->cur_first,
+					VX_FIN_PX, v->fcnt, v->fcnt + ncomp, &v->vf, e))
+				goto fail;
 			for (uint32_t k = 0; k < ncomp; k++)
-				if (v->fcnt[k] > 0 &&
-				    rec_add(&v->fin, v->cur_first + k, layer, v->fcnt[k]))
+				if ((v->fcnt[k] > 0 &&
+				     rec_add(&v->fin, v->cur_first + k, layer, v->fcnt[k])) ||
+				    (v->fcnt[ncomp + k] > 0 &&
+				     rec_add(&v->sliver, v->cur_first + k, layer, v->fcnt[ncomp + k])))
 					goto nomem;
 			if (nenc >= 2 && walls_between(v, layer, e))
 				goto fail;
@@ -886,6 +852,10 @@ int verify_finish(struct verify *v, struct verify_report *out, struct err *e)
 		if (uf_find(v, v->fin.v[k].id) != VX_OUT)
 			v->r.fin_px += (long long)v->fin.v[k].val;
 	v->r.fin_mm3 = (double)v->r.fin_px * pa * v->p.layer_mm;
+	for (size_t k = 0; k < v->sliver.n; k++)
+		if (uf_find(v, v->sliver.v[k].id) != VX_OUT)
+			v->r.sliver_px += (long long)v->sliver.v[k].val;
+	v->r.sliver_mm3 = (double)v->r.sliver_px * pa * v->p.layer_mm;
 	for (size_t k = 0; k < v->shelf.n; k++)
 		if (uf_find(v, v->shelf.v[k].id) != VX_OUT && uf_find(v, v->shelf.v[k].id2) != VX_OUT)
 			v->r.shelf_px += (long long)v->shelf.v[k].val;
@@ -969,6 +939,8 @@ int verify_report_metrics(const struct verify_report *r, const char *prefix, str
 	rc |= metrics_num(m, KEY("min_wall_between_vertical_mm"), r->min_wall_between_vertical_mm);
 	rc |= metrics_int(m, KEY("fin_px"), r->fin_px);
 	rc |= metrics_num(m, KEY("fin_mm3"), r->fin_mm3);
+	rc |= metrics_int(m, KEY("sliver_px"), r->sliver_px);
+	rc |= metrics_num(m, KEY("sliver_mm3"), r->sliver_mm3);
 	rc |= metrics_int(m, KEY("shelf_px"), r->shelf_px);
 	rc |= metrics_num(m, KEY("shelf_mm3"), r->shelf_mm3);
 	rc |= metrics_int(m, KEY("layers"), r->layers);

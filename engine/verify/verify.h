@@ -79,6 +79,10 @@ struct verify_report {
 	 * one); a convex tip of thicker solid adds a pixel or two */
 	long long fin_px;
 	double fin_mm3;               /* fin_px as volume (pixel area x layer height) */
+	/* slivers: fin pixels none of whose solid 4-neighbours is solid
+	 * beyond the fins (fins.h): standing free, not a bump on a wall */
+	long long sliver_px;
+	double sliver_mm3;
 	/* walls between two cavities (enclosed 3D void components, neither
 	 * a speck; a partition inside one cavity is not one): in-layer, the
 	 * centre distance between their nearest pixels less one pixel, an

@@ -3,7 +3,8 @@
 # shared meshes at 50 mm, alpha 45, walls 1.0 / 0.8 mm, SL1 output checked by
 # the layer verifier: volume reduction, interior overhang (must be 0), voids,
 # rounds, minimum wall (to the outside; between two voids in the layer, verify
-# min_wall_between_mm), fins (verify fin_mm3: solid 1-2 px thick between voids) and
+# min_wall_between_mm), fins (verify fin_mm3: solid 1-2 px thick between voids;
+# sliver_mm3: those of them standing free, not attached to thicker solid) and
 # shelves (shelf_mm3: 1-2 layers thick between voids), time,
 # peak RSS.  Paper's Table 1: 53-77 % reduction, 17-60 min.
 # normal: the top-down fill alone (rounds=0 fill=true) and the default
@@ -54,18 +55,18 @@ if h.get("voids_dropped_for_fill"):
     extra += "  (optimiser's %d voids + fill: %.1f %%, fill alone kept)" % (
         h["voids_dropped_for_fill"], 100 * h["optimised_and_fill_volume_mm3"] / h["part_volume_mm3"])
 between = h["verify"]["min_wall_between_mm"]
-print("%-10s a=%-2s %-11s rounds<=%-2s %5.1f %%  %9.4f  %3d (%3d+%3d)  %6d  %5.2f %5s  %6.2f %6.3f  %7.1f (opt %6.1f fill %6.1f)  %5d%s%s"
+print("%-10s a=%-2s %-11s rounds<=%-2s %5.1f %%  %9.4f  %3d (%3d+%3d)  %6d  %5.2f %5s  %6.2f %6.3f %6.3f  %7.1f (opt %6.1f fill %6.1f)  %5d%s%s"
       % (sys.argv[3], sys.argv[4], sys.argv[5], sys.argv[6], 100 * h["volume_reduction"],
          h["interior_overhang_mm2"], h["voids"], h["voids_optimised"], h["voids_fill"],
          h["rounds"], h["min_wall_mm"], "-" if between is None else "%.2f" % between,
-         h["verify"]["fin_mm3"], h["verify"]["shelf_mm3"], float(wall), h["seconds"]["optimise"],
+         h["verify"]["fin_mm3"], h["verify"]["sliver_mm3"], h["verify"]["shelf_mm3"], float(wall), h["seconds"]["optimise"],
          h["seconds"]["fill"], int(rss) // 1024,
          extra, ("  note: " + h["note"]) if "note" in h else ""))
 PY
 }
 
 echo "50 mm, walls t = 1.0 / 0.8 mm, SL1, 2 threads; overhang by engine/verify on the layers"
-echo "model      alpha objective   rounds    reduction overhang  voids(opt+fill) rounds minwall between fin shelf mm3 time s                        RSS MB"
+echo "model      alpha objective   rounds    reduction overhang  voids(opt+fill) rounds minwall between fin sliver shelf mm3 time s                 RSS MB"
 
 status=0
 # cow and elephant stand on +y (their z-up placement is wider than the SL1 display)

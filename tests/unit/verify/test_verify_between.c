@@ -5,7 +5,8 @@
  * are no pair; a cavity over another with a floor of N layers reads N
  * layers and, up to 2 layers, is a shelf; a speck beside a cavity is
  * kept out; random discs read the
- * brute-force nearest pixel pair's distance.
+ * brute-force nearest pixel pair's distance; thin partitions are fins and,
+ * but for their ends, slivers, where a bump on a wall is a fin only.
  */
 #include "harness.h"
 
@@ -277,6 +278,46 @@ static void test_random_discs(void)
 	}
 }
 
+/* Fins and slivers: a partition of 1 or 2 columns between the two
+ * cavities of `partition` stands free between them except its end pixels,
+ * which touch the box's solid: 40 fin pixels a column per layer, of which
+ * 38 slivers.  A 3-column partition is no fin. */
+static void test_slivers(void)
+{
+	for (int w = 1; w <= 3; w++) {
+		struct part p = {w, 0};
+		struct verify_report rep;
+		run_stack(partition, &p, 12, &rep);
+		CHECK_EQ_INT((int)rep.fin_px, w <= 2 ? 6 * 40 * w : 0);
+		CHECK_EQ_INT((int)rep.sliver_px, w <= 2 ? 6 * 38 * w : 0);
+		CHECK_NEAR(rep.sliver_mm3, (double)rep.sliver_px * PX * PX * LAYER, 1e-12);
+		verify_report_fini(&rep);
+	}
+}
+
+/* One cavity [20, 60)^2 on layers 3..8 with a pixel bump on its left wall
+ * at (20, 40): solid between void above and below it, a fin pixel, but
+ * attached along its side to the wall, no sliver. */
+static int bump(int i, int j, int k, const void *arg)
+{
+	(void)arg;
+	if (!in_box(i, j, 10, 10, 70, 70))
+		return 0;
+	if (k < 3 || k > 8 || !in_box(i, j, 20, 20, 60, 60))
+		return 1;
+	return i == 20 && j == 40;
+}
+
+static void test_bump_is_no_sliver(void)
+{
+	struct verify_report rep;
+
+	run_stack(bump, NULL, 12, &rep);
+	CHECK_EQ_INT((int)rep.fin_px, 6);
+	CHECK_EQ_INT((int)rep.sliver_px, 0);
+	verify_report_fini(&rep);
+}
+
 int main(void)
 {
 	RUN(test_partition);
@@ -286,5 +327,7 @@ int main(void)
 	RUN(test_shelf_in_one_cavity);
 	RUN(test_speck_is_no_cavity);
 	RUN(test_random_discs);
+	RUN(test_slivers);
+	RUN(test_bump_is_no_sliver);
 	return harness_report();
 }
