@@ -747,8 +747,10 @@ int hl_run(const struct mesh *part, const struct hl_config *c, struct progress *
 			goto out;
 		}
 		t0 = progress_now_s();
-		/* larger voids first: a void too close to a kept one is dropped */
-		qsort(vv, nvv, sizeof *vv, cmp_void_volume_desc);
+		/* larger voids first: a void too close to a kept one is dropped
+		 * (no void: vv may be NULL, which qsort must not see) */
+		if (nvv > 1)
+			qsort(vv, nvv, sizeof *vv, cmp_void_volume_desc);
 		kept_mask = mem_calloc(nvv + 1, 1);
 		if (!kept_mask) {
 			voids_fini(vv, nvv);
