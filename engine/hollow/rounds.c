@@ -20,6 +20,8 @@
 #include "engine/hollow/rounds.h"
 
 #include <math.h>
+#include <pthread.h>
+#include <stdatomic.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -577,6 +579,34 @@ static struct hull_pt com_after(const struct hl_outcome *o)
 	return q;
 }
 
+/* The fill alone (step 9's other candidate) on a helper thread, while the
+ * job thread fills around the optimised voids: the two are independent
+ * (both read the part and the config only).  The helper has a private
+ * progress record whose cancel hook is the flag the job thread raises
+ * when its own fill stops (progress.h: helpers never touch the job's). */
+struct alone_job {
+	const struct mesh *part;
+	const struct hl_config *c;
+	struct hl_fill fill;
+	struct progress prog;
+	struct err e;
+	atomic_int stop;
+	int rc;
+};
+
+static int alone_cancelled(void *ctx)
+{
+	return atomic_load(&((struct alone_job *)ctx)->stop);
+}
+
+static void *alone_main(void *arg)
+{
+	struct alone_job *j = arg;
+
+	j->rc = hl_fill_build(j->part, NULL, j->c, &j->prog, 0, 1, &j->fill, &j->e);
+	return NULL;
+}
+
 /* The top-down fill of what the optimiser left (o->mesh holds its voids).
  * Lightweight: everywhere.  Stability (target: the goal region, hull: the
  * contact hull, r: its offset): removing mass at p moves the centre of
@@ -824,9 +854,37 @@ int hl_run(const struct mesh *part, const struct hl_config *c, struct progress *
 	res.opt_volume_mm3 = res.void_volume_mm3;
 	if (c->fill && (c->objective == HL_OBJ_LIGHTWEIGHT || ntarget >= 3)) {
 		double t0 = progress_now_s();
+		int both = res.voids_optimised > 0 && c->objective == HL_OBJ_LIGHTWEIGHT;
+		struct alone_job *aj = NULL;
+		pthread_t th;
+		if (both && c->threads >= 2 && (aj = mem_calloc(1, sizeof *aj)) != NULL) {
+			struct progress_hooks hk = {NULL, alone_cancelled, aj};
+			aj->part = part;
+			aj->c = c;
+			err_clear(&aj->e);
+			atomic_init(&aj->stop, 0);
+			progress_init(&aj->prog, &hk);
+			if (pthread_create(&th, NULL, alone_main, aj) != 0) {
+				mem_free(aj); /* no thread: the fill alone runs after, here */
+				aj = NULL;
+			}
+		}
 		rc = fill_run(part, c, target, ntarget, hull, nhull, res.hull_offset_mm, prog, &res, e);
-		if (rc)
+		if (aj) {
+			if (rc)
+				atomic_store(&aj->stop, 1);
+			pthread_join(th, NULL);
+			if (!rc && aj->rc) {
+				*e = aj->e;
+				rc = aj->rc;
+			}
+			if (rc)
+				hl_fill_fini(&aj->fill);
+		}
+		if (rc) {
+			mem_free(aj);
 			goto out;
+		}
 		res.voids += res.fill.voids;
 		res.void_volume_mm3 += res.fill.volume_mm3;
 		/* lightweight: the fill keeps wall_next_mm from the optimised
@@ -834,10 +892,16 @@ int hl_run(const struct mesh *part, const struct hl_config *c, struct progress *
 		 * would carve there the pair hollows less; keep the larger */
 		if (!rc && res.voids_optimised > 0 && c->objective == HL_OBJ_LIGHTWEIGHT) {
 			struct hl_fill alone;
-			memset(&alone, 0, sizeof alone);
-			rc = hl_fill_build(part, NULL, c, prog, 0.95, 1.0, &alone, e);
-			if (rc)
-				goto out;
+			if (aj) {
+				alone = aj->fill;
+				mem_free(aj);
+				aj = NULL;
+			} else {
+				memset(&alone, 0, sizeof alone);
+				rc = hl_fill_build(part, NULL, c, prog, 0.95, 1.0, &alone, e);
+				if (rc)
+					goto out;
+			}
 			res.fill_alone_mm3 = alone.volume_mm3;
 			res.opt_fill_mm3 = res.void_volume_mm3;
 			if (alone.volume_mm3 > res.void_volume_mm3) {
@@ -859,6 +923,10 @@ int hl_run(const struct mesh *part, const struct hl_config *c, struct progress *
 			} else {
 				hl_fill_fini(&alone);
 			}
+		}
+		if (aj) { /* not taken above (cannot happen: same condition) */
+			hl_fill_fini(&aj->fill);
+			mem_free(aj);
 		}
 		res.s_fill = progress_now_s() - t0;
 	}

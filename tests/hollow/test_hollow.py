@@ -19,11 +19,11 @@ SHARED = os.environ.get("INFILLD_SHARED", os.path.join(ROOT, "..", "shared"))
 MESHES = os.path.join(SHARED, "meshes")
 
 
-def hollow(tmp, mesh, fmt="sl1", **sets):
+def hollow(tmp, mesh, fmt="sl1", threads=2, **sets):
     out = os.path.join(tmp, "out." + fmt)
     met = os.path.join(tmp, "m.json")
     args = [BIN, "run", os.path.join(MESHES, mesh), "-o", out, "--engine", "hollow",
-            "--format", fmt, "--threads", "2", "--quiet", "--metrics", met]
+            "--format", fmt, "--threads", str(threads), "--quiet", "--metrics", met]
     for k, v in sets.items():
         args += ["--set", f"{k}={v}"]
     p = subprocess.run(args, capture_output=True, text=True, timeout=900)
@@ -95,6 +95,15 @@ class HollowTest(unittest.TestCase):
             self.assertAlmostEqual(h["volume_reduction"], alone / h["part_volume_mm3"],
                                    delta=1e-9)
         self.assertEqual(h["interior_overhang_mm2"], 0.0, h["verify"])
+        # with 2 threads the fill alone runs on a helper thread beside the
+        # fill around the optimised voids; on one thread they run in turn:
+        # the same two candidates, the same choice
+        m1 = hollow(self.tmp.name, "misc/cube.ascii.stl", threads=1, height_mm=12, rounds=1,
+                    optimise_s=0)
+        h1 = m1["hollow"]
+        for k in ("fill_alone_volume_mm3", "optimised_and_fill_volume_mm3", "void_volume_mm3",
+                  "voids", "voids_dropped_for_fill"):
+            self.assertEqual(h1[k], h[k], k)
 
     def test_cube_fill_alone_at_45_and_30(self):
         # the top-down fill alone (rounds=0): support-free on the very
