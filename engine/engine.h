@@ -50,7 +50,8 @@ struct engine_ctx {
 	double layer_mm;                   /* resolved layer height */
 	int threads;                       /* worker threads the engine may use */
 	int want_raster;                   /* output consumes pixels */
-	int want_region;                   /* output consumes polygons */
+	int want_region;                   /* output consumes polygons (G-code);
+					      a mesh output consumes neither */
 	const struct raster_map *map;      /* pixel map when want_raster */
 	struct progress *progress;         /* stage already set to "prepare" */
 	const char *scratch_dir;           /* where engines may keep unlinked temporary

@@ -8,6 +8,7 @@
 
 #include <math.h>
 #include <stddef.h>
+#include <stdio.h>
 #include <string.h>
 
 #include "engine/core/mem.h"
@@ -121,6 +122,7 @@ struct hollow_state {
 	struct hl_fill frag;         /* beads of the optimised voids, painted solid */
 	struct hl_config cfg;
 	int objective;
+	int fill_not_applied;        /* fill=true asked, but the output is a mesh */
 };
 
 static int hollow_validate(const void *params, const struct common_params *common,
@@ -267,6 +269,7 @@ static int hollow_prepare(const struct engine_ctx *ctx, const void *params, void
 	c->print_layer_mm = ctx->layer_mm;
 	/* the fill lives in the layers: a mesh output could not carry it */
 	c->fill = p->fill && (ctx->want_raster || ctx->want_region);
+	s->fill_not_applied = p->fill && !c->fill;
 	c->fill_lean = p->lean_walls;
 	/* the fill is designed on the pixels the verifier reads */
 	if (s->map)
@@ -519,8 +522,17 @@ static int hollow_metrics(void *state, struct metrics *m, struct err *e)
 	rc |= metrics_num(m, "hollow.seconds.fill", o->s_fill);
 	rc |= metrics_num(m, "hollow.seconds.prepare", s->t_prepare);
 	rc |= metrics_num(m, "hollow.seconds.verify", s->t_verify);
-	if (o->note[0])
+	rc |= metrics_bool(m, "hollow.fill_applied", s->cfg.fill);
+	if (s->fill_not_applied) {
+		/* say so: the same job as SL1 or G-code would hollow far more */
+		char note[sizeof o->note + 160];
+		snprintf(note, sizeof note, "%s%sfill=true applies to layer outputs (sl1, zip, "
+			 "gcode) only: this mesh carries the optimised voids alone",
+			 o->note, o->note[0] ? "; " : "");
+		rc |= metrics_str(m, "hollow.note", note);
+	} else if (o->note[0]) {
 		rc |= metrics_str(m, "hollow.note", o->note);
+	}
 	if (o->has_com) {
 		rc |= metrics_num(m, "hollow.com_before_mm", o->com_before_mm);
 		rc |= metrics_num(m, "hollow.com_after_mm", o->com_after_mm);

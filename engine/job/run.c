@@ -277,7 +277,8 @@ int engine_run(const struct job_spec *js, struct sink *out, const struct progres
 	ctx.layer_mm = layer_mm;
 	ctx.threads = threads;
 	ctx.want_raster = out_format_is_raster(js->format);
-	ctx.want_region = js->format == OUT_GCODE || !ctx.want_raster;
+	/* a mesh output (stl, obj) consumes neither: it has no layers */
+	ctx.want_region = !ctx.want_raster && !out_format_is_mesh(js->format);
 	ctx.map = ctx.want_raster ? &map : NULL;
 	ctx.progress = &prog;
 	ctx.scratch_dir = js->scratch_dir;

@@ -9,6 +9,7 @@ Standalone: python3 tests/hollow/test_hollow.py
 """
 import json
 import os
+import struct
 import subprocess
 import tempfile
 import unittest
@@ -31,6 +32,21 @@ def hollow(tmp, mesh, fmt="sl1", threads=2, **sets):
         raise AssertionError(f"{' '.join(args)}: {p.stderr}")
     with open(met) as f:
         return json.load(f)
+
+
+def stl_volume_mm3(path):
+    """Signed volume of a binary STL (divergence theorem over its
+    triangles), read here, independently of the engine."""
+    with open(path, "rb") as f:
+        d = f.read()
+    n = struct.unpack_from("<I", d, 80)[0]
+    vol = 0.0
+    for i in range(n):
+        v = struct.unpack_from("<9f", d, 84 + 50 * i + 12)
+        a, b, c = v[0:3], v[3:6], v[6:9]
+        vol += (a[0] * (b[1] * c[2] - b[2] * c[1]) - a[1] * (b[0] * c[2] - b[2] * c[0]) +
+                a[2] * (b[0] * c[1] - b[1] * c[0])) / 6
+    return vol
 
 
 def between_walls_ok(t, v):
@@ -117,6 +133,8 @@ class HollowTest(unittest.TestCase):
             res[a] = h
             self.assertGreaterEqual(h["voids_fill"], 1)
             self.assertEqual(h["voids_optimised"], 0)
+            self.assertTrue(h["fill_applied"])
+            self.assertNotIn("note", h)
             self.assertEqual(h["interior_overhang_mm2"], 0.0, h["verify"])
             self.assertEqual(h["verify"]["islands"], 0)
             self.assertGreaterEqual(h["verify"]["min_wall_mm"], 1.0 - 0.06)
@@ -134,8 +152,28 @@ class HollowTest(unittest.TestCase):
         h = m["hollow"]
         self.assertEqual(h["voids"], 0)
         self.assertIn("too thin", h["note"])
+        # a mesh output cannot carry the layer fill, and says so
+        self.assertFalse(h["fill_applied"])
+        self.assertIn("layer outputs", h["note"])
         self.assertAlmostEqual(h["volume_reduction"], 0.0)
         self.assertAlmostEqual(m["material_volume_mm3"], m["part_volume_mm3"], delta=1e-6)
+
+    def test_mesh_output_is_what_its_metrics_say(self):
+        # an STL carries the optimised voids alone (the fill lives in the
+        # layers): the figures describe that mesh, not a fill it lacks
+        out = os.path.join(self.tmp.name, "out.stl")
+        m = hollow(self.tmp.name, "misc/cube.ascii.stl", fmt="stl", height_mm=12, rounds=1)
+        h = m["hollow"]
+        self.assertFalse(h["fill_applied"])
+        self.assertIn("layer outputs", h["note"])
+        self.assertEqual(h["voids_fill"], 0)
+        self.assertGreaterEqual(h["voids_optimised"], 1)
+        self.assertEqual(h["interior_overhang_mm2"], 0.0, h["verify"])
+        vol = stl_volume_mm3(out)
+        self.assertAlmostEqual(vol, m["part_volume_mm3"] - h["void_volume_mm3"],
+                               delta=1e-4 * m["part_volume_mm3"])
+        self.assertAlmostEqual(h["volume_reduction"], 1 - vol / m["part_volume_mm3"], delta=1e-4)
+        self.assertAlmostEqual(m["material_volume_mm3"], vol, delta=1e-4 * vol)
 
     def test_optimiser_time_budget(self):
         # a budget spent before any solve: no solver iteration, and no void
