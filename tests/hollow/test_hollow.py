@@ -175,6 +175,27 @@ class HollowTest(unittest.TestCase):
         self.assertAlmostEqual(h["volume_reduction"], 1 - vol / m["part_volume_mm3"], delta=1e-4)
         self.assertAlmostEqual(m["material_volume_mm3"], vol, delta=1e-4 * vol)
 
+    def test_gcode_output_carries_the_hollowing(self):
+        # G-code: the fill is designed and checked on the engine's own
+        # 0.05 mm grid, and the toolpaths leave the voids out: the filament
+        # deposited (E) against the solid part's at 100 % infill follows
+        # the reduction (perimeters round the voids and bead overlap: 0.1)
+        m = hollow(self.tmp.name, "misc/cube.ascii.stl", fmt="gcode", height_mm=12)
+        h = m["hollow"]
+        self.assertTrue(h["fill_applied"])
+        self.assertGreaterEqual(h["voids"], 1)
+        self.assertEqual(h["interior_overhang_mm2"], 0.0, h["verify"])
+        self.assertGreater(h["volume_reduction"], 0.3)
+        out = os.path.join(self.tmp.name, "solid.gcode")
+        met = os.path.join(self.tmp.name, "solid.json")
+        subprocess.run([BIN, "run", os.path.join(MESHES, "misc/cube.ascii.stl"), "-o", out,
+                        "--set", "height_mm=12", "--set", "infill_pct=100", "--quiet",
+                        "--metrics", met], check=True, timeout=300)
+        with open(met) as f:
+            dense = json.load(f)["material_volume_mm3"]
+        self.assertAlmostEqual(m["material_volume_mm3"] / dense, 1 - h["volume_reduction"],
+                               delta=0.1)
+
     def test_optimiser_time_budget(self):
         # a budget spent before any solve: no solver iteration, and no void
         # but support-free starts (the first round may have begun); the
