@@ -4,11 +4,16 @@
 # Run as root (or with sudo available) on Debian 12.
 set -euo pipefail
 
+# Every -l the link line asks for (pkg-config --libs of the Makefile's PKGS,
+# Ipopt's included: -llapack -lblas), every tool `make run`, `make test` and
+# the README's session call.  Installed with --no-install-recommends, so a
+# library that a -dev package only recommends must be listed here itself.
 PKGS=(
-	gcc g++ make pkg-config clang libclang-rt-14-dev python3
+	gcc g++ make pkg-config clang libclang-rt-14-dev python3 python3-pil
 	libmicrohttpd-dev libjansson-dev libpng-dev zlib1g-dev libsqlite3-dev
 	libarchive-dev libpolyclipping-dev libtet1.5-dev coinor-libipopt-dev
-	nettle-dev wrk
+	liblapack-dev libblas-dev nettle-dev
+	curl ca-certificates wrk
 )
 
 missing=()
@@ -40,7 +45,12 @@ fi
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
 if [ "${SKIP_NPM-}" != 1 ] && [ -f "$ROOT/package-lock.json" ] &&
 	! cmp -s "$ROOT/package-lock.json" "$ROOT/node_modules/.package-lock-installed" 2>/dev/null; then
-	echo "deps: npm ci" >&2
-	(cd "$ROOT" && npm ci --no-audit --no-fund --loglevel=error >/dev/null) &&
-		cp "$ROOT/package-lock.json" "$ROOT/node_modules/.package-lock-installed"
+	echo "deps: npm ci (node $(node --version), npm $(npm --version))" >&2
+	# --engine-strict: a package whose `engines` refuses this node or npm
+	# stops the install with npm's own message instead of a hidden warning.
+	(cd "$ROOT" && npm ci --engine-strict --no-audit --no-fund --loglevel=warn) ||
+		{ echo "deps: npm ci failed (see above)" >&2; exit 1; }
+	"$ROOT/node_modules/.bin/redocly" --version >/dev/null ||
+		{ echo "deps: the OpenAPI linter does not start under node $(node --version)" >&2; exit 1; }
+	cp "$ROOT/package-lock.json" "$ROOT/node_modules/.package-lock-installed"
 fi
