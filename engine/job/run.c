@@ -194,27 +194,17 @@ static int run_layers(const struct job_spec *js, void *state, struct out_writer 
 	return rc;
 }
 
-static int write_result_mesh(const struct job_spec *js, void *state, struct sink *out,
-			     struct metrics *m, struct err *e)
+/* A mesh output: the engine's result mesh, through the writer like layers. */
+static int run_mesh(const struct job_spec *js, void *state, struct out_writer *w,
+		    struct err *e)
 {
 	const struct mesh *rm = NULL;
-	struct mesh_report r;
 	int rc;
 
 	rc = js->engine->result_mesh(state, &rm, e);
 	if (rc)
 		return rc;
-	rc = js->format == OUT_STL ? mesh_write_stl(rm, 1, out, e) : mesh_write_obj(rm, out, e);
-	if (rc)
-		return rc;
-	rc = mesh_analyze(rm, &r, e);
-	if (rc)
-		return rc;
-	if (metrics_num(m, "material_volume_mm3", r.volume_mm3) ||
-	    metrics_int(m, "result_mesh.triangles", (long long)r.triangles) ||
-	    metrics_bool(m, "result_mesh.watertight", r.watertight))
-		return ERR_SET(e, ERR_NOMEM, "out of memory recording metrics");
-	return 0;
+	return out_mesh(w, rm, e);
 }
 
 int engine_run(const struct job_spec *js, struct sink *out, const struct progress_hooks *hooks,
@@ -308,11 +298,7 @@ int engine_run(const struct job_spec *js, struct sink *out, const struct progres
 	/* 3. Layers (or the result mesh) into the writer. */
 	progress_stage(&prog, out_format_is_mesh(js->format) ? "write" : "layers",
 		       0.05 + share * 0.95, 1.0);
-	if (out_format_is_mesh(js->format)) {
-		rc = write_result_mesh(js, state, out, m, e);
-		if (rc)
-			goto out;
-	} else {
+	if (!out_format_is_mesh(js->format)) {
 		count = layer_count_for(extent.hi.z, layer_mm);
 		if (count < 1) {
 			rc = extent.hi.z > 0
@@ -322,28 +308,29 @@ int engine_run(const struct job_spec *js, struct sink *out, const struct progres
 				     : ERR_SET(e, ERR_GEOMETRY, "the part has no height to print");
 			goto out;
 		}
-		memset(&oi, 0, sizeof oi);
-		oi.format = js->format;
-		oi.printer = &js->printer;
-		oi.layer_count = count;
-		oi.layer_mm = layer_mm;
-		oi.part_bbox = extent;
-		oi.mesh = mesh;
-		oi.job_name = js->job_name ? js->job_name : base_name(js->input_path);
-		oi.engine_name = ops->name;
-		oi.threads = threads;
-		oi.created = js->created_unix ? (time_t)js->created_unix : time(NULL);
-		oi.scratch_dir = js->scratch_dir;
-		rc = out_open(&oi, out, &w, e);
-		if (rc)
-			goto out;
-		rc = run_layers(js, state, w, count, layer_mm, &prog, e);
-		if (rc)
-			goto out;
-		rc = out_close(w, m, e);
-		if (rc)
-			goto out;
 	}
+	memset(&oi, 0, sizeof oi);
+	oi.format = js->format;
+	oi.printer = &js->printer;
+	oi.layer_count = count;
+	oi.layer_mm = layer_mm;
+	oi.part_bbox = extent;
+	oi.mesh = mesh;
+	oi.job_name = js->job_name ? js->job_name : base_name(js->input_path);
+	oi.engine_name = ops->name;
+	oi.threads = threads;
+	oi.created = js->created_unix ? (time_t)js->created_unix : time(NULL);
+	oi.scratch_dir = js->scratch_dir;
+	rc = out_open(&oi, out, &w, e);
+	if (rc)
+		goto out;
+	rc = out_format_is_mesh(js->format) ? run_mesh(js, state, w, e)
+					    : run_layers(js, state, w, count, layer_mm, &prog, e);
+	if (rc)
+		goto out;
+	rc = out_close(w, m, e);
+	if (rc)
+		goto out;
 	t_layers = progress_now_s();
 
 	/* 4. Metrics (docs/metrics.md). */

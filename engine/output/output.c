@@ -10,7 +10,7 @@
 struct format_desc {
 	const char *name, *ext, *mime, *printer;
 	int raster, mesh;
-	const struct writer_ops *ops; /* NULL: mesh formats, written by the job driver */
+	const struct writer_ops *ops;
 };
 
 static const struct format_desc formats[OUT_FORMAT_COUNT] = {
@@ -18,8 +18,8 @@ static const struct format_desc formats[OUT_FORMAT_COUNT] = {
 	[OUT_SL1S] = {"sl1s", ".sl1s", "application/vnd.prusa.sl1s", "sl1s", 1, 0, &sl1_writer_ops},
 	[OUT_ZIP] = {"zip", ".zip", "application/zip", "sl1", 1, 0, &zip_writer_ops},
 	[OUT_GCODE] = {"gcode", ".gcode", "text/x.gcode", "generic-fdm", 0, 0, &gcode_writer_ops},
-	[OUT_STL] = {"stl", ".stl", "model/stl", NULL, 0, 1, NULL},
-	[OUT_OBJ] = {"obj", ".obj", "model/obj", NULL, 0, 1, NULL},
+	[OUT_STL] = {"stl", ".stl", "model/stl", NULL, 0, 1, &mesh_writer_ops},
+	[OUT_OBJ] = {"obj", ".obj", "model/obj", NULL, 0, 1, &mesh_writer_ops},
 };
 
 int out_format_parse(const char *name, enum out_format *f, struct err *e)
@@ -87,8 +87,7 @@ int out_open(const struct out_info *info, struct sink *s, struct out_writer **ou
 	int rc;
 
 	if (info->format >= OUT_FORMAT_COUNT || !formats[info->format].ops)
-		return ERR_SET(e, ERR_UNSUPPORTED, "format %s is not a layer format",
-			       out_format_name(info->format));
+		return ERR_SET(e, ERR_UNSUPPORTED, "unknown output format %d", (int)info->format);
 	w = mem_calloc(1, sizeof *w);
 	if (!w)
 		return ERR_SET(e, ERR_NOMEM, "out of memory opening the %s writer",
@@ -128,6 +127,14 @@ const struct raster_map *out_raster_map(const struct out_writer *w)
 int out_layer(struct out_writer *w, struct layer *ly, struct err *e)
 {
 	return w->ops->layer(w->state, ly, e);
+}
+
+int out_mesh(struct out_writer *w, const struct mesh *m, struct err *e)
+{
+	if (!w->ops->mesh)
+		return ERR_SET(e, ERR_INTERNAL, "the %s writer takes layers, not a mesh",
+			       w->ops->name);
+	return w->ops->mesh(w->state, m, e);
 }
 
 int out_close(struct out_writer *w, struct metrics *m, struct err *e)

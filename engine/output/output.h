@@ -75,9 +75,15 @@ const struct raster_map *out_raster_map(const struct out_writer *w);
  * itself when the output wants pixels and !ly->raster_ready. */
 int out_layer(struct out_writer *w, struct layer *ly, struct err *e);
 
+/* Mesh formats (stl, obj; out_format_is_mesh): hand over the one result
+ * mesh m (borrowed for the call, printer frame, mm) instead of layers.
+ * Layer writers refuse it (ERR_INTERNAL), as mesh writers refuse layers. */
+int out_mesh(struct out_writer *w, const struct mesh *m, struct err *e);
+
 /* Flush everything, write trailers/manifests, and record the output's
  * figures in m: "material_volume_mm3" and a "<format>" object
- * (sl1: used_material_ml, print_time_s; gcode: filament_mm, print_time_s...). */
+ * (sl1: used_material_ml, print_time_s; gcode: filament_mm, print_time_s...;
+ * stl/obj: result_mesh.triangles, result_mesh.watertight). */
 int out_close(struct out_writer *w, struct metrics *m, struct err *e);
 void out_free(struct out_writer *w);
 

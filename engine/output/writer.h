@@ -2,7 +2,8 @@
  *
  * output.c dispatches struct out_writer calls to one of these; each
  * format lives in its own files (sl1.c for sl1/sl1s/zip, gcode_write.c
- * for G-code, mesh_out.c for stl/obj).  Not included outside
+ * for G-code, mesh_out.c for stl/obj).  Layer writers implement layer();
+ * mesh writers implement mesh() and refuse layers.  Not included outside
  * engine/output/.
  */
 #ifndef INFILLD_WRITER_H
@@ -20,6 +21,8 @@ struct writer_ops {
 	const struct raster_map *(*raster_map)(const void *state);
 	/* Take ownership of ly's region and raster (layers arrive in order). */
 	int (*layer)(void *state, struct layer *ly, struct err *e);
+	/* Mesh writers: the result mesh m (borrowed for the call), once. */
+	int (*mesh)(void *state, const struct mesh *m, struct err *e);
 	int (*close)(void *state, struct metrics *m, struct err *e);
 	void (*free_state)(void *state);
 };
@@ -27,5 +30,6 @@ struct writer_ops {
 extern const struct writer_ops sl1_writer_ops;   /* OUT_SL1, OUT_SL1S (printerModel from profile) */
 extern const struct writer_ops zip_writer_ops;   /* OUT_ZIP: 1.png ... N.png */
 extern const struct writer_ops gcode_writer_ops; /* OUT_GCODE */
+extern const struct writer_ops mesh_writer_ops;  /* OUT_STL (binary), OUT_OBJ */
 
 #endif
