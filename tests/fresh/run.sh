@@ -3,7 +3,8 @@
 # commands on a fresh Debian 12.
 #
 # Builds a minbase Debian 12 (bookworm) root with debootstrap (nothing else
-# installed: no compiler, no curl, no node), clones this repository's HEAD
+# installed: no compiler, no make, no curl, no node), installs make (the
+# README's one prerequisite), clones this repository's HEAD
 # into it as /root/infilld with ../shared beside it as /root/shared, then,
 # chrooted:
 #   1. `make run` in the background, and waits (up to FRESH_RUN_WAIT_S,
@@ -98,6 +99,12 @@ git -C "$ROOTFS/root/infilld" log -1 --format='%h %s' | cut -c1-100 | sed 's/^/[
 cp -r "$SHARED" "$ROOTFS/root/shared"
 in_root() { chroot "$ROOTFS" /usr/bin/env -i HOME=/root PATH=/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin \
 	LANG=C.UTF-8 TERM=dumb bash -c "cd /root/infilld && $1"; }
+
+# make itself is the one prerequisite the README names (make deps installs
+# the rest); git is not needed in the root: the clone was made from outside.
+say "apt-get install make (the README's prerequisite)"
+in_root "apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq --no-install-recommends make" \
+	>"$LOGS/prereq.txt" 2>&1 || { tail -n 20 "$LOGS/prereq.txt"; exit 1; }
 
 # 3. make run, then wait for /livez (polled from this machine: same network)
 say "make run (background; log $LOGS/make-run.txt)"
