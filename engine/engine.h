@@ -22,7 +22,7 @@
 #include "engine/geom/vec.h"
 #include "engine/mesh/mesh.h"
 #include "engine/output/output.h"
-#include "engine/output/printer.h"
+#include "engine/output/printer/printer.h"
 #include "engine/slice/layer.h"
 
 #define INFILLD_VERSION "0.1.0"

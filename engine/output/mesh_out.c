@@ -75,7 +75,7 @@ static void mesh_free_state(void *state)
 	mem_free(state);
 }
 
-const struct writer_ops mesh_writer_ops = {
+const struct writer_ops out_mesh_writer_ops = {
 	.name = "mesh",
 	.open = mesh_open,
 	.layer = mesh_layer,

@@ -18,8 +18,8 @@ static const struct format_desc formats[OUT_FORMAT_COUNT] = {
 	[OUT_SL1S] = {"sl1s", ".sl1s", "application/vnd.prusa.sl1s", "sl1s", 1, 0, &sl1_writer_ops},
 	[OUT_ZIP] = {"zip", ".zip", "application/zip", "sl1", 1, 0, &zip_writer_ops},
 	[OUT_GCODE] = {"gcode", ".gcode", "text/x.gcode", "generic-fdm", 0, 0, &gcode_writer_ops},
-	[OUT_STL] = {"stl", ".stl", "model/stl", NULL, 0, 1, &mesh_writer_ops},
-	[OUT_OBJ] = {"obj", ".obj", "model/obj", NULL, 0, 1, &mesh_writer_ops},
+	[OUT_STL] = {"stl", ".stl", "model/stl", NULL, 0, 1, &out_mesh_writer_ops},
+	[OUT_OBJ] = {"obj", ".obj", "model/obj", NULL, 0, 1, &out_mesh_writer_ops},
 };
 
 int out_format_parse(const char *name, enum out_format *f, struct err *e)

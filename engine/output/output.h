@@ -3,8 +3,8 @@
  *
  * A writer receives layers in order 0..N-1 and streams its format to a
  * sink; memory is bounded by a few layers in flight, never by the layer
- * count (formatting in sl1.c/zip, gcode_write.c; toolpath planning in
- * toolpath.c).  Writers may encode layers on worker threads (pipeline.h)
+ * count (formatting in resin/sl1.c, gcode/gcode_write.c; toolpath planning
+ * in toolpath/).  Writers may encode layers on worker threads (pipeline.h)
  * but write to the sink only from the caller's thread.
  */
 #ifndef INFILLD_OUTPUT_H

@@ -30,6 +30,6 @@ struct writer_ops {
 extern const struct writer_ops sl1_writer_ops;   /* OUT_SL1, OUT_SL1S (printerModel from profile) */
 extern const struct writer_ops zip_writer_ops;   /* OUT_ZIP: 1.png ... N.png */
 extern const struct writer_ops gcode_writer_ops; /* OUT_GCODE */
-extern const struct writer_ops mesh_writer_ops;  /* OUT_STL (binary), OUT_OBJ */
+extern const struct writer_ops out_mesh_writer_ops;  /* OUT_STL (binary), OUT_OBJ */
 
 #endif

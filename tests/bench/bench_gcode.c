@@ -12,8 +12,8 @@
 #include "engine/core/progress.h"
 #include "engine/core/sink.h"
 #include "engine/geom/clip.h"
-#include "engine/output/printer.h"
-#include "engine/output/printer_kinds.h"
+#include "engine/output/printer/printer.h"
+#include "engine/output/printer/printer_kinds.h"
 #include "engine/output/writer.h"
 
 #include <math.h>

@@ -18,8 +18,8 @@
 #include "engine/core/sink.h"
 #include "engine/geom/clip.h"
 #include "engine/mesh/mesh.h"
-#include "engine/output/printer.h"
-#include "engine/output/printer_kinds.h"
+#include "engine/output/printer/printer.h"
+#include "engine/output/printer/printer_kinds.h"
 #include "engine/output/writer.h"
 
 #include <math.h>

@@ -9,7 +9,7 @@
 #include "engine/core/err.h"
 #include "engine/core/metrics.h"
 #include "engine/core/sink.h"
-#include "engine/output/printer_kinds.h"
+#include "engine/output/printer/printer_kinds.h"
 #include "engine/output/writer.h"
 #include "engine/slice/layer.h"
 #include "harness.h"

@@ -4,8 +4,8 @@
 
 #include "engine/core/err.h"
 #include "engine/core/param.h"
-#include "engine/output/printer.h"
-#include "engine/output/printer_kinds.h"
+#include "engine/output/printer/printer.h"
+#include "engine/output/printer/printer_kinds.h"
 
 #include <stddef.h>
 

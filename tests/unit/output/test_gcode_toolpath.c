@@ -7,10 +7,10 @@
 #include "engine/core/err.h"
 #include "engine/core/mem.h"
 #include "engine/geom/clip.h"
-#include "engine/output/gcode_int.h"
-#include "engine/output/printer_kinds.h"
-#include "engine/output/toolpath.h"
-#include "engine/output/toolpath_int.h"
+#include "engine/output/gcode/gcode_int.h"
+#include "engine/output/printer/printer_kinds.h"
+#include "engine/output/toolpath/toolpath.h"
+#include "engine/output/toolpath/toolpath_int.h"
 
 static void rect(struct paths *ps, double x0, double y0, double x1, double y1, int ccw)
 {

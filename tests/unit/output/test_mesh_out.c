@@ -11,7 +11,7 @@
 #include "engine/core/sink.h"
 #include "engine/mesh/mesh.h"
 #include "engine/output/output.h"
-#include "engine/output/printer.h"
+#include "engine/output/printer/printer.h"
 #include "engine/slice/layer.h"
 #include "harness.h"
 

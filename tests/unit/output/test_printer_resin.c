@@ -4,8 +4,8 @@
  */
 #include "engine/core/err.h"
 #include "engine/core/sink.h"
-#include "engine/output/printer_kinds.h"
-#include "engine/output/sl1_ini.h"
+#include "engine/output/printer/printer_kinds.h"
+#include "engine/output/resin/sl1_ini.h"
 #include "harness.h"
 
 static const struct printer *profile(const char *name)

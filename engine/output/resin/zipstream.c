@@ -3,7 +3,7 @@
  * the callback forwards them to the sink and keeps the sink's error
  * record, which is what callers get back instead of libarchive's text.
  */
-#include "engine/output/zipstream.h"
+#include "engine/output/resin/zipstream.h"
 #include "engine/core/err.h"
 #include "engine/core/mem.h"
 #include "engine/core/sink.h"

@@ -7,7 +7,7 @@
  * per-block dynamic Huffman codes; zlib wrapper (RFC 1950) with an
  * Adler-32 computed per run in closed form.  Design: docs/formats.md.
  */
-#include "engine/output/png_encode.h"
+#include "engine/output/image/png_encode.h"
 #include "engine/core/err.h"
 #include "engine/core/mem.h"
 #include "engine/core/sink.h"

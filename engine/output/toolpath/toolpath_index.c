@@ -9,7 +9,7 @@
  * there exactly in integer arithmetic; a per-edge stamp skips edges seen
  * twice in one query.
  */
-#include "engine/output/toolpath_int.h"
+#include "engine/output/toolpath/toolpath_int.h"
 #include "engine/core/err.h"
 #include "engine/core/mem.h"
 

@@ -13,12 +13,12 @@
 #include "engine/core/metrics.h"
 #include "engine/core/pipeline.h"
 #include "engine/core/sink.h"
-#include "engine/output/png_encode.h"
-#include "engine/output/printer_kinds.h"
-#include "engine/output/sl1_ini.h"
-#include "engine/output/thumbnail.h"
+#include "engine/output/image/png_encode.h"
+#include "engine/output/printer/printer_kinds.h"
+#include "engine/output/resin/sl1_ini.h"
+#include "engine/output/image/thumbnail.h"
 #include "engine/output/writer.h"
-#include "engine/output/zipstream.h"
+#include "engine/output/resin/zipstream.h"
 #include "engine/slice/slice.h"
 
 #include <math.h>

@@ -5,7 +5,7 @@
 
 #include <stddef.h>
 
-#include "engine/output/printer.h"
+#include "engine/output/printer/printer.h"
 
 extern const struct printer printer_resin_profiles[];
 extern const size_t printer_resin_profile_count;

@@ -3,8 +3,8 @@
  * Profiles and override tables of each kind live in printer_resin.c and
  * printer_fdm.c; this file only looks them up and dispatches by kind.
  */
-#include "engine/output/printer.h"
-#include "engine/output/printer_kinds.h"
+#include "engine/output/printer/printer.h"
+#include "engine/output/printer/printer_kinds.h"
 #include "engine/core/err.h"
 
 #include <stdio.h>

@@ -11,7 +11,7 @@
  * of nonzero winding are the infill lines.  O(E + K log K) for K
  * crossings.
  */
-#include "engine/output/toolpath_int.h"
+#include "engine/output/toolpath/toolpath_int.h"
 #include "engine/core/err.h"
 #include "engine/core/mem.h"
 

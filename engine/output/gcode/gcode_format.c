@@ -7,7 +7,7 @@
  * lengths are measured between the printed (rounded) coordinates, so a
  * reader recomputing E from the text finds exactly what we meant.
  */
-#include "engine/output/gcode_int.h"
+#include "engine/output/gcode/gcode_int.h"
 #include "engine/core/err.h"
 #include "engine/core/mem.h"
 

@@ -13,7 +13,7 @@
 #include <stddef.h>
 
 #include "engine/output/output.h"
-#include "engine/output/printer.h"
+#include "engine/output/printer/printer.h"
 
 struct buf;
 struct err;

@@ -18,8 +18,8 @@
 #include "engine/core/sink.h"
 #include "engine/engine.h"
 #include "engine/geom/raster.h"
-#include "engine/output/gcode_int.h"
-#include "engine/output/thumbnail.h"
+#include "engine/output/gcode/gcode_int.h"
+#include "engine/output/image/thumbnail.h"
 #include "engine/output/writer.h"
 
 #include <math.h>

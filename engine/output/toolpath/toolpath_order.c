@@ -14,7 +14,7 @@
  * outline.  Nearest-neighbour queries use a uniform grid over candidate
  * points with lazy removal: about O(n) for evenly spread points.
  */
-#include "engine/output/toolpath_int.h"
+#include "engine/output/toolpath/toolpath_int.h"
 #include "engine/core/err.h"
 #include "engine/core/mem.h"
 

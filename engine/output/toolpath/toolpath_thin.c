@@ -16,7 +16,7 @@
  * the nearest wall point to the opposite wall, the chord's length being
  * the width there.
  */
-#include "engine/output/toolpath_int.h"
+#include "engine/output/toolpath/toolpath_int.h"
 #include "engine/core/err.h"
 #include "engine/core/mem.h"
 #include "engine/geom/clip.h"

@@ -4,8 +4,8 @@
  * Values and sources: docs/printers.md (PrusaSlicer 2.5.2,
  * resources/profiles/PrusaResearch.ini and PrintConfig.cpp defaults).
  */
-#include "engine/output/printer.h"
-#include "engine/output/printer_kinds.h"
+#include "engine/output/printer/printer.h"
+#include "engine/output/printer/printer_kinds.h"
 #include "engine/core/err.h"
 
 #include <math.h>

@@ -10,7 +10,7 @@
  * (limit 3): the offset of a region by -d keeps every point at least d
  * from its outline whatever the join, and mitres keep corners sharp.
  */
-#include "engine/output/toolpath_int.h"
+#include "engine/output/toolpath/toolpath_int.h"
 #include "engine/core/err.h"
 #include "engine/core/mem.h"
 #include "engine/geom/clip.h"

@@ -6,13 +6,13 @@
  * sample centres of a 2x2 supersampled canvas with a float z-buffer, and
  * shaded two-sided Lambert (ambient 0.25) in resin orange.
  */
-#include "engine/output/thumbnail.h"
+#include "engine/output/image/thumbnail.h"
 #include "engine/core/err.h"
 #include "engine/core/mem.h"
 #include "engine/geom/path.h"
 #include "engine/geom/raster.h"
 #include "engine/mesh/mesh.h"
-#include "engine/output/png_encode.h"
+#include "engine/output/image/png_encode.h"
 #include "engine/slice/layer.h"
 #include "engine/slice/slice.h"
 

@@ -7,7 +7,7 @@
  * layer count.  Replay streams it to the sink in 64 KiB pieces, turning
  * marks into M73 progress lines.
  */
-#include "engine/output/gcode_int.h"
+#include "engine/output/gcode/gcode_int.h"
 #include "engine/core/err.h"
 #include "engine/core/mem.h"
 

@@ -2,10 +2,10 @@
  * profile and jerk-limited junctions, and the layer-time slowdown (see
  * toolpath.h; the model is derived in docs/gcode.md, "time model").
  */
-#include "engine/output/toolpath.h"
+#include "engine/output/toolpath/toolpath.h"
 #include "engine/core/err.h"
 #include "engine/core/mem.h"
-#include "engine/output/printer.h"
+#include "engine/output/printer/printer.h"
 
 #include <math.h>
 #include <string.h>

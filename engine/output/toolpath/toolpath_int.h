@@ -1,6 +1,6 @@
 /* toolpath_int.h - internal to toolpath*.c: the planner's stages.
  *
- * tp_plan_layer() (toolpath.c) runs: region analysis (toolpath_regions.c:
+ * tp_plan_layer() (layer.c) runs: region analysis (toolpath_regions.c:
  * perimeter loops, thin pieces via toolpath_thin.c, skin/sparse areas),
  * infill lines (toolpath_fill.c), then ordering (toolpath_order.c) with
  * segment queries on an edge grid (toolpath_index.c).
@@ -8,7 +8,7 @@
 #ifndef INFILLD_TOOLPATH_INT_H
 #define INFILLD_TOOLPATH_INT_H
 
-#include "engine/output/toolpath.h"
+#include "engine/output/toolpath/toolpath.h"
 
 /* Fill areas of a layer, by role (only the infill roles are used). */
 struct tp_areas {

@@ -13,8 +13,8 @@
 #include <stdio.h>
 
 #include "engine/core/sink.h"
-#include "engine/output/printer.h"
-#include "engine/output/toolpath.h"
+#include "engine/output/printer/printer.h"
+#include "engine/output/toolpath/toolpath.h"
 
 /* E is counted in integer units of 1e-5 mm of filament (the printed
  * resolution) so every total is the exact sum of the printed values. */

@@ -4,8 +4,8 @@
  * Values are written `key = value` without quotes, as PrusaSlicer does;
  * the firmware reads them with a TOML reader that accepts that form.
  */
-#include "engine/output/sl1_ini.h"
-#include "engine/output/printer_kinds.h"
+#include "engine/output/resin/sl1_ini.h"
+#include "engine/output/printer/printer_kinds.h"
 #include "engine/core/err.h"
 #include "engine/core/sink.h"
 #include "engine/engine.h" /* INFILLD_VERSION */

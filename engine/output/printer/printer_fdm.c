@@ -3,8 +3,8 @@
  * docs/printers.md).  The G-code writer (gcode_write.c) and the toolpath
  * planner (toolpath*.c) read only struct fdm_printer.
  */
-#include "engine/output/printer.h"
-#include "engine/output/printer_kinds.h"
+#include "engine/output/printer/printer.h"
+#include "engine/output/printer/printer_kinds.h"
 #include "engine/core/err.h"
 
 #include <stddef.h>
