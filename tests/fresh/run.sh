@@ -97,8 +97,18 @@ say "root has $(chroot "$ROOTFS" dpkg-query -W -f='.\n' | wc -l) packages;" \
 git clone -q "$REPO" "$ROOTFS/root/infilld"
 git -C "$ROOTFS/root/infilld" log -1 --format='%h %s' | cut -c1-100 | sed 's/^/[fresh] HEAD /'
 cp -r "$SHARED" "$ROOTFS/root/shared"
+# A site whose egress re-signs TLS (a proxy CA in this machine's trust
+# store) needs that trust in the root too, or npm cannot reach its
+# registry: the host's bundle goes in as /root/host-ca.crt and node reads
+# it (NODE_EXTRA_CA_CERTS), as node does on this machine.  Nothing else of
+# the host's set-up is carried over.
+CA_ENV=()
+if [ -n "${NODE_EXTRA_CA_CERTS-}" ] && [ -f "$NODE_EXTRA_CA_CERTS" ]; then
+	cp "$NODE_EXTRA_CA_CERTS" "$ROOTFS/root/host-ca.crt"
+	CA_ENV=(NODE_EXTRA_CA_CERTS=/root/host-ca.crt)
+fi
 in_root() { chroot "$ROOTFS" /usr/bin/env -i HOME=/root PATH=/usr/local/sbin:/usr/local/bin:/usr/sbin:/usr/bin:/sbin:/bin \
-	LANG=C.UTF-8 TERM=dumb bash -c "cd /root/infilld && $1"; }
+	LANG=C.UTF-8 TERM=dumb "${CA_ENV[@]}" bash -c "cd /root/infilld && $1"; }
 
 # make itself is the one prerequisite the README names (make deps installs
 # the rest); git is not needed in the root: the clone was made from outside.
