@@ -4,6 +4,8 @@
 #include "engine/core/mem.h"
 #include "engine/output/writer.h"
 
+#include <ctype.h>
+#include <stdio.h>
 #include <string.h>
 #include <strings.h>
 
@@ -149,4 +151,61 @@ void out_free(struct out_writer *w)
 	if (w->ops->free_state)
 		w->ops->free_state(w->state);
 	mem_free(w);
+}
+
+/* Length of name without a trailing mesh-file extension. */
+static size_t stem_length(const char *name)
+{
+	static const char *const ext[] = {".stl", ".obj", ".off", ".ply", ".3mf", ".amf"};
+	size_t n = strlen(name);
+
+	for (size_t i = 0; i < sizeof ext / sizeof ext[0]; i++) {
+		size_t k = strlen(ext[i]);
+		if (n > k && strcasecmp(name + n - k, ext[i]) == 0)
+			return n - k;
+	}
+	return n;
+}
+
+/* First case-insensitive occurrence of "thumbnail" in s, or NULL. */
+static char *find_thumbnail(char *s)
+{
+	for (; *s; s++)
+		if (strncasecmp(s, "thumbnail", 9) == 0)
+			return s;
+	return NULL;
+}
+
+/* Stems longer than this are cut before the "thumbnail" rewrite; the
+ * result keeps only OUT_JOB_DIR_MAX of them anyway. */
+#define JOB_STEM_MAX 255
+
+void out_job_dir(const char *job_name, char *out)
+{
+	static const char thumb[] = "thumbnail/";
+	const char *p = job_name ? job_name : "";
+	char s[JOB_STEM_MAX + 1];
+	size_t n = 0, len = stem_length(p);
+	char *hit;
+
+	for (size_t i = 0; i < len && n < JOB_STEM_MAX; i++) {
+		unsigned char c = (unsigned char)p[i];
+		s[n++] = (isalnum(c) && c < 0x80) || c == '-' || c == '_' ? (char)c : '_';
+	}
+	s[n] = '\0';
+	/* each rewrite shortens s by 4, so the loop ends; it repeats because
+	 * dropping "nail" can join a new "thumbnail" ("thumbnailnail") */
+	while ((hit = find_thumbnail(s)) != NULL) {
+		memmove(hit + 5, hit + 9, strlen(hit + 9) + 1);
+		n -= 4;
+	}
+	if (n > OUT_JOB_DIR_MAX)
+		n = OUT_JOB_DIR_MAX;
+	s[n] = '\0';
+	if (n == 0)
+		snprintf(out, OUT_JOB_DIR_MAX + 1, "infilld");
+	else if (strncmp(thumb, s, n) == 0)
+		snprintf(out, OUT_JOB_DIR_MAX + 1, "job_%s", s);
+	else
+		memcpy(out, s, n + 1);
 }

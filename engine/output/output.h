@@ -37,6 +37,24 @@ int out_format_is_mesh(enum out_format f);           /* stl, obj */
 /* Profile used when the job names none: sl1, sl1s, sl1 (zip), generic-fdm. */
 const char *out_format_default_printer(enum out_format f);
 
+/* Longest name out_job_dir() writes (without the NUL). */
+#define OUT_JOB_DIR_MAX 40
+
+/* The file-name-safe form of a job name (an uploaded mesh's name, a CLI
+ * input's base name), used as the SL1 jobDir and so as every layer's
+ * name prefix; other code naming files after a job may call it too.
+ * A mesh-file extension (.stl .obj .off .ply .3mf .amf, any case) is
+ * dropped; ASCII letters, digits, '-' and '_' are kept and anything else
+ * (path separators, spaces, dots, bytes >= 0x80) becomes '_'; every
+ * "thumbnail" in any case becomes "thumb" (keeping the case of the five
+ * letters), repeated until none is left, because PrusaSlicer's SL1
+ * importer skips every entry whose lower-cased name contains "thumbnail";
+ * then at most OUT_JOB_DIR_MAX characters are kept; empty (or NULL) ->
+ * "infilld"; a prefix of "thumbnail/" (the firmware takes every PNG whose
+ * name starts with jobDir as a layer) gets a "job_" prefix.
+ * out: OUT_JOB_DIR_MAX + 1 bytes, always NUL-terminated.  Pure. */
+void out_job_dir(const char *job_name, char *out);
+
 struct out_info {
 	enum out_format format;
 	const struct printer *printer; /* borrowed for the writer's life */

@@ -120,6 +120,33 @@ class CliTest(unittest.TestCase):
                 f"layer_mm={layer}", "--metrics", met, "--quiet", check=True)
             self.assertEqual(load(met)["layers"], math.ceil(10 / float(layer) - 1e-9))
 
+    def test_thumbnail_in_the_job_name(self):
+        """PrusaSlicer's SL1 importer skips every entry whose lower-cased name
+        contains "thumbnail": a job named after MyThumbnailHolder.stl must
+        still give layers it imports."""
+        import shutil
+        import zipfile
+        mesh = self.path("MyThumbnailHolder.stl")
+        shutil.copy(os.path.join(MESHES, "misc", "cube.bin.stl"), mesh)
+        out = self.path("holder.sl1")
+        run("run", mesh, "-o", out, "--set", "height_mm=2", "--quiet", check=True)
+        with zipfile.ZipFile(out) as z:
+            names = z.namelist()
+            ini = dict(l.split(" = ", 1) for l in z.read("config.ini").decode().splitlines()
+                       if " = " in l)
+        layers = [n for n in names if n.endswith(".png") and not n.startswith("thumbnail/")]
+        self.assertEqual(len(layers), 40)
+        self.assertEqual(ini["jobDir"], "MyThumbHolder")
+        for n in names:
+            if n.startswith("thumbnail/"):
+                continue
+            self.assertNotIn("thumbnail", n.lower(), n)
+            self.assertTrue(all(c.isalnum() and c.isascii() or c in "._-" for c in n), n)
+        # what PrusaSlicer's importer keeps: the layers, all of them
+        kept = [n for n in names if n.endswith(".png") and "thumbnail" not in n.lower()]
+        self.assertEqual(kept, layers)
+        sl1check.check_archive(out, expect_layers=40, printer="sl1")
+
     # ---- run: FDM -------------------------------------------------------------
     def test_run_gcode_femur_contained(self):
         placed = self.path("femur50.stl")

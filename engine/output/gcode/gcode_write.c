@@ -71,6 +71,7 @@ struct gc_writer {
 	struct gc_region **win;
 	int win_n;
 	int received, submitted, emitted;
+	int written; /* layers in the spool: up to the last one with moves */
 	double z_shift_mm; /* first_layer_mm - layer_mm */
 	struct pt2 start_ref;
 	struct gc_spool spool;
@@ -282,6 +283,40 @@ static int layer_change(struct gc_writer *w, const struct gc_item *it, struct si
 	return rc;
 }
 
+/* Spool layer j's tags, its progress mark and the per-layer commands
+ * that precede its moves (Klipper's layer counter, the fan from layer 1)
+ * into b (reset first), then b itself. */
+static int layer_head(struct gc_writer *w, int j, struct buf *b, struct err *e)
+{
+	double h = j == 0 ? w->f.first_layer_mm : w->info.layer_mm;
+	double z = (j + 1) * w->info.layer_mm + w->z_shift_mm;
+	struct sink bs;
+	int rc;
+
+	buf_reset(b);
+	sink_init_buf(&bs, b);
+	/* PrusaSlicer's before_layer_gcode (";BEFORE_LAYER_CHANGE", then
+	 * ";[layer_z]"): Moonraker takes the largest such z as object_height. */
+	rc = sink_printf(&bs, e, ";BEFORE_LAYER_CHANGE\n;%s\n;LAYER_CHANGE\n;Z:%s\n;HEIGHT:%s\n"
+			     ";LAYER:%d\n",
+		     mm(z), mm(z), mm(h), j);
+	if (!rc)
+		rc = gc_spool_text(&w->spool, b->data, b->len, e);
+	if (!rc)
+		rc = gc_spool_mark(&w->spool, w->elapsed_s, e);
+	buf_reset(b);
+	if (!rc && w->f.klipper)
+		rc = sink_printf(&bs, e, "SET_PRINT_STATS_INFO CURRENT_LAYER=%d\n", j + 1);
+	if (!rc && j == 1 && w->f.fan_pct > 0)
+		rc = sink_printf(&bs, e, "M106 S%.0f\n", 255.0 * w->f.fan_pct / 100.0);
+	return rc;
+}
+
+/* Layers without moves (nothing printable: a lattice above its last
+ * strut, tips thinner than a bead) are held back and written only when a
+ * later layer prints, so the file ends with the last layer that carries
+ * material and its layer count says so.  Nothing of a held-back layer
+ * depends on more than its index: no state is kept per layer. */
 static int emit(void *ctx, void *item, struct err *e)
 {
 	struct gc_writer *w = ctx;
@@ -289,27 +324,27 @@ static int emit(void *ctx, void *item, struct err *e)
 	struct gc_layer_out *o = &it->out;
 	struct buf b;
 	struct sink bs;
-	int rc;
+	int rc = 0;
 
 	buf_init(&b);
 	sink_init_buf(&bs, &b);
-	rc = sink_printf(&bs, e, ";LAYER_CHANGE\n;Z:%s\n;HEIGHT:%s\n;LAYER:%d\n", mm(it->z_mm),
-		     mm(it->h_mm), it->index);
-	if (!rc)
-		rc = gc_spool_text(&w->spool, b.data, b.len, e);
-	if (!rc)
-		rc = gc_spool_mark(&w->spool, w->elapsed_s, e);
-	buf_reset(&b);
-	if (!rc && w->f.klipper)
-		rc = sink_printf(&bs, e, "SET_PRINT_STATS_INFO CURRENT_LAYER=%d\n", it->index + 1);
-	if (!rc && it->index == 1 && w->f.fan_pct > 0)
-		rc = sink_printf(&bs, e, "M106 S%.0f\n", 255.0 * w->f.fan_pct / 100.0);
-	if (!rc && o->has_moves)
-		rc = layer_change(w, it, &bs, e);
-	if (!rc)
-		rc = gc_spool_text(&w->spool, b.data, b.len, e);
-	if (!rc && o->has_moves)
-		rc = gc_spool_text(&w->spool, o->text.data, o->text.len, e);
+	if (o->has_moves) {
+		for (; !rc && w->written < it->index; w->written++) {
+			rc = layer_head(w, w->written, &b, e);
+			if (!rc)
+				rc = gc_spool_text(&w->spool, b.data, b.len, e);
+		}
+		if (!rc)
+			rc = layer_head(w, it->index, &b, e);
+		if (!rc)
+			rc = layer_change(w, it, &bs, e);
+		if (!rc)
+			rc = gc_spool_text(&w->spool, b.data, b.len, e);
+		if (!rc)
+			rc = gc_spool_text(&w->spool, o->text.data, o->text.len, e);
+		if (!rc)
+			w->written = it->index + 1;
+	}
 	if (!rc && w->sink->limit && w->spool.bytes > w->sink->limit)
 		rc = ERR_SET(e, ERR_LIMIT, "G-code exceeds the output limit of %llu bytes",
 			     (unsigned long long)w->sink->limit);
@@ -571,7 +606,7 @@ static int start_code(struct gc_writer *w, struct sink *b, int64_t *prime_units,
 	if (!rc)
 		rc = sink_printf(b, e, "M109 S%.0f ; wait for the nozzle\n", f->nozzle_c);
 	if (!rc && f->klipper)
-		rc = sink_printf(b, e, "SET_PRINT_STATS_INFO TOTAL_LAYER=%d\n", w->received);
+		rc = sink_printf(b, e, "SET_PRINT_STATS_INFO TOTAL_LAYER=%d\n", w->written);
 	if (!rc)
 		rc = sink_printf(b, e,
 			     "G28 ; home\nG90 ; absolute XYZ\nM83 ; relative E\nG92 E0\n");
@@ -732,7 +767,7 @@ static int header(struct gc_writer *w, struct sink *b, double total_s, double fi
 			     mm(w->first_z_mm), mm((double)w->hi_x_um / 1000),
 			     mm((double)w->hi_y_um / 1000), mm(w->last_z_mm));
 	if (!rc)
-		rc = sink_printf(b, e, ";LAYER_COUNT:%d\n;TARGET_MACHINE.NAME:%s\n", w->received,
+		rc = sink_printf(b, e, ";LAYER_COUNT:%d\n;TARGET_MACHINE.NAME:%s\n", w->written,
 			     w->printer_name);
 	if (!rc)
 		rc = sink_printf(b, e, "; job = %s\n; engine = %s\n", w->job_name,
@@ -758,7 +793,7 @@ static int footer(struct gc_writer *w, struct sink *b, double total_s, double fi
 		rc = sink_printf(b, e,
 			     "; estimated printing time (normal mode) = %s\n"
 			     "; total layers count = %d\n",
-			     dur, w->received);
+			     dur, w->written);
 	if (!rc)
 		rc = sink_printf(b, e,
 			     "; layer_height = %s\n; first_layer_height = %s\n"
@@ -771,9 +806,19 @@ static int footer(struct gc_writer *w, struct sink *b, double total_s, double fi
 			     "; extrusion_width = %s\n; perimeters = %d\n; fill_density = %g%%\n"
 			     "; top_solid_layers = %d\n; bottom_solid_layers = %d\n"
 			     "; temperature = %.0f\n; bed_temperature = %.0f\n"
-			     "; printer_model = %s\n",
+			     "; first_layer_temperature = %.0f\n; first_layer_bed_temperature = %.0f\n"
+			     "; chamber_temperature = 0\n",
 			     mm(f->line_width_mm), f->perimeters, f->infill_pct, f->top_layers,
-			     f->bottom_layers, f->nozzle_c, f->bed_c, w->printer_name);
+			     f->bottom_layers, f->nozzle_c, f->bed_c, f->nozzle_c, f->bed_c);
+	/* One extruder, one filament: PrusaSlicer's multi-material keys with
+	 * their single-extruder values; the colour is the thumbnails'. */
+	if (!rc)
+		rc = sink_printf(b, e,
+			     "; filament_settings_id = \"Generic %s\"\n; filament_colour = %s\n"
+			     "; extruder_colour = \"\"\n; single_extruder_multi_material = 0\n"
+			     "; total toolchanges = 0\n; printer_model = %s\n"
+			     "; printer_variant = %s\n",
+			     f->filament_type, THUMBNAIL_COLOUR_HEX, w->printer_name, mm(f->nozzle_mm));
 	return rc;
 }
 
@@ -803,7 +848,7 @@ static int metrics_out(struct gc_writer *w, struct metrics *m, double total_s,
 	rc |= metrics_num(m, "gcode.filament_g", filament_mm * area / 1000 *
 						     w->f.filament_density_g_cm3);
 	rc |= metrics_num(m, "gcode.print_time_s", total_s);
-	rc |= metrics_int(m, "gcode.layers", w->received);
+	rc |= metrics_int(m, "gcode.layers", w->written);
 	rc |= metrics_num(m, "gcode.part_material_mm3", (double)part_units / GC_E_PER_MM * area);
 	rc |= metrics_num(m, "gcode.extrusion_mm", w->extrude_mm);
 	rc |= metrics_num(m, "gcode.travel_mm", w->travel_mm);
@@ -846,6 +891,10 @@ static int gc_close(void *state, struct metrics *m, struct err *e)
 		rc = submit(w, j, e);
 	if (!rc)
 		rc = pipeline_finish(w->pl, e);
+	if (!rc && w->written == 0)
+		rc = ERR_SET(e, ERR_GEOMETRY,
+			     "none of the %d layers has anything printable at a %g mm line width",
+			     w->received, w->f.line_width_mm);
 	/* Every total is known now: header, start, body, end, footer. */
 	if (!rc)
 		rc = start_code(w, &ss, &prime_units, &start_s, e);

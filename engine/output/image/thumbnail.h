@@ -18,6 +18,10 @@
 
 #include "engine/geom/vec.h"
 
+/* The parts' colour in every thumbnail (Prusa Orange), as #RRGGBB text;
+ * the G-code footer's filament_colour says the same, so host UIs agree. */
+#define THUMBNAIL_COLOUR_HEX "#FF8040"
+
 struct err;
 struct buf;
 struct mesh;

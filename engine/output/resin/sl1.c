@@ -73,6 +73,8 @@ struct sl1_writer {
 	struct sl1_item *spare;   /* finished items, buffers kept (job's thread only) */
 	struct thumb_acc *thumbs; /* no mesh: thumbnails from the layers */
 	int next_index;           /* next layer expected */
+	int emitted;              /* layers through sl1_emit, written or held back */
+	struct buf empty_png;     /* an empty layer's PNG (all are alike), for held-back ones */
 	struct sl1_summary sum;
 	uint64_t png_bytes;
 	int failed;      /* sticky first failure (negative err_code), 0 if none */
@@ -299,30 +301,59 @@ static void layer_name(const struct sl1_writer *w, int index, char *name, size_t
 		snprintf(name, len, "%d.png", index + 1);
 }
 
-/* Caller's thread, in layer order: the zip entry and the running figures. */
-static int sl1_emit(void *ctx, void *item, struct err *e)
+/* The zip entry of layer index (PNG png, coverage sum_px in pixel values
+ * 0..255) and the running figures. */
+static int add_layer(struct sl1_writer *w, int index, const struct buf *png, uint64_t sum_px,
+		     double height_mm, struct err *e)
 {
-	struct sl1_writer *w = ctx;
-	struct sl1_item *it = item;
 	char name[SL1_JOB_DIR_MAX + 16];
-	double area_mm2, height_mm = it->z_hi_mm - it->z_lo_mm;
-	int rc, slow;
+	double area_mm2 = (double)sum_px / 255.0 * w->px_area_mm2;
+	int slow = sl1_layer_is_slow(w->rp, area_mm2);
+	int rc;
 
-	layer_name(w, it->index, name, sizeof name);
-	rc = out_zip_add(w->zip, name, it->png.data, it->png.len, e);
+	layer_name(w, index, name, sizeof name);
+	rc = out_zip_add(w->zip, name, png->data, png->len, e);
 	if (!rc) {
-		area_mm2 = (double)it->st.sum / 255.0 * w->px_area_mm2;
-		slow = sl1_layer_is_slow(w->rp, area_mm2);
 		w->sum.layers++;
 		w->sum.slow_layers += slow;
 		w->sum.fast_layers += !slow;
 		w->sum.volume_mm3 += area_mm2 * height_mm;
-		w->sum.print_time_s += sl1_layer_time_s(w->rp, it->index, height_mm, slow);
+		w->sum.print_time_s += sl1_layer_time_s(w->rp, index, height_mm, slow);
 		w->sum.max_area_mm2 = fmax(w->sum.max_area_mm2, area_mm2);
-		w->png_bytes += it->png.len;
-		if (it->thumb)
-			thumb_acc_merge(w->thumbs, it->z_lo_mm, it->z_hi_mm, it->mask);
+		w->png_bytes += png->len;
 	}
+	return rc;
+}
+
+/* Caller's thread, in layer order: the zip entry and the running figures.
+ * An empty layer (no pixel lit: a lattice above its last strut) is held
+ * back and written only when a later layer exposes something, so the
+ * archive ends with the last layer that carries material and numSlow +
+ * numFast count exactly the layers written.  Held-back layers share one
+ * stored PNG: every empty image of the writer encodes alike. */
+static int sl1_emit(void *ctx, void *item, struct err *e)
+{
+	struct sl1_writer *w = ctx;
+	struct sl1_item *it = item;
+	double height_mm = it->z_hi_mm - it->z_lo_mm;
+	int rc = 0;
+
+	w->emitted++;
+	if (it->st.sum == 0) {
+		if (w->empty_png.len == 0)
+			rc = buf_append(&w->empty_png, it->png.data, it->png.len)
+				     ? ERR_SET(e, ERR_NOMEM, "out of memory for an empty layer")
+				     : 0;
+		item_put(w, it);
+		return rc;
+	}
+	/* resin layers all have the job's layer height */
+	for (int j = w->sum.layers; !rc && j < it->index; j++)
+		rc = add_layer(w, j, &w->empty_png, 0, w->info.layer_mm, e);
+	if (!rc)
+		rc = add_layer(w, it->index, &it->png, it->st.sum, height_mm, e);
+	if (!rc && it->thumb)
+		thumb_acc_merge(w->thumbs, it->z_lo_mm, it->z_hi_mm, it->mask);
 	item_put(w, it);
 	return rc;
 }
@@ -359,6 +390,7 @@ static void sl1_free_state(void *state)
 	}
 	out_zip_free(w->zip);   /* abandons an unclosed archive */
 	thumb_acc_free(w->thumbs);
+	buf_fini(&w->empty_png);
 	/* lent images belong to the caller; queued ones came back above */
 	for (int i = 0; i < w->nfree; i++)
 		raster_free(w->idle[i]);
@@ -455,6 +487,7 @@ static int open_common(const struct out_info *info, struct sink *s, enum sl1_kin
 	w = mem_calloc(1, sizeof *w);
 	if (!w)
 		return ERR_SET(e, ERR_NOMEM, "out of memory opening the archive writer");
+	buf_init(&w->empty_png);
 	pthread_mutex_init(&w->mu, NULL);
 	pthread_cond_init(&w->cv, NULL);
 	w->kind = kind;
@@ -465,7 +498,7 @@ static int open_common(const struct out_info *info, struct sink *s, enum sl1_kin
 	w->bytes0 = s->bytes;
 	printer_raster_geometry(info->printer, &w->map, &w->w, &w->h);
 	w->px_area_mm2 = raster_map_pixel_area_mm2(&w->map);
-	sl1_job_dir(info->job_name, w->job_dir);
+	out_job_dir(info->job_name, w->job_dir);
 	w->threads = info->threads < 1 ? 1 : info->threads > SL1_MAX_THREADS ? SL1_MAX_THREADS
 									   : info->threads;
 	/* two layers per worker keep every worker busy while the emitter
@@ -643,8 +676,11 @@ static int sl1_close(void *state, struct metrics *m, struct err *e)
 	if (w->failed)
 		return writer_failed(w, e);
 	rc = pipeline_finish(w->pipe, e);
-	if (!rc && w->sum.layers != w->info.layer_count)
-		rc = ERR_SET(e, ERR_INTERNAL, "%d of %d layers were written", w->sum.layers,
+	if (!rc && w->emitted != w->info.layer_count)
+		rc = ERR_SET(e, ERR_INTERNAL, "%d of %d layers were written", w->emitted,
+			     w->info.layer_count);
+	if (!rc && w->sum.layers == 0)
+		rc = ERR_SET(e, ERR_GEOMETRY, "none of the %d layers exposes a pixel",
 			     w->info.layer_count);
 	if (!rc && w->kind == KIND_SL1 && w->thumbs)
 		rc = add_thumbnails(w, e);

@@ -28,42 +28,6 @@
 /* Tower move per layer, seconds per mm of layer (PrusaSlicer 2.5). */
 #define SL1_TOWER_S_PER_MM 5.0
 
-/* Length of name without a trailing mesh-file extension. */
-static size_t stem_length(const char *name)
-{
-	static const char *const ext[] = {".stl", ".obj", ".off", ".ply", ".3mf", ".amf"};
-	size_t n = strlen(name);
-
-	for (size_t i = 0; i < sizeof ext / sizeof ext[0]; i++) {
-		size_t k = strlen(ext[i]);
-		if (n > k && strcasecmp(name + n - k, ext[i]) == 0)
-			return n - k;
-	}
-	return n;
-}
-
-void sl1_job_dir(const char *job_name, char *out)
-{
-	static const char thumb[] = "thumbnail/";
-	const char *p = job_name ? job_name : "";
-	size_t n = 0, len = stem_length(p);
-
-	for (size_t i = 0; i < len && n < SL1_JOB_DIR_MAX; i++) {
-		unsigned char c = (unsigned char)p[i];
-		out[n++] = (isalnum(c) && c < 0x80) || c == '-' || c == '_' ? (char)c : '_';
-	}
-	out[n] = '\0';
-	if (n == 0) {
-		snprintf(out, SL1_JOB_DIR_MAX + 1, "infilld");
-		return;
-	}
-	if (strncmp(thumb, out, n) == 0) {
-		char tmp[SL1_JOB_DIR_MAX + 1];
-		memcpy(tmp, out, n + 1);
-		snprintf(out, SL1_JOB_DIR_MAX + 1, "job_%s", tmp);
-	}
-}
-
 double sl1_layer_exposure_s(const struct resin_printer *r, int k)
 {
 	int fade = r->fade_layers > 0 ? r->fade_layers : 0;

@@ -27,16 +27,8 @@ struct sl1_summary {
 	double max_area_mm2;          /* largest layer */
 };
 
-/* Longest jobDir we write (without the NUL). */
-#define SL1_JOB_DIR_MAX 40
-
-/* jobDir from a job name: a mesh-file extension (.stl .obj .off .ply .3mf
- * .amf) dropped, letters, digits, '-' and '_' kept, anything else (path
- * separators, spaces, dots) becomes '_'; empty -> "infilld";
- * and never a prefix of "thumbnail/" (the firmware takes every PNG whose
- * name starts with jobDir as a layer), which gets a "job_" prefix.
- * out: SL1_JOB_DIR_MAX + 1 bytes. */
-void sl1_job_dir(const char *job_name, char *out);
+/* Longest jobDir we write (without the NUL): out_job_dir(). */
+#define SL1_JOB_DIR_MAX OUT_JOB_DIR_MAX
 
 /* The firmware's exposure schedule: layers 0-2 expose exposure_first_s,
  * the next fade_layers fall linearly towards exposure_s, then exposure_s. */

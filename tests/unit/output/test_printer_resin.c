@@ -150,19 +150,23 @@ static void test_job_dir(void)
 		{"../../etc/passwd", "______etc_passwd"},
 		{"", "infilld"},
 		{"thumb", "job_thumb"},
-		{"thumbnail", "job_thumbnail"},
+		{"thumbnail", "job_thumb"},
 		{"t", "job_t"},
-		{"thumbnails", "thumbnails"},
+		{"thumbnails", "thumbs"},
+		{"MyThumbnailHolder.stl", "MyThumbHolder"},
+		{"THUMBNAIL.OFF", "THUMB"},
+		{"thumbnailnail", "job_thumb"},
+		{"a.thumbnail.b", "a_thumb_b"},
 		{"caf\xc3\xa9", "caf__"},
 	};
 
 	for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
-		sl1_job_dir(cases[i][0], d);
+		out_job_dir(cases[i][0], d);
 		CHECK_STR(d, cases[i][1]);
 	}
-	sl1_job_dir(NULL, d);
+	out_job_dir(NULL, d);
 	CHECK_STR(d, "infilld");
-	sl1_job_dir("aaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaa", d);
+	out_job_dir("aaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaaa", d);
 	CHECK_EQ_INT(strlen(d), SL1_JOB_DIR_MAX);
 }
 
