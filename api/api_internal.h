@@ -24,7 +24,7 @@ enum problem {
 	PROB_NOT_FOUND, PROB_METHOD_NOT_ALLOWED, PROB_CONFLICT, PROB_NOT_READY, PROB_GONE,
 	PROB_TOO_LARGE, PROB_UNSUPPORTED_MEDIA, PROB_RANGE, PROB_INVALID_PARAM,
 	PROB_CHECKSUM, PROB_INVALID_MESH, PROB_IDEMPOTENCY, PROB_QUOTA, PROB_INTERNAL,
-	PROB_UNAVAILABLE, PROB_COUNT
+	PROB_UNAVAILABLE, PROB_TIMEOUT, PROB_HEAD_TOO_LARGE, PROB_NOT_IMPLEMENTED, PROB_COUNT
 };
 
 enum route_auth { AUTH_NONE, AUTH_TENANT, AUTH_ADMIN };
@@ -53,6 +53,7 @@ struct api_waiter {
 
 struct analyze_task;
 struct submit_task;
+struct api_gate;
 struct job_new;
 struct job_row;
 
@@ -65,6 +66,8 @@ struct api_server {
 	atomic_llong requests[ROUTE_COUNT_MAX + 1][HTTP_CODES];
 	atomic_llong bytes_out;
 	atomic_int open_streams;
+	struct api_gate *gate;           /* accept loop and head gate (gate.c) */
+	atomic_llong gate_answers[3];    /* the gate's own 408, 503, other (400/431/501) */
 
 	/* Parked SSE streams: the ticker resumes them every ~200 ms. */
 	pthread_mutex_t wait_mu;
@@ -112,6 +115,8 @@ struct api_req {
 	enum problem reject_p;
 	char reject_detail[256];
 	size_t discarded;
+	int64_t started_ms;         /* head complete (first call), for the body rate */
+	int64_t body_bytes;         /* received so far */
 };
 
 #define API_DISCARD_MAX (16u << 20)
@@ -126,6 +131,22 @@ void api_reject(struct api_req *r, enum problem p, const char *fmt, ...)
 /* Metrics label of route i (server.c): its pattern, "unmatched" for
  * i == number of routes, NULL past that. */
 const char *api_route_label(int i);
+
+/* ---- accept loop and head gate (gate.c) ---- */
+struct sockaddr_storage;
+/* Bind and listen on ss (s->port gets the bound port); api_gate_run()
+ * starts accepting once s->mhd runs. */
+int api_gate_start(struct api_server *s, const struct sockaddr_storage *ss, struct err *e);
+int api_gate_run(struct api_server *s, struct err *e);
+/* Stop accepting and close what the gate holds (before MHD stops);
+ * api_gate_free() then frees it (after MHD stopped).  NULL-safe. */
+void api_gate_stop(struct api_server *s);
+void api_gate_free(struct api_server *s);
+/* MHD_OPTION_NOTIFY_CONNECTION callback (cls = the server). */
+void api_gate_notify(void *cls, struct MHD_Connection *conn, void **socket_context,
+		     enum MHD_ConnectionNotificationCode toe);
+/* Connections MHD holds now. */
+int api_gate_live(struct api_gate *g);
 
 /* ---- responses (http.c) ---- */
 enum MHD_Result api_queue(struct api_req *r, unsigned status, struct MHD_Response *resp);

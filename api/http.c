@@ -17,6 +17,11 @@ enum MHD_Result api_queue(struct api_req *r, unsigned status, struct MHD_Respons
 	if (!resp)
 		return MHD_NO; /* out of memory: MHD closes the connection */
 	MHD_add_response_header(resp, "Cache-Control", "no-store");
+	/* Past 3/4 of the connection limit, keep-alive gives way: the next
+	 * request comes through the head gate again instead of holding a
+	 * slot while its head trickles in. */
+	if (r->srv->gate && api_gate_live(r->srv->gate) * 4 >= r->srv->cfg.max_connections * 3)
+		MHD_add_response_header(resp, MHD_HTTP_HEADER_CONNECTION, "close");
 	r->status = status;
 	ret = MHD_queue_response(r->conn, status, resp);
 	MHD_destroy_response(resp);

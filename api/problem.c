@@ -54,7 +54,15 @@ static const struct {
 	[PROB_INTERNAL] = {"internal", 500, "Internal error",
 			   "Something failed on the server; the log has details."},
 	[PROB_UNAVAILABLE] = {"unavailable", 503, "Service unavailable",
-			      "The service is shutting down or cannot reach its database."},
+			      "The service is shutting down, cannot reach its database, or is at its "
+			      "connection limit; retry after the Retry-After seconds."},
+	[PROB_TIMEOUT] = {"request-timeout", 408, "Request timeout",
+			  "The request head did not arrive in time (--head-timeout-s), or the body "
+			  "arrived slower than the minimum rate; the connection is closed."},
+	[PROB_HEAD_TOO_LARGE] = {"header-fields-too-large", 431, "Request header fields too large",
+				 "The request line and header fields exceed 32 KiB."},
+	[PROB_NOT_IMPLEMENTED] = {"not-implemented", 501, "Not implemented",
+				  "The request uses a transfer coding other than chunked."},
 };
 
 unsigned problem_status(enum problem p)

