@@ -164,6 +164,10 @@ enum MHD_Result api_problem(struct api_req *r, enum problem p, const char *field
 struct MHD_Response *api_problem_response(enum problem p, const char *instance,
 					  const char *field, const char *detail,
 					  unsigned *status);
+/* The same with more members (reference stolen; NULL = none). */
+struct MHD_Response *api_problem_response_members(enum problem p, const char *instance,
+						  const char *field, const char *detail,
+						  json_t *members, unsigned *status);
 /* Problem for an engine/db error record: maps err codes to types. */
 enum MHD_Result api_problem_err(struct api_req *r, const struct err *e);
 unsigned problem_status(enum problem p);

@@ -178,7 +178,8 @@ enum MHD_Result api_upload_begin(struct api_req *r)
 	if (r->tenant.quota_bytes &&
 	    r->tenant.used_bytes + (cl ? strtoll(cl, NULL, 10) : 0) > r->tenant.quota_bytes)
 		return api_problem(r, PROB_QUOTA, NULL,
-				   "storage quota of %lld bytes is used up (%lld in use)",
+				   "the upload would take the tenant past its storage quota of %lld bytes "
+				   "(%lld in use)",
 				   (long long)r->tenant.quota_bytes, (long long)r->tenant.used_bytes);
 	if (!(u = calloc(1, sizeof *u)))
 		return MHD_NO;
@@ -246,6 +247,14 @@ int api_upload_feed(struct api_req *r, const char *data, size_t len)
 	struct upload *u = r->upload;
 
 	u->bytes += (int64_t)len;
+	if (r->tenant.quota_bytes && r->tenant.used_bytes + u->bytes > r->tenant.quota_bytes) {
+		/* Chunked bodies have no length to refuse up front. */
+		api_reject(r, PROB_QUOTA,
+			   "the upload would take the tenant past its storage quota of %lld bytes "
+			   "(%lld in use)",
+			   (long long)r->tenant.quota_bytes, (long long)r->tenant.used_bytes);
+		return -1;
+	}
 	if (u->bytes > u->limit) {
 		/* Chunked or lying Content-Length: stop at the limit. */
 		api_reject(r, PROB_TOO_LARGE, "the upload exceeds this tenant's limit of %lld bytes",

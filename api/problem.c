@@ -92,6 +92,13 @@ struct MHD_Response *api_problem_response(enum problem p, const char *instance,
 					  const char *field, const char *detail,
 					  unsigned *status)
 {
+	return api_problem_response_members(p, instance, field, detail, NULL, status);
+}
+
+struct MHD_Response *api_problem_response_members(enum problem p, const char *instance,
+						  const char *field, const char *detail,
+						  json_t *members, unsigned *status)
+{
 	char type[64];
 	json_t *o;
 	struct MHD_Response *resp;
@@ -103,6 +110,9 @@ struct MHD_Response *api_problem_response(enum problem p, const char *instance,
 		json_object_set_new(o, "instance", json_string(instance));
 	if (o && field && field[0])
 		json_object_set_new(o, "field", json_string(field));
+	if (o && members)
+		json_object_update_missing(o, members);
+	json_decref(members);
 	resp = api_json_response(o);
 	if (resp)
 		MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE,
@@ -122,7 +132,13 @@ enum MHD_Result api_problem(struct api_req *r, enum problem p, const char *field
 	va_start(ap, fmt);
 	vsnprintf(detail, sizeof detail, fmt, ap);
 	va_end(ap);
-	resp = api_problem_response(p, r->url, field, detail, &status);
+	/* Quota refusals say where the tenant stands (as of this request). */
+	resp = api_problem_response_members(
+		p, r->url, field, detail,
+		p == PROB_QUOTA ? json_pack("{s:I, s:I}", "used_bytes", (json_int_t)r->tenant.used_bytes,
+					    "quota_bytes", (json_int_t)r->tenant.quota_bytes)
+				: NULL,
+		&status);
 	if (resp && p == PROB_UNAUTHORIZED)
 		MHD_add_response_header(resp, MHD_HTTP_HEADER_WWW_AUTHENTICATE,
 					"Bearer realm=\"infilld\"");

@@ -584,6 +584,35 @@ static int fenced_row(struct db *db, int64_t seq, int attempt, int *max_attempts
 	return rc == SQLITE_DONE ? 0 : db_fail(db, e, "reading job");
 }
 
+/* ERR_LIMIT when bytes more would take the tenant past its storage quota
+ * (checked in the caller's transaction, so concurrent jobs of a tenant
+ * cannot pass it together). */
+static int quota_room(struct db *db, int64_t tenant_id, int64_t bytes, struct err *e)
+{
+	static const char sql[] = "SELECT quota_bytes, used_bytes FROM tenants WHERE id = ?1";
+	sqlite3_stmt *st = db_stmt(db, sql, e);
+	int64_t quota = 0, used = 0;
+	int rc;
+
+	if (!st)
+		return ERR_IO;
+	sqlite3_bind_int64(st, 1, tenant_id);
+	rc = sqlite3_step(st);
+	if (rc == SQLITE_ROW) {
+		quota = sqlite3_column_int64(st, 0);
+		used = sqlite3_column_int64(st, 1);
+	}
+	sqlite3_reset(st);
+	if (rc != SQLITE_ROW && rc != SQLITE_DONE)
+		return db_fail(db, e, "reading the quota");
+	if (quota > 0 && used + bytes > quota)
+		return ERR_SET(e, ERR_LIMIT,
+			       "the output (%lld bytes) would take the tenant past its storage quota "
+			       "of %lld bytes (%lld in use)",
+			       (long long)bytes, (long long)quota, (long long)used);
+	return 0;
+}
+
 int queue_succeed(struct db *db, int64_t seq, int attempt, const struct job_artifact *a,
 		  const char *metrics_json, struct err *e)
 {
@@ -619,7 +648,8 @@ int queue_succeed(struct db *db, int64_t seq, int attempt, const struct job_arti
 	sqlite3_bind_int64(st, 5, a->bytes);
 	sqlite3_bind_text(st, 6, a->sha256, -1, SQLITE_STATIC);
 	sqlite3_bind_text(st, 7, metrics_json ? metrics_json : "{}", -1, SQLITE_STATIC);
-	if ((rc = step_done(db, st, "completing job", e)) ||
+	if ((rc = quota_room(db, tenant_id, a->bytes, e)) ||
+	    (rc = step_done(db, st, "completing job", e)) ||
 	    (rc = db_tenant_add_usage(db, tenant_id, a->bytes, e)) ||
 	    (rc = add_event(db, seq, "state", e)) || (rc = record_duration(db, seq, e)))
 		goto out;

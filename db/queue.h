@@ -124,6 +124,8 @@ struct job_artifact {
 	int64_t bytes;
 	const char *sha256;       /* hex */
 };
+/* Record success and charge a->bytes to the tenant's used bytes; ERR_LIMIT
+ * (nothing recorded) when that would pass the tenant's quota. */
 int queue_succeed(struct db *db, int64_t seq, int attempt, const struct job_artifact *a,
 		  const char *metrics_json, struct err *e);
 

@@ -45,6 +45,8 @@ struct jobproc_args {
 	const char *mesh_path;
 	const char *out_tmp;       /* where the output goes */
 	int fd;                    /* write end of the report pipe */
+	int64_t quota_bytes;       /* tenant's storage quota, 0 = none ... */
+	int64_t quota_left_bytes;  /* ... and what was left of it at the claim */
 };
 
 /* Runs in the forked child; never returns. */

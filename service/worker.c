@@ -10,6 +10,7 @@
 #include "db/meshes.h"
 #include "db/queue.h"
 #include "db/store.h"
+#include "db/tenants.h"
 #include "engine/engine.h"
 #include "service/commands.h"
 #include "service/config.h"
@@ -166,6 +167,14 @@ static void finish(struct attempt *a, int status)
 		art.bytes = (int64_t)a->result.bytes;
 		art.sha256 = a->result.sha256;
 		rc = queue_succeed(a->db, j->seq, j->attempt, &art, a->metrics, &e);
+		if (rc == ERR_LIMIT) {
+			/* Another output of the tenant took the room meanwhile. */
+			unlink(final_path);
+			snprintf(msg, sizeof msg, "%s", e.msg);
+			f.type = "quota";
+			f.message = msg;
+			goto fail;
+		}
 		if (rc != 1) {
 			unlink(final_path); /* fenced out (or the db failed): not ours */
 			log_msg(rc < 0 ? LOG_ERROR : LOG_INFO, "worker",
@@ -289,6 +298,7 @@ static void run_attempt(const struct service_config *c, struct db *db, struct jo
 	struct attempt a;
 	struct mesh_rec m;
 	struct jobproc_args args;
+	struct tenant t;
 	char mesh_path[STORE_PATH_MAX], tmp[STORE_PATH_MAX];
 	int p[2];
 	struct err e;
@@ -311,6 +321,22 @@ static void run_attempt(const struct service_config *c, struct db *db, struct jo
 		struct job_failure f = {"io", "cannot create a pipe", "", 1};
 		queue_fail(db, j->seq, j->attempt, &f, &e);
 		return;
+	}
+	memset(&args, 0, sizeof args);
+	if (db_tenant_get_id(db, j->tenant_id, &t, &e) == 0 && t.quota_bytes > 0) {
+		args.quota_bytes = t.quota_bytes;
+		args.quota_left_bytes = t.quota_bytes > t.used_bytes ? t.quota_bytes - t.used_bytes : 0;
+		if (args.quota_left_bytes == 0) {
+			char msg[160];
+			struct job_failure f = {"quota", msg, "", 0};
+			snprintf(msg, sizeof msg,
+				 "the tenant's storage quota of %lld bytes is used up (%lld in use)",
+				 (long long)t.quota_bytes, (long long)t.used_bytes);
+			close(p[0]);
+			close(p[1]);
+			queue_fail(db, j->seq, j->attempt, &f, &e);
+			return;
+		}
 	}
 	args.cfg = c;
 	args.job = j;
