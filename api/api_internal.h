@@ -113,6 +113,7 @@ struct api_req {
 	 * then the connection is closed) and the problem sent at its end. */
 	int rejected;
 	enum problem reject_p;
+	char reject_field[16];
 	char reject_detail[256];
 	size_t discarded;
 	int64_t started_ms;         /* head complete (first call), for the body rate */
@@ -121,12 +122,14 @@ struct api_req {
 
 #define API_DISCARD_MAX (16u << 20)
 
-/* Refuse the request body with problem p once it has ended (see above). */
+/* Refuse the request body with problem p once it has ended (see above);
+ * field (may be NULL) is the problem's "field". */
 void api_reject(struct api_req *r, enum problem p, const char *fmt, ...)
 #if defined(__GNUC__)
 	__attribute__((format(printf, 3, 4)))
 #endif
 	;
+void api_reject_field(struct api_req *r, const char *field);
 
 /* Metrics label of route i (server.c): its pattern, "unmatched" for
  * i == number of routes, NULL past that. */
@@ -180,6 +183,10 @@ const char *api_time(int64_t ms, char *buf, size_t len);
 /* Header / query values (NULL when absent). */
 const char *api_header(struct api_req *r, const char *name);
 const char *api_query(struct api_req *r, const char *name);
+
+/* 1 when s is UTF-8 (shortest forms, no surrogates) without control
+ * characters: fit for names stored and shown in JSON. */
+int api_text_valid(const char *s);
 
 /* Park the request's connection until api_wake() or the ticker. */
 void api_park(struct api_req *r);

@@ -116,6 +116,11 @@ void api_wake(struct api_server *s, struct MHD_Connection *conn)
 	MHD_resume_connection(conn);
 }
 
+void api_reject_field(struct api_req *r, const char *field)
+{
+	snprintf(r->reject_field, sizeof r->reject_field, "%s", field);
+}
+
 void api_reject(struct api_req *r, enum problem p, const char *fmt, ...)
 {
 	va_list ap;
@@ -127,4 +132,41 @@ void api_reject(struct api_req *r, enum problem p, const char *fmt, ...)
 	va_start(ap, fmt);
 	vsnprintf(r->reject_detail, sizeof r->reject_detail, fmt, ap);
 	va_end(ap);
+}
+
+int api_text_valid(const char *s)
+{
+	const unsigned char *p = (const unsigned char *)s;
+
+	while (*p) {
+		unsigned c = *p;
+		int n;
+		uint32_t cp;
+
+		if (c < 0x20 || c == 0x7f)
+			return 0;
+		if (c < 0x80) {
+			p++;
+			continue;
+		}
+		if (c >= 0xc2 && c <= 0xdf)
+			n = 1, cp = c & 0x1f;
+		else if (c >= 0xe0 && c <= 0xef)
+			n = 2, cp = c & 0x0f;
+		else if (c >= 0xf0 && c <= 0xf4)
+			n = 3, cp = c & 0x07;
+		else
+			return 0;
+		for (int i = 1; i <= n; i++) {
+			if ((p[i] & 0xc0) != 0x80)
+				return 0;
+			cp = cp << 6 | (p[i] & 0x3f);
+		}
+		/* overlong, surrogates, past U+10FFFF */
+		if ((n == 2 && cp < 0x800) || (n == 3 && (cp < 0x10000 || cp > 0x10ffff)) ||
+		    (cp >= 0xd800 && cp <= 0xdfff))
+			return 0;
+		p += n + 1;
+	}
+	return 1;
 }

@@ -275,7 +275,7 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn, const 
 		return MHD_YES;
 	}
 	if (r->rejected)
-		return api_problem(r, r->reject_p, NULL, "%s", r->reject_detail);
+		return api_problem(r, r->reject_p, r->reject_field, "%s", r->reject_detail);
 	if (r->pending) {
 		struct MHD_Response *resp = r->pending;
 		r->pending = NULL;

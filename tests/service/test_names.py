@@ -1,0 +1,73 @@
+"""Names: a mesh name that is not UTF-8 text is refused (422, field name)
+before anything is stored or charged, by query and by multipart filename;
+errors name the client's file, never temporary files, data-directory
+paths or uninitialised numbers."""
+import glob
+import os
+import re
+import sys
+import time
+
+sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
+from svc import SHARED, Server, check, run  # noqa: E402
+
+P = os.path.join(SHARED, "meshes", "P.off")
+srv = Server(workers=1)
+S = {}
+
+
+def setup():
+    srv.start()
+    S["admin"] = srv.admin_key()
+    t = srv.json("POST", "/v1/tenants", {"name": "n"}, key=S["admin"], expect=201)
+    S["key"] = t["api_key"]
+
+
+def used():
+    return srv.json("GET", "/v1/tenants/n", key=S["admin"])["used_bytes"]
+
+
+def meshes():
+    return srv.json("GET", "/v1/meshes", key=S["key"])["meshes"]
+
+
+def multipart(filename, data):
+    b = b"----infilldtest"
+    body = (b"--" + b + b"\r\nContent-Disposition: form-data; name=\"file\"; filename=\"" +
+            filename + b"\"\r\nContent-Type: application/octet-stream\r\n\r\n" + data +
+            b"\r\n--" + b + b"--\r\n")
+    return srv.request("POST", "/v1/meshes?format=off", body,
+                       {"Content-Type": "multipart/form-data; boundary=" + b.decode()},
+                       S["key"], timeout=5)
+
+
+def test_invalid_utf8_name():
+    data = open(P, "rb").read()
+    before_used, before_n = used(), len(meshes())
+    for q in ("%ff%fe", "a%c0%afb", "%ed%a0%80", "x%0Ay"):
+        r = srv.request("POST", "/v1/meshes?format=off&name=" + q, data,
+                        {"Content-Type": "application/octet-stream"}, S["key"], timeout=5)
+        check(r.problem(422, "invalid-parameter").get("field") == "name",
+              "query name %s: field name" % q)
+    r = multipart(b"\xff\xfe.off", data)
+    check(r.problem(422, "invalid-parameter").get("field") == "name", "multipart filename")
+    check(used() == before_used, "nothing charged: %d vs %d" % (used(), before_used))
+    check(len(meshes()) == before_n, "nothing stored")
+    tmp = os.listdir(os.path.join(srv.data, "tmp"))
+    check(not tmp, "no temp files left: %s" % tmp)
+    # Valid UTF-8 names are kept as sent.
+    r = srv.request("POST", "/v1/meshes?format=off&name=%C3%A9l%C3%A9phant.off", data,
+                    {"Content-Type": "application/octet-stream"}, S["key"], timeout=5)
+    check(r.status == 201 and r.json()["name"] == "\u00e9l\u00e9phant.off", "utf-8 name kept")
+
+
+def teardown():
+    srv.cleanup()
+
+
+if __name__ == "__main__":
+    try:
+        setup()
+        run([test_invalid_utf8_name, teardown])
+    finally:
+        srv.cleanup()
