@@ -157,6 +157,8 @@ enum MHD_Result api_queue(struct api_req *r, unsigned status, struct MHD_Respons
 enum MHD_Result api_json(struct api_req *r, unsigned status, json_t *body);
 /* Same, as a response object with no status queued yet. */
 struct MHD_Response *api_json_response(json_t *body);
+/* The same with another JSON media type (exactly one Content-Type). */
+struct MHD_Response *api_json_response_as(json_t *body, const char *content_type);
 /* RFC 9457 problem+json.  field may be NULL; detail is printf-style. */
 enum MHD_Result api_problem(struct api_req *r, enum problem p, const char *field,
 			    const char *fmt, ...)

@@ -30,6 +30,11 @@ enum MHD_Result api_queue(struct api_req *r, unsigned status, struct MHD_Respons
 
 struct MHD_Response *api_json_response(json_t *body)
 {
+	return api_json_response_as(body, "application/json");
+}
+
+struct MHD_Response *api_json_response_as(json_t *body, const char *content_type)
+{
 	struct MHD_Response *resp;
 	char *text;
 
@@ -44,7 +49,7 @@ struct MHD_Response *api_json_response(json_t *body)
 		free(text);
 		return NULL;
 	}
-	MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE, "application/json");
+	MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE, content_type);
 	return resp;
 }
 

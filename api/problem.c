@@ -113,10 +113,7 @@ struct MHD_Response *api_problem_response_members(enum problem p, const char *in
 	if (o && members)
 		json_object_update_missing(o, members);
 	json_decref(members);
-	resp = api_json_response(o);
-	if (resp)
-		MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE,
-					"application/problem+json");
+	resp = api_json_response_as(o, "application/problem+json");
 	*status = problems[p].status;
 	return resp;
 }

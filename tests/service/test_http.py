@@ -120,6 +120,94 @@ def test_slow_body():
     check(time.time() - t0 < 5, "slow body cut off after %.1f s" % (time.time() - t0))
 
 
+def test_framing():
+    """Request smuggling: conflicting framing gets an error and a close, and
+    what follows the head never runs as a second request."""
+    smuggled = b"GET /v1/nothing HTTP/1.1\r\nHost: x\r\n\r\n"
+    cases = [
+        (b"Content-Length: 5\r\nContent-Length: 40\r\n", b"400"),
+        (b"Content-Length: 5, 40\r\n", b"400"),
+        (b"Content-Length: 5x\r\n", b"400"),
+        (b"Content-Length : 5\r\n", b"400"),
+        (b"Transfer-Encoding: chunked\r\nContent-Length: 5\r\n", b"400"),
+        (b"Transfer-Encoding: chunked, chunked\r\n", b"400"),
+        (b"Transfer-Encoding: chunked\r\nTransfer-Encoding: chunked\r\n", b"400"),
+        (b"Transfer-Encoding: gzip\r\n", b"501"),
+        (b"Transfer-Encoding: gzip, chunked\r\n", b"501"),
+    ]
+    for fields, code in cases:
+        t0 = time.time()
+        got = raw(b"POST /v1/jobs HTTP/1.1\r\nHost: x\r\nAuthorization: Bearer " +
+                  S["key"].encode() + b"\r\nContent-Type: application/json\r\n" + fields +
+                  b"\r\n{}\r\n" + smuggled, limit=5)
+        check(got.startswith(b"HTTP/1.1 " + code), "%r: %r" % (fields, got[:120]))
+        check(got.count(b"HTTP/1.1 ") == 1, "%r: one answer only: %r" % (fields, got))
+        check(time.time() - t0 < 3, "%r: answered and closed at once" % fields)
+        line, hdrs = head_fields(got)
+        check(("Connection", "close") in hdrs, "%r: Connection: close" % fields)
+        check(("Content-Type", "application/problem+json") in hdrs, "problem body")
+    # Identical repeated values are one value (RFC 9110 section 8.6).
+    got = raw(b"POST /v1/jobs HTTP/1.1\r\nHost: x\r\nAuthorization: Bearer " +
+              S["key"].encode() + b"\r\nContent-Type: application/json\r\n"
+              b"Content-Length: 2\r\nContent-Length: 2\r\nConnection: close\r\n\r\n{}", 5)
+    check(got.startswith(b"HTTP/1.1 422"), "repeated equal Content-Length: %r" % got[:80])
+
+
+def test_one_content_type():
+    """Every problem carries exactly one Content-Type, application/problem+json."""
+    for path, key in (("/v1/nothing", S["key"]), ("/v1/jobs", None), ("/v1/jobs/j_x", S["key"])):
+        got = raw(("GET %s HTTP/1.1\r\nHost: x\r\n%sConnection: close\r\n\r\n" %
+                   (path, "Authorization: Bearer %s\r\n" % key if key else "")).encode())
+        line, hdrs = head_fields(got)
+        types = [v for k, v in hdrs if k.lower() == "content-type"]
+        check(types == ["application/problem+json"], "%s: %s %s" % (path, line, types))
+
+
+def hold(src, n):
+    """n connections from src that each hold a libmicrohttpd slot (a whole
+    head, then a body that does not come)."""
+    socks = []
+    for _ in range(n):
+        s = connect(src)
+        s.sendall(("POST /v1/jobs HTTP/1.1\r\nHost: x\r\nAuthorization: Bearer %s\r\n"
+                   "Content-Type: application/json\r\nContent-Length: 100\r\n\r\n" %
+                   S["key"]).encode())
+        socks.append(s)
+    time.sleep(0.3)
+    return socks
+
+
+def get_from(src, path):
+    s = connect(src)
+    s.sendall(("GET %s HTTP/1.1\r\nHost: x\r\nConnection: close\r\n\r\n" % path).encode())
+    got = read_all(s, 5)
+    s.close()
+    return got
+
+
+def test_limits_answer_503():
+    """At the per-address and total limits, new clients get 503 with
+    Retry-After (not a silent close); probes still answer."""
+    held = hold("127.0.0.9", 8)  # --per-ip-connections 8
+    got = get_from("127.0.0.9", "/v1/engines")
+    line, hdrs = head_fields(got)
+    check(line.startswith("HTTP/1.1 503"), "per-address limit: %r" % got[:100])
+    check(any(k == "Retry-After" for k, _ in hdrs), "Retry-After at the per-address limit")
+    check(b"/problems/unavailable" in got, "problem body")
+    held += hold("127.0.0.10", 8)  # 16 = --max-connections
+    got = get_from("127.0.0.11", "/v1/engines")
+    line, hdrs = head_fields(got)
+    check(line.startswith("HTTP/1.1 503"), "connection limit: %r" % got[:100])
+    check(("Retry-After", "2") in hdrs, "Retry-After at the limit")
+    check(get_from("127.0.0.11", "/livez").startswith(b"HTTP/1.1 200"), "probes use the reserve")
+    for s in held:
+        s.close()
+    time.sleep(0.5)
+    check(get_from("127.0.0.9", "/livez").startswith(b"HTTP/1.1 200"), "slots released")
+    got = get_from("127.0.0.11", "/v1/engines")
+    check(got.startswith(b"HTTP/1.1 401"), "served again after the limit: %r" % got[:60])
+
+
 def teardown():
     srv.cleanup()
 
@@ -127,6 +215,7 @@ def teardown():
 if __name__ == "__main__":
     try:
         setup()
-        run([test_slow_heads, test_slow_body, teardown])
+        run([test_slow_heads, test_slow_body, test_framing, test_one_content_type,
+             test_limits_answer_503, teardown])
     finally:
         srv.cleanup()
