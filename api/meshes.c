@@ -445,6 +445,8 @@ void api_upload_complete(struct api_req *r)
 						  &r->pending_status);
 	return;
 fail:
+	/* The reader names the temporary file; the client knows its own name. */
+	store_redact(detail, sizeof detail, s->cfg.data_dir, u->tmp, u->name);
 	r->pending = api_problem_response(p, r->url, NULL, detail, &r->pending_status);
 }
 

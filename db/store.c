@@ -7,6 +7,7 @@
 #include <fcntl.h>
 #include <ftw.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
 #include <sys/stat.h>
 #include <sys/statvfs.h>
@@ -146,4 +147,44 @@ int64_t store_free_bytes(const char *data_dir)
 	if (statvfs(data_dir, &sv) != 0)
 		return -1;
 	return (int64_t)sv.f_bavail * (int64_t)sv.f_frsize;
+}
+
+/* Replace every occurrence of what in msg by with (within cap). */
+static void replace_all(char *msg, size_t cap, const char *what, const char *with)
+{
+	size_t wl = strlen(what), nl = strlen(with);
+	char *p = msg;
+
+	if (!wl)
+		return;
+	while ((p = strstr(p, what)) != NULL) {
+		size_t tail = strlen(p + wl);
+		size_t at = (size_t)(p - msg);
+		if (at + nl + tail + 1 > cap)
+			tail = cap > at + nl + 1 ? cap - at - nl - 1 : 0;
+		if (at + nl + 1 > cap)
+			break;
+		memmove(p + nl, p + wl, tail);
+		p[nl + tail] = '\0';
+		memcpy(p, with, nl);
+		p += nl;
+	}
+}
+
+void store_redact(char *msg, size_t cap, const char *data_dir, const char *path,
+		  const char *name)
+{
+	char abs_dir[STORE_PATH_MAX];
+
+	if (path && path[0]) {
+		const char *base = strrchr(path, '/');
+		replace_all(msg, cap, path, name ? name : "the file");
+		if (base && base[1])
+			replace_all(msg, cap, base + 1, name ? name : "the file");
+	}
+	if (data_dir && data_dir[0]) {
+		if (realpath(data_dir, abs_dir))
+			replace_all(msg, cap, abs_dir, "DATA");
+		replace_all(msg, cap, data_dir, "DATA");
+	}
 }

@@ -60,6 +60,8 @@ struct attempt {
 	int timed_out, shutdown;
 	double stop_sent_s;       /* when SIGUSR1 went out */
 	double stop_seen_s;       /* when the worker was told to stop */
+	const char *mesh_path;    /* the job's input, named ... */
+	char mesh_name[128];      /* ... by the client's name in messages */
 };
 
 /* Parse complete records from a->in. */
@@ -134,7 +136,7 @@ static void finish(struct attempt *a, int status)
 	const struct service_config *c = a->cfg;
 	struct job_row *j = a->job;
 	struct job_failure f = {NULL, NULL, "", 0};
-	char msg[ERR_MSG_MAX + 256];
+	char msg[ERR_MSG_MAX + 256], redacted[ERR_MSG_MAX + 256];
 	char tmp[STORE_PATH_MAX], final_path[STORE_PATH_MAX], name[128];
 	struct err e;
 	int rc;
@@ -229,6 +231,14 @@ static void finish(struct attempt *a, int status)
 		f.message = msg;
 	}
 fail:
+	/* Messages name our files (the mesh by its id, the .part file, the
+	 * data directory); the client knows the mesh by its own name. */
+	if (f.message != redacted) {
+		snprintf(redacted, sizeof redacted, "%s", f.message);
+		store_redact(redacted, sizeof redacted, NULL, tmp, "the output");
+		store_redact(redacted, sizeof redacted, c->data_dir, a->mesh_path, a->mesh_name);
+		f.message = redacted;
+	}
 	rc = queue_fail(a->db, j->seq, j->attempt, &f, &e);
 	log_msg(LOG_INFO, "worker", "job %s attempt %d failed (%s: %s)%s", j->id, j->attempt, f.type,
 		f.message, rc == 1 ? "" : " - not recorded, job no longer ours");
@@ -314,6 +324,8 @@ static void run_attempt(const struct service_config *c, struct db *db, struct jo
 		return;
 	}
 	store_mesh_path(c->data_dir, j->tenant_id, m.id, m.format, mesh_path, sizeof mesh_path);
+	a.mesh_path = mesh_path;
+	snprintf(a.mesh_name, sizeof a.mesh_name, "%s", m.name);
 	db_mesh_rec_fini(&m);
 	store_tmp_path(c->data_dir, "", tmp, sizeof tmp);
 	snprintf(tmp + strlen(tmp), sizeof tmp - strlen(tmp), "%s-a%d.part", j->id, j->attempt);

@@ -61,6 +61,45 @@ def test_invalid_utf8_name():
     check(r.status == 201 and r.json()["name"] == "\u00e9l\u00e9phant.off", "utf-8 name kept")
 
 
+def clean(detail):
+    """No temporary names, data-directory paths or garbage numbers."""
+    check("up-" not in detail and "/tmp" not in detail and srv.data not in detail and
+          os.path.realpath(srv.data) not in detail, "internal path in %r" % detail)
+    check(not re.search(r"\d{7,}", detail), "garbage number in %r" % detail)
+
+
+def test_errors_name_client_files():
+    r = srv.request("POST", "/v1/tenants", {"name": "../x"}, key=S["admin"])
+    p = r.problem(422, "invalid-parameter")
+    check(p.get("field") == "name", "tenant name field: %s" % p)
+    clean(p["detail"])
+    broken = sorted(glob.glob(os.path.join(SHARED, "meshes", "broken", "*.stl")))
+    seen = 0
+    for path in broken:
+        r = srv.request("POST", "/v1/meshes?format=stl&name=client-part.stl",
+                        open(path, "rb").read(), {"Content-Type": "model/stl"}, S["key"],
+                        timeout=10)
+        if r.status == 201:
+            continue
+        p = r.problem(422)
+        clean(p["detail"])
+        if "client-part.stl" in p["detail"]:
+            seen += 1
+        print("     %s: %s" % (os.path.basename(path), p["detail"]))
+    check(seen > 0, "broken meshes' errors name the client's file")
+    # A job's error names the mesh by the client's name, not its stored file.
+    mesh = srv.upload(P, S["key"], name="my-part.off").json()["id"]
+    for f in glob.glob(os.path.join(srv.data, "tenants", "*", "meshes", mesh + ".*")):
+        os.unlink(f)  # lost on disk (a bad restore): the reader names the path
+    jid = srv.submit(S["key"], mesh, format="sl1", params={"height_mm": 5}).json()["id"]
+    j = srv.wait_job(S["key"], jid)
+    check(j["state"] == "failed", "mesh file missing: %s" % j["state"])
+    check("my-part.off" in j["error"]["detail"], "names the client's file")
+    print("     job: %s" % j["error"]["detail"])
+    clean(j["error"]["detail"])
+    check(mesh not in j["error"]["detail"], "no stored file name in %r" % j["error"]["detail"])
+
+
 def teardown():
     srv.cleanup()
 
@@ -68,6 +107,6 @@ def teardown():
 if __name__ == "__main__":
     try:
         setup()
-        run([test_invalid_utf8_name, teardown])
+        run([test_invalid_utf8_name, test_errors_name_client_files, teardown])
     finally:
         srv.cleanup()
