@@ -51,7 +51,8 @@ void queue_job_rows_free(struct job_row *v, int n)
 	"seq, id, tenant_id, mesh_id, engine, format, printer, params, fault, state, stage," \
 	" progress, layers_done, layers_total, attempt, max_attempts, created_at,"          \
 	" started_at, finished_at, run_after, lease_expires, error_type, error,"            \
-	" error_field, metrics, artifact, artifact_bytes, artifact_sha256, event_seq"
+	" error_field, metrics, artifact, artifact_bytes, artifact_sha256, event_seq,"       \
+	" artifact_damaged_at"
 
 static void read_job(sqlite3_stmt *st, struct job_row *j)
 {
@@ -85,6 +86,7 @@ static void read_job(sqlite3_stmt *st, struct job_row *j)
 	j->artifact_bytes = sqlite3_column_int64(st, 26);
 	db_col_copy(st, 27, j->artifact_sha256, sizeof j->artifact_sha256);
 	j->event_seq = sqlite3_column_int64(st, 28);
+	j->artifact_damaged_ms = sqlite3_column_int64(st, 29);
 }
 
 /* Step a statement expecting no row; 0 or ERR_IO. */

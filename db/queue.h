@@ -47,6 +47,7 @@ struct job_row {
 	int64_t artifact_bytes;
 	char artifact_sha256[65];
 	int64_t event_seq;        /* last event number */
+	int64_t artifact_damaged_ms; /* quarantined by fsck (artifact then ""), 0 = no */
 };
 
 void queue_job_row_fini(struct job_row *j);
