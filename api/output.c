@@ -119,6 +119,31 @@ static int parse_range(const char *h, uint64_t size, uint64_t *from, uint64_t *t
 	return 1;
 }
 
+/* RFC 6266: filename= the sanitised ASCII name (store_output_name), and
+ * filename*= the mesh's own name, UTF-8 percent-encoded (RFC 8187), each
+ * with the output's extension. */
+static void content_disposition(const struct job_row *j, const char *ext, char *buf, size_t len)
+{
+	static const char attr[] = "!#$&+-.^_`|~";
+	char ascii[STORE_OUTPUT_NAME_MAX];
+	const char *name = j->mesh_name[0] ? j->mesh_name : ascii;
+	const char *dot = strrchr(name, '.');
+	size_t stem = dot && dot != name ? (size_t)(dot - name) : strlen(name), n;
+
+	store_output_name(j->mesh_name, j->id, ascii, sizeof ascii);
+	n = (size_t)snprintf(buf, len, "attachment; filename=\"%s%s\"; filename*=UTF-8''", ascii,
+			     ext);
+	for (size_t i = 0; i < stem && n + 4 < len; i++) {
+		unsigned char c = (unsigned char)name[i];
+		if ((c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
+		    (c && strchr(attr, c)))
+			buf[n++] = (char)c;
+		else
+			n += (size_t)snprintf(buf + n, len - n, "%%%02X", c);
+	}
+	snprintf(buf + n, len - n, "%s", ext);
+}
+
 static int etag_match(const char *inm, const char *etag)
 {
 	return inm && (strstr(inm, etag) != NULL || !strcmp(inm, "*"));
@@ -126,7 +151,7 @@ static int etag_match(const char *inm, const char *etag)
 
 enum MHD_Result api_job_output(struct api_req *r)
 {
-	char path[STORE_PATH_MAX], etag[72], digest[64], disp[128], b64[48], expect_sha[65];
+	char path[STORE_PATH_MAX], etag[72], digest[64], disp[768], b64[48], expect_sha[65];
 	struct job_row j;
 	struct MHD_Response *resp;
 	enum MHD_Result ret;
@@ -190,7 +215,7 @@ enum MHD_Result api_job_output(struct api_req *r)
 	snprintf(expect_sha, sizeof expect_sha, "%s", j.artifact_sha256);
 	if (out_format_parse(j.format, &f, &e) != 0)
 		f = OUT_ZIP;
-	snprintf(disp, sizeof disp, "attachment; filename=\"%s%s\"", j.id, out_format_extension(f));
+	content_disposition(&j, out_format_extension(f), disp, sizeof disp);
 	queue_job_row_fini(&j);
 	if (etag_match(api_header(r, MHD_HTTP_HEADER_IF_NONE_MATCH), etag)) {
 		close(fd);

@@ -52,7 +52,7 @@ void queue_job_rows_free(struct job_row *v, int n)
 	" progress, layers_done, layers_total, attempt, max_attempts, created_at,"          \
 	" started_at, finished_at, run_after, lease_expires, error_type, error,"            \
 	" error_field, metrics, artifact, artifact_bytes, artifact_sha256, event_seq,"       \
-	" artifact_damaged_at"
+	" artifact_damaged_at, mesh_name"
 
 static void read_job(sqlite3_stmt *st, struct job_row *j)
 {
@@ -87,6 +87,7 @@ static void read_job(sqlite3_stmt *st, struct job_row *j)
 	db_col_copy(st, 27, j->artifact_sha256, sizeof j->artifact_sha256);
 	j->event_seq = sqlite3_column_int64(st, 28);
 	j->artifact_damaged_ms = sqlite3_column_int64(st, 29);
+	db_col_copy(st, 30, j->mesh_name, sizeof j->mesh_name);
 }
 
 /* Step a statement expecting no row; 0 or ERR_IO. */
@@ -625,7 +626,8 @@ int queue_succeed(struct db *db, int64_t seq, int attempt, const struct job_arti
 		" layers_total = COALESCE(json_extract(?7, '$.layers'), layers_total),"
 		" layers_done = COALESCE(json_extract(?7, '$.layers'), layers_total),"
 		" finished_at = ?3, artifact = ?4, artifact_bytes = ?5,"
-		" artifact_sha256 = ?6, metrics = ?7, lease_expires = NULL, worker = NULL,"
+		" artifact_sha256 = ?6, metrics = ?7, mesh_name = ?8, lease_expires = NULL,"
+		" worker = NULL,"
 		" error_type = NULL, error = NULL, error_field = NULL, event_seq = event_seq + 1"
 		" WHERE seq = ?1 AND attempt = ?2 AND state = 'running'";
 	int max_attempts, rc, ours;
@@ -650,6 +652,8 @@ int queue_succeed(struct db *db, int64_t seq, int attempt, const struct job_arti
 	sqlite3_bind_int64(st, 5, a->bytes);
 	sqlite3_bind_text(st, 6, a->sha256, -1, SQLITE_STATIC);
 	sqlite3_bind_text(st, 7, metrics_json ? metrics_json : "{}", -1, SQLITE_STATIC);
+	if (a->mesh_name)
+		sqlite3_bind_text(st, 8, a->mesh_name, -1, SQLITE_STATIC);
 	if ((rc = quota_room(db, tenant_id, a->bytes, e)) ||
 	    (rc = step_done(db, st, "completing job", e)) ||
 	    (rc = db_tenant_add_usage(db, tenant_id, a->bytes, e)) ||

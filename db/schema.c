@@ -90,6 +90,9 @@ static const char *const migrations[] = {
 	/* 2: `infilld fsck --quarantine` marks damaged artifacts (their
 	 * downloads answer 410). */
 	"ALTER TABLE jobs ADD COLUMN artifact_damaged_at INTEGER;",
+	/* 3: the mesh's name as the job ran it, for the download's file name
+	 * (the mesh may be deleted later). */
+	"ALTER TABLE jobs ADD COLUMN mesh_name TEXT;",
 };
 
 int db_schema_latest(void)

@@ -9,6 +9,7 @@
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 #include <sys/stat.h>
 #include <sys/statvfs.h>
 #include <unistd.h>
@@ -187,4 +188,55 @@ void store_redact(char *msg, size_t cap, const char *data_dir, const char *path,
 			replace_all(msg, cap, abs_dir, "DATA");
 		replace_all(msg, cap, data_dir, "DATA");
 	}
+}
+
+/* Remove every (case-insensitive) "thumbnail" from s; removal may join
+ * two halves into a new one, so repeat until none is left. */
+static void drop_thumbnail(char *s)
+{
+	static const char word[] = "thumbnail";
+	const size_t wl = sizeof word - 1;
+	int found;
+
+	do {
+		found = 0;
+		for (char *p = s; *p; p++) {
+			if (!strncasecmp(p, word, wl)) {
+				memmove(p, p + wl, strlen(p + wl) + 1);
+				found = 1;
+				break;
+			}
+		}
+	} while (found);
+}
+
+static void sanitise_stem(const char *name, char *buf, size_t len)
+{
+	const char *dot = name ? strrchr(name, '.') : NULL;
+	size_t n = 0, stem = name ? (dot && dot != name ? (size_t)(dot - name) : strlen(name)) : 0;
+
+	for (size_t i = 0; i < stem && n + 1 < len && n + 1 < STORE_OUTPUT_NAME_MAX; i++) {
+		unsigned char c = (unsigned char)name[i];
+		int keep = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
+			   c == '-' || c == '_';
+		if (!keep && n > 0 && buf[n - 1] == '_')
+			continue; /* one '_' per run of others */
+		buf[n++] = keep ? (char)c : '_';
+	}
+	buf[n] = '\0';
+	drop_thumbnail(buf);
+	/* Nothing but separators left is no name. */
+	if (strspn(buf, "_-") == strlen(buf))
+		buf[0] = '\0';
+}
+
+void store_output_name(const char *mesh_name, const char *fallback, char *buf, size_t len)
+{
+	if (!len)
+		return;
+	sanitise_stem(mesh_name, buf, len);
+	if (!buf[0])
+		sanitise_stem(fallback, buf, len);
+	if (!buf[0])
+		snprintf(buf, len, "part");
 }

@@ -45,6 +45,14 @@ int store_remove_tree(const char *path, struct err *e);
  * be NULL).  Messages from readers and the store name our files. */
 void store_redact(char *msg, size_t cap, const char *data_dir, const char *path,
 		  const char *name);
+/* The name outputs carry (an SL1's jobDir and layer names, the download's
+ * file name) from the mesh's name: its stem without the extension, other
+ * characters than ASCII letters, digits, '-' and '_' made '_', never
+ * containing "thumbnail" in any case (PrusaSlicer's SL1 importer skips
+ * entries whose name does), at most 63 bytes; fallback when nothing is
+ * left (then "part").  buf holds at least 64 bytes. */
+#define STORE_OUTPUT_NAME_MAX 64
+void store_output_name(const char *mesh_name, const char *fallback, char *buf, size_t len);
 /* Free bytes available to us on the file system of data_dir, -1 on error. */
 int64_t store_free_bytes(const char *data_dir);
 

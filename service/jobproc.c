@@ -209,7 +209,7 @@ void jobproc_main(const struct jobproc_args *a)
 		js.input_path = a->mesh_path;
 		js.threads = c->job_threads;
 		js.output_limit_bytes = (uint64_t)c->output_limit_mb << 20;
-		js.job_name = j->id;
+		js.job_name = a->output_name;
 		js.created_unix = j->created_ms / 1000;
 		/* Temporary files beside the artifact, inside the data directory. */
 		slash = strrchr(a->out_tmp, '/');

@@ -47,6 +47,7 @@ struct jobproc_args {
 	int fd;                    /* write end of the report pipe */
 	int64_t quota_bytes;       /* tenant's storage quota, 0 = none ... */
 	int64_t quota_left_bytes;  /* ... and what was left of it at the claim */
+	char output_name[64];      /* store_output_name() of the mesh: SL1 jobDir, G-code job */
 };
 
 /* Runs in the forked child; never returns. */

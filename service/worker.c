@@ -168,6 +168,7 @@ static void finish(struct attempt *a, int status)
 		art.name = name;
 		art.bytes = (int64_t)a->result.bytes;
 		art.sha256 = a->result.sha256;
+		art.mesh_name = a->mesh_name;
 		rc = queue_succeed(a->db, j->seq, j->attempt, &art, a->metrics, &e);
 		if (rc == ERR_LIMIT) {
 			/* Another output of the tenant took the room meanwhile. */
@@ -350,6 +351,7 @@ static void run_attempt(const struct service_config *c, struct db *db, struct jo
 			return;
 		}
 	}
+	store_output_name(a.mesh_name, j->id, args.output_name, sizeof args.output_name);
 	args.cfg = c;
 	args.job = j;
 	args.mesh_path = mesh_path;

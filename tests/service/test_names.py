@@ -100,6 +100,40 @@ def test_errors_name_client_files():
     check(mesh not in j["error"]["detail"], "no stored file name in %r" % j["error"]["detail"])
 
 
+def sl1_job(name):
+    mesh = srv.upload(P, S["key"], name=name).json()["id"]
+    jid = srv.submit(S["key"], mesh, format="sl1", params={"height_mm": 2}).json()["id"]
+    check(srv.wait_job(S["key"], jid)["state"] == "succeeded", "sl1 job")
+    return srv.request("GET", "/v1/jobs/%s/output" % jid, key=S["key"])
+
+
+def test_output_names():
+    """Outputs carry the mesh's name (sanitised), not j_<id>."""
+    import io
+    import urllib.parse
+    import zipfile
+    r = sl1_job("Gear%20Wheel%20(v2).off")
+    disp = r.header("Content-Disposition")
+    check('filename="Gear_Wheel_v2_.sl1"' in disp, "ASCII filename: %s" % disp)
+    m = re.search(r"filename\*=UTF-8''(\S+)", disp)
+    check(m and urllib.parse.unquote(m.group(1)) == "Gear Wheel (v2).sl1", "filename*: %s" % disp)
+    z = zipfile.ZipFile(io.BytesIO(r.body))
+    ini = z.read("config.ini").decode()
+    check("jobDir = Gear_Wheel_v2_" in ini, "jobDir from the mesh name: %s" % ini[:200])
+    check(any(n.startswith("Gear_Wheel_v2_") and n.endswith(".png") for n in z.namelist()),
+          "layers named after the mesh: %s" % z.namelist()[:5])
+    # Non-ASCII and "thumbnail" never reach the archive's names.
+    r = sl1_job("%C3%A9l%C3%A9-Thumbnail.off")
+    disp = r.header("Content-Disposition")
+    check('filename="_l_-.sl1"' in disp, "sanitised: %s" % disp)
+    m = re.search(r"filename\*=UTF-8''(\S+)", disp)
+    check(urllib.parse.unquote(m.group(1)) == "\u00e9l\u00e9-Thumbnail.sl1", "utf-8 kept in filename*")
+    z = zipfile.ZipFile(io.BytesIO(r.body))
+    layers = [n for n in z.namelist() if n.endswith(".png") and not n.startswith("thumbnail/")]
+    check(layers and all("thumbnail" not in n.lower() for n in layers), "layers: %s" % layers[:3])
+    check(all(ord(c) < 128 for n in layers for c in n), "ASCII layer names")
+
+
 def teardown():
     srv.cleanup()
 
@@ -107,6 +141,7 @@ def teardown():
 if __name__ == "__main__":
     try:
         setup()
-        run([test_invalid_utf8_name, test_errors_name_client_files, teardown])
+        run([test_invalid_utf8_name, test_errors_name_client_files, test_output_names,
+             teardown])
     finally:
         srv.cleanup()
