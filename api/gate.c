@@ -278,8 +278,8 @@ static void answer(struct api_gate *g, struct gate_conn *c, enum problem p, cons
 	free(body);
 	/* What the client sent so far is read away first: closing with
 	 * unread data would reset the connection and lose the answer. */
-	while (recv(c->fd, g->peek, sizeof g->peek, MSG_DONTWAIT) > 0)
-		;
+	for (int k = 0; k < 32 && recv(c->fd, g->peek, sizeof g->peek, MSG_DONTWAIT) > 0; k++)
+		; /* at most 1 MiB now; lingering reads the rest */
 	if (n > 0 && (size_t)n < sizeof text)
 		(void)!send(c->fd, text, (size_t)n, MSG_NOSIGNAL | MSG_DONTWAIT);
 	shutdown(c->fd, SHUT_WR);
@@ -457,7 +457,7 @@ static void hand_over(struct api_gate *g, struct gate_conn *c, size_t len)
 	free(c);
 }
 
-static void on_readable(struct api_gate *g, struct gate_conn *c)
+static void on_readable(struct api_gate *g, struct gate_conn *c, uint32_t events)
 {
 	ssize_t n;
 	size_t end;
@@ -482,6 +482,10 @@ static void on_readable(struct api_gate *g, struct gate_conn *c)
 		return;
 	}
 	c->scanned = (size_t)n;
+	if (events & (EPOLLRDHUP | EPOLLHUP | EPOLLERR)) {
+		conn_close(g, c); /* gone, or stopped sending, before the head ended */
+		return;
+	}
 	if ((size_t)n >= GATE_HEAD_MAX) {
 		char detail[96];
 		snprintf(detail, sizeof detail, "the request line and header fields exceed %u bytes",
@@ -572,7 +576,7 @@ static void *gate_main(void *arg)
 			if (p == &listen_tag)
 				on_accept(g);
 			else if (p != &wake_tag)
-				on_readable(g, p);
+				on_readable(g, p, evs[i].events);
 		}
 	}
 	return NULL;

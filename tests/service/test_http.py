@@ -146,6 +146,9 @@ def test_framing():
         line, hdrs = head_fields(got)
         check(("Connection", "close") in hdrs, "%r: Connection: close" % fields)
         check(("Content-Type", "application/problem+json") in hdrs, "problem body")
+    # A head past 32 KiB: 431, without waiting for its end.
+    got = raw(b"GET /livez HTTP/1.1\r\nHost: x\r\n" + b"X-Big: " + b"a" * 40000, limit=5)
+    check(got.startswith(b"HTTP/1.1 431"), "oversize head: %r" % got[:80])
     # Identical repeated values are one value (RFC 9110 section 8.6).
     got = raw(b"POST /v1/jobs HTTP/1.1\r\nHost: x\r\nAuthorization: Bearer " +
               S["key"].encode() + b"\r\nContent-Type: application/json\r\n"
