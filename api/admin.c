@@ -56,6 +56,7 @@ enum MHD_Result api_tenant_create(struct api_req *r)
 
 	if (!b)
 		return ret;
+	err_clear(&e); /* the problem prints its place fields */
 	db_tenant_limits_default(&l);
 	json_object_foreach(b, k, v) {
 		if (!strcmp(k, "name"))
@@ -113,6 +114,7 @@ enum MHD_Result api_tenant_list(struct api_req *r)
 	int n, rc;
 	struct db *db = db_pool_get(r->srv->pool);
 
+	err_clear(&e);
 	rc = db_tenant_list(db, &v, &n, &e);
 	db_pool_put(r->srv->pool, db);
 	if (rc)

@@ -19,6 +19,9 @@ struct api_config {
 	int max_connections;
 	int per_ip_connections;
 	int conn_timeout_s;        /* idle connections are closed after this */
+	int head_timeout_s;        /* whole request head must arrive within this */
+	int64_t min_body_bps;      /* bytes/s a request body must average ... */
+	int body_grace_s;          /* ... once it has taken this long; 0 bps = off */
 	size_t conn_memory_bytes;  /* per-connection buffer limit */
 	size_t json_max_bytes;     /* request bodies other than uploads */
 	int max_attempts;          /* per job */

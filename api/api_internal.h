@@ -24,7 +24,7 @@ enum problem {
 	PROB_NOT_FOUND, PROB_METHOD_NOT_ALLOWED, PROB_CONFLICT, PROB_NOT_READY, PROB_GONE,
 	PROB_TOO_LARGE, PROB_UNSUPPORTED_MEDIA, PROB_RANGE, PROB_INVALID_PARAM,
 	PROB_CHECKSUM, PROB_INVALID_MESH, PROB_IDEMPOTENCY, PROB_QUOTA, PROB_INTERNAL,
-	PROB_UNAVAILABLE, PROB_COUNT
+	PROB_UNAVAILABLE, PROB_TIMEOUT, PROB_HEAD_TOO_LARGE, PROB_NOT_IMPLEMENTED, PROB_COUNT
 };
 
 enum route_auth { AUTH_NONE, AUTH_TENANT, AUTH_ADMIN };
@@ -53,6 +53,7 @@ struct api_waiter {
 
 struct analyze_task;
 struct submit_task;
+struct api_gate;
 struct job_new;
 struct job_row;
 
@@ -65,6 +66,8 @@ struct api_server {
 	atomic_llong requests[ROUTE_COUNT_MAX + 1][HTTP_CODES];
 	atomic_llong bytes_out;
 	atomic_int open_streams;
+	struct api_gate *gate;           /* accept loop and head gate (gate.c) */
+	atomic_llong gate_answers[3];    /* the gate's own 408, 503, other (400/431/501) */
 
 	/* Parked SSE streams: the ticker resumes them every ~200 ms. */
 	pthread_mutex_t wait_mu;
@@ -110,22 +113,43 @@ struct api_req {
 	 * then the connection is closed) and the problem sent at its end. */
 	int rejected;
 	enum problem reject_p;
+	char reject_field[16];
 	char reject_detail[256];
 	size_t discarded;
+	int64_t started_ms;         /* head complete (first call), for the body rate */
+	int64_t body_bytes;         /* received so far */
 };
 
 #define API_DISCARD_MAX (16u << 20)
 
-/* Refuse the request body with problem p once it has ended (see above). */
+/* Refuse the request body with problem p once it has ended (see above);
+ * field (may be NULL) is the problem's "field". */
 void api_reject(struct api_req *r, enum problem p, const char *fmt, ...)
 #if defined(__GNUC__)
 	__attribute__((format(printf, 3, 4)))
 #endif
 	;
+void api_reject_field(struct api_req *r, const char *field);
 
 /* Metrics label of route i (server.c): its pattern, "unmatched" for
  * i == number of routes, NULL past that. */
 const char *api_route_label(int i);
+
+/* ---- accept loop and head gate (gate.c) ---- */
+struct sockaddr_storage;
+/* Bind and listen on ss (s->port gets the bound port); api_gate_run()
+ * starts accepting once s->mhd runs. */
+int api_gate_start(struct api_server *s, const struct sockaddr_storage *ss, struct err *e);
+int api_gate_run(struct api_server *s, struct err *e);
+/* Stop accepting and close what the gate holds (before MHD stops);
+ * api_gate_free() then frees it (after MHD stopped).  NULL-safe. */
+void api_gate_stop(struct api_server *s);
+void api_gate_free(struct api_server *s);
+/* MHD_OPTION_NOTIFY_CONNECTION callback (cls = the server). */
+void api_gate_notify(void *cls, struct MHD_Connection *conn, void **socket_context,
+		     enum MHD_ConnectionNotificationCode toe);
+/* Connections MHD holds now. */
+int api_gate_live(struct api_gate *g);
 
 /* ---- responses (http.c) ---- */
 enum MHD_Result api_queue(struct api_req *r, unsigned status, struct MHD_Response *resp);
@@ -133,6 +157,8 @@ enum MHD_Result api_queue(struct api_req *r, unsigned status, struct MHD_Respons
 enum MHD_Result api_json(struct api_req *r, unsigned status, json_t *body);
 /* Same, as a response object with no status queued yet. */
 struct MHD_Response *api_json_response(json_t *body);
+/* The same with another JSON media type (exactly one Content-Type). */
+struct MHD_Response *api_json_response_as(json_t *body, const char *content_type);
 /* RFC 9457 problem+json.  field may be NULL; detail is printf-style. */
 enum MHD_Result api_problem(struct api_req *r, enum problem p, const char *field,
 			    const char *fmt, ...)
@@ -143,6 +169,10 @@ enum MHD_Result api_problem(struct api_req *r, enum problem p, const char *field
 struct MHD_Response *api_problem_response(enum problem p, const char *instance,
 					  const char *field, const char *detail,
 					  unsigned *status);
+/* The same with more members (reference stolen; NULL = none). */
+struct MHD_Response *api_problem_response_members(enum problem p, const char *instance,
+						  const char *field, const char *detail,
+						  json_t *members, unsigned *status);
 /* Problem for an engine/db error record: maps err codes to types. */
 enum MHD_Result api_problem_err(struct api_req *r, const struct err *e);
 unsigned problem_status(enum problem p);
@@ -155,6 +185,10 @@ const char *api_time(int64_t ms, char *buf, size_t len);
 /* Header / query values (NULL when absent). */
 const char *api_header(struct api_req *r, const char *name);
 const char *api_query(struct api_req *r, const char *name);
+
+/* 1 when s is UTF-8 (shortest forms, no surrogates) without control
+ * characters: fit for names stored and shown in JSON. */
+int api_text_valid(const char *s);
 
 /* Park the request's connection until api_wake() or the ticker. */
 void api_park(struct api_req *r);

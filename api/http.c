@@ -17,6 +17,11 @@ enum MHD_Result api_queue(struct api_req *r, unsigned status, struct MHD_Respons
 	if (!resp)
 		return MHD_NO; /* out of memory: MHD closes the connection */
 	MHD_add_response_header(resp, "Cache-Control", "no-store");
+	/* Past 3/4 of the connection limit, keep-alive gives way: the next
+	 * request comes through the head gate again instead of holding a
+	 * slot while its head trickles in. */
+	if (r->srv->gate && api_gate_live(r->srv->gate) * 4 >= r->srv->cfg.max_connections * 3)
+		MHD_add_response_header(resp, MHD_HTTP_HEADER_CONNECTION, "close");
 	r->status = status;
 	ret = MHD_queue_response(r->conn, status, resp);
 	MHD_destroy_response(resp);
@@ -24,6 +29,11 @@ enum MHD_Result api_queue(struct api_req *r, unsigned status, struct MHD_Respons
 }
 
 struct MHD_Response *api_json_response(json_t *body)
+{
+	return api_json_response_as(body, "application/json");
+}
+
+struct MHD_Response *api_json_response_as(json_t *body, const char *content_type)
 {
 	struct MHD_Response *resp;
 	char *text;
@@ -39,7 +49,7 @@ struct MHD_Response *api_json_response(json_t *body)
 		free(text);
 		return NULL;
 	}
-	MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE, "application/json");
+	MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE, content_type);
 	return resp;
 }
 
@@ -111,6 +121,11 @@ void api_wake(struct api_server *s, struct MHD_Connection *conn)
 	MHD_resume_connection(conn);
 }
 
+void api_reject_field(struct api_req *r, const char *field)
+{
+	snprintf(r->reject_field, sizeof r->reject_field, "%s", field);
+}
+
 void api_reject(struct api_req *r, enum problem p, const char *fmt, ...)
 {
 	va_list ap;
@@ -122,4 +137,41 @@ void api_reject(struct api_req *r, enum problem p, const char *fmt, ...)
 	va_start(ap, fmt);
 	vsnprintf(r->reject_detail, sizeof r->reject_detail, fmt, ap);
 	va_end(ap);
+}
+
+int api_text_valid(const char *s)
+{
+	const unsigned char *p = (const unsigned char *)s;
+
+	while (*p) {
+		unsigned c = *p;
+		int n;
+		uint32_t cp;
+
+		if (c < 0x20 || c == 0x7f)
+			return 0;
+		if (c < 0x80) {
+			p++;
+			continue;
+		}
+		if (c >= 0xc2 && c <= 0xdf)
+			n = 1, cp = c & 0x1f;
+		else if (c >= 0xe0 && c <= 0xef)
+			n = 2, cp = c & 0x0f;
+		else if (c >= 0xf0 && c <= 0xf4)
+			n = 3, cp = c & 0x07;
+		else
+			return 0;
+		for (int i = 1; i <= n; i++) {
+			if ((p[i] & 0xc0) != 0x80)
+				return 0;
+			cp = cp << 6 | (p[i] & 0x3f);
+		}
+		/* overlong, surrogates, past U+10FFFF */
+		if ((n == 2 && cp < 0x800) || (n == 3 && (cp < 0x10000 || cp > 0x10ffff)) ||
+		    (cp >= 0xd800 && cp <= 0xdfff))
+			return 0;
+		p += n + 1;
+	}
+	return 1;
 }

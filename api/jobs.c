@@ -192,8 +192,9 @@ enum MHD_Result api_job_submit(struct api_req *r)
 	if (r->tenant.quota_bytes && r->tenant.used_bytes >= r->tenant.quota_bytes) {
 		job_spec_fini(&js);
 		ret = api_problem(r, PROB_QUOTA, NULL,
-				  "storage quota of %lld bytes is used up; delete meshes first",
-				  (long long)r->tenant.quota_bytes);
+				  "storage quota of %lld bytes is used up (%lld in use); delete meshes "
+				  "or wait for artifacts to expire",
+				  (long long)r->tenant.quota_bytes, (long long)r->tenant.used_bytes);
 		goto out;
 	}
 	{

@@ -34,6 +34,7 @@ struct upload {
 	struct multipart mp;
 	int in_file;               /* multipart: inside the "file" part */
 	int files;                 /* "file" parts seen */
+	int bad_name;              /* the file part's filename is not valid text */
 	char field[16];            /* multipart: current small field */
 	char value[80];
 	size_t vlen;
@@ -118,6 +119,12 @@ static int write_all(struct upload *u, const void *p, size_t len)
 	return sink_write(&u->out, p, len, &e) ? -1 : 0;
 }
 
+/* Mesh names are stored and shown in JSON: UTF-8 text that fits. */
+static int name_valid(const char *name)
+{
+	return api_text_valid(name) && strlen(name) < sizeof ((struct upload *)0)->name;
+}
+
 static int mp_begin(void *ctx, const char *name, const char *filename)
 {
 	struct upload *u = ctx;
@@ -130,7 +137,12 @@ static int mp_begin(void *ctx, const char *name, const char *filename)
 			return -1; /* one mesh per upload */
 		if (filename[0]) {
 			const char *base = strrchr(filename, '/');
-			snprintf(u->name, sizeof u->name, "%s", base ? base + 1 : filename);
+			base = base ? base + 1 : filename;
+			if (!name_valid(base)) {
+				u->bad_name = 1;
+				return -1;
+			}
+			snprintf(u->name, sizeof u->name, "%s", base);
 			if (!u->format[0] && format_of_name(u->name))
 				set_format(u, format_of_name(u->name));
 		}
@@ -171,6 +183,10 @@ enum MHD_Result api_upload_begin(struct api_req *r)
 	if (qf && !format_valid(qf))
 		return api_problem(r, PROB_INVALID_PARAM, "format",
 				   "format must be one of stl, obj, off, ply");
+	if (name && !name_valid(name))
+		return api_problem(r, PROB_INVALID_PARAM, "name",
+				   "name must be UTF-8 text without control characters, under %zu bytes",
+				   sizeof u->name);
 	if (cl && strtoll(cl, NULL, 10) > r->tenant.max_upload_bytes)
 		return api_problem(r, PROB_TOO_LARGE, NULL,
 				   "the upload is %s bytes; this tenant's limit is %lld bytes", cl,
@@ -178,7 +194,8 @@ enum MHD_Result api_upload_begin(struct api_req *r)
 	if (r->tenant.quota_bytes &&
 	    r->tenant.used_bytes + (cl ? strtoll(cl, NULL, 10) : 0) > r->tenant.quota_bytes)
 		return api_problem(r, PROB_QUOTA, NULL,
-				   "storage quota of %lld bytes is used up (%lld in use)",
+				   "the upload would take the tenant past its storage quota of %lld bytes "
+				   "(%lld in use)",
 				   (long long)r->tenant.quota_bytes, (long long)r->tenant.used_bytes);
 	if (!(u = calloc(1, sizeof *u)))
 		return MHD_NO;
@@ -246,6 +263,14 @@ int api_upload_feed(struct api_req *r, const char *data, size_t len)
 	struct upload *u = r->upload;
 
 	u->bytes += (int64_t)len;
+	if (r->tenant.quota_bytes && r->tenant.used_bytes + u->bytes > r->tenant.quota_bytes) {
+		/* Chunked bodies have no length to refuse up front. */
+		api_reject(r, PROB_QUOTA,
+			   "the upload would take the tenant past its storage quota of %lld bytes "
+			   "(%lld in use)",
+			   (long long)r->tenant.quota_bytes, (long long)r->tenant.used_bytes);
+		return -1;
+	}
 	if (u->bytes > u->limit) {
 		/* Chunked or lying Content-Length: stop at the limit. */
 		api_reject(r, PROB_TOO_LARGE, "the upload exceeds this tenant's limit of %lld bytes",
@@ -254,7 +279,15 @@ int api_upload_feed(struct api_req *r, const char *data, size_t len)
 	}
 	if (u->multipart) {
 		if (multipart_feed(&u->mp, data, len)) {
-			api_reject(r, PROB_BAD_REQUEST, "malformed multipart body: %s", u->mp.error);
+			if (u->bad_name) {
+				api_reject(r, PROB_INVALID_PARAM,
+					   "the file name must be UTF-8 text without control characters, "
+					   "under %zu bytes", sizeof u->name);
+				api_reject_field(r, "name");
+			} else {
+				api_reject(r, PROB_BAD_REQUEST, "malformed multipart body: %s",
+					   u->mp.error);
+			}
 			return -1;
 		}
 		return 0;
@@ -406,8 +439,14 @@ void api_upload_complete(struct api_req *r)
 		MHD_add_response_header(r->pending, MHD_HTTP_HEADER_LOCATION, loc);
 	}
 	r->pending_status = MHD_HTTP_CREATED;
+	if (!r->pending) /* never leave the client without an answer */
+		r->pending = api_problem_response(PROB_INTERNAL, r->url, NULL,
+						  "the mesh is stored but its record could not be shown",
+						  &r->pending_status);
 	return;
 fail:
+	/* The reader names the temporary file; the client knows its own name. */
+	store_redact(detail, sizeof detail, s->cfg.data_dir, u->tmp, u->name);
 	r->pending = api_problem_response(p, r->url, NULL, detail, &r->pending_status);
 }
 

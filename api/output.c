@@ -4,8 +4,13 @@
  * blocks (memory per connection is one block, whatever the file size);
  * a single "Range: bytes=a-b" gets 206 served from the file descriptor.
  * ETag is the artifact's SHA-256; Repr-Digest (RFC 9530) carries it too.
+ * The file's size is checked against the database before anything is
+ * sent, and a whole download is hashed as it streams: a file altered on
+ * disk ends the stream without its last chunk, so the client sees an
+ * error instead of a complete, wrong file.
  */
 #include "api/api_internal.h"
+#include "api/log.h"
 #include "db/queue.h"
 #include "db/store.h"
 #include "engine/engine.h"
@@ -14,6 +19,7 @@
 #include <fcntl.h>
 #include <inttypes.h>
 #include <nettle/base64.h>
+#include <nettle/sha2.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -26,6 +32,10 @@ struct dl {
 	struct api_server *srv;
 	int fd;
 	uint64_t size;
+	uint64_t hashed;             /* bytes fed to sha so far (reads are in order) */
+	struct sha256_ctx sha;
+	char expect_sha[65];         /* recorded digest, hex */
+	char job_id[DB_ID_MAX];
 };
 
 static ssize_t dl_read(void *cls, uint64_t pos, char *buf, size_t max)
@@ -42,6 +52,23 @@ static ssize_t dl_read(void *cls, uint64_t pos, char *buf, size_t max)
 	while (n < 0 && errno == EINTR);
 	if (n <= 0)
 		return MHD_CONTENT_READER_END_WITH_ERROR; /* truncated underneath us */
+	if (pos == d->hashed) {
+		sha256_update(&d->sha, (size_t)n, (const uint8_t *)buf);
+		d->hashed += (uint64_t)n;
+		if (d->hashed == d->size) {
+			uint8_t digest[SHA256_DIGEST_SIZE];
+			char hex[65];
+			sha256_digest(&d->sha, sizeof digest, digest);
+			db_sha256_hex(digest, hex);
+			if (strcmp(hex, d->expect_sha) != 0) {
+				log_msg(LOG_ERROR, "output",
+					"job %s: artifact digest %s differs from the recorded %s; "
+					"download aborted (run infilld fsck)",
+					d->job_id, hex, d->expect_sha);
+				return MHD_CONTENT_READER_END_WITH_ERROR;
+			}
+		}
+	}
 	atomic_fetch_add(&d->srv->bytes_out, n);
 	return n;
 }
@@ -92,6 +119,31 @@ static int parse_range(const char *h, uint64_t size, uint64_t *from, uint64_t *t
 	return 1;
 }
 
+/* RFC 6266: filename= the sanitised ASCII name (store_output_name), and
+ * filename*= the mesh's own name, UTF-8 percent-encoded (RFC 8187), each
+ * with the output's extension. */
+static void content_disposition(const struct job_row *j, const char *ext, char *buf, size_t len)
+{
+	static const char attr[] = "!#$&+-.^_`|~";
+	char ascii[STORE_OUTPUT_NAME_MAX];
+	const char *name = j->mesh_name[0] ? j->mesh_name : ascii;
+	const char *dot = strrchr(name, '.');
+	size_t stem = dot && dot != name ? (size_t)(dot - name) : strlen(name), n;
+
+	store_output_name(j->mesh_name, j->id, ascii, sizeof ascii);
+	n = (size_t)snprintf(buf, len, "attachment; filename=\"%s%s\"; filename*=UTF-8''", ascii,
+			     ext);
+	for (size_t i = 0; i < stem && n + 4 < len; i++) {
+		unsigned char c = (unsigned char)name[i];
+		if ((c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
+		    (c && strchr(attr, c)))
+			buf[n++] = (char)c;
+		else
+			n += (size_t)snprintf(buf + n, len - n, "%%%02X", c);
+	}
+	snprintf(buf + n, len - n, "%s", ext);
+}
+
 static int etag_match(const char *inm, const char *etag)
 {
 	return inm && (strstr(inm, etag) != NULL || !strcmp(inm, "*"));
@@ -99,7 +151,7 @@ static int etag_match(const char *inm, const char *etag)
 
 enum MHD_Result api_job_output(struct api_req *r)
 {
-	char path[STORE_PATH_MAX], etag[72], digest[64], disp[128], b64[48];
+	char path[STORE_PATH_MAX], etag[72], digest[64], disp[768], b64[48], expect_sha[65];
 	struct job_row j;
 	struct MHD_Response *resp;
 	enum MHD_Result ret;
@@ -124,8 +176,12 @@ enum MHD_Result api_job_output(struct api_req *r)
 		return api_queue(r, status, resp);
 	}
 	if (!j.artifact[0]) {
+		int damaged = j.artifact_damaged_ms != 0;
 		queue_job_row_fini(&j);
-		return api_problem(r, PROB_GONE, NULL, "the output of job %s was deleted by retention",
+		return api_problem(r, PROB_GONE, NULL,
+				   damaged ? "the output of job %s was damaged on disk and is withdrawn; "
+					     "submit the job again"
+					   : "the output of job %s was deleted by retention",
 				   r->arg[0]);
 	}
 	store_artifact_path(r->srv->cfg.data_dir, r->tenant.id, j.artifact, path, sizeof path);
@@ -137,6 +193,16 @@ enum MHD_Result api_job_output(struct api_req *r)
 		return api_problem(r, PROB_GONE, NULL, "the output file of job %s is missing",
 				   r->arg[0]);
 	}
+	if ((int64_t)st.st_size != j.artifact_bytes) {
+		log_msg(LOG_ERROR, "output",
+			"job %s: artifact %s has %lld bytes on disk, %lld recorded (run infilld fsck)",
+			j.id, j.artifact, (long long)st.st_size, (long long)j.artifact_bytes);
+		close(fd);
+		queue_job_row_fini(&j);
+		return api_problem(r, PROB_INTERNAL, NULL,
+				   "the stored output of job %s is damaged; it cannot be served",
+				   r->arg[0]);
+	}
 	snprintf(etag, sizeof etag, "\"%s\"", j.artifact_sha256);
 	{
 		uint8_t raw[32];
@@ -146,9 +212,10 @@ enum MHD_Result api_job_output(struct api_req *r)
 		b64[BASE64_ENCODE_RAW_LENGTH(32)] = '\0';
 		snprintf(digest, sizeof digest, "sha-256=:%s:", b64);
 	}
+	snprintf(expect_sha, sizeof expect_sha, "%s", j.artifact_sha256);
 	if (out_format_parse(j.format, &f, &e) != 0)
 		f = OUT_ZIP;
-	snprintf(disp, sizeof disp, "attachment; filename=\"%s%s\"", j.id, out_format_extension(f));
+	content_disposition(&j, out_format_extension(f), disp, sizeof disp);
 	queue_job_row_fini(&j);
 	if (etag_match(api_header(r, MHD_HTTP_HEADER_IF_NONE_MATCH), etag)) {
 		close(fd);
@@ -191,6 +258,9 @@ enum MHD_Result api_job_output(struct api_req *r)
 		d->srv = r->srv;
 		d->fd = fd;
 		d->size = (uint64_t)st.st_size;
+		sha256_init(&d->sha);
+		snprintf(d->expect_sha, sizeof d->expect_sha, "%s", expect_sha);
+		snprintf(d->job_id, sizeof d->job_id, "%s", r->arg[0]);
 		/* MHD_SIZE_UNKNOWN: chunked transfer encoding, constant memory. */
 		resp = MHD_create_response_from_callback(MHD_SIZE_UNKNOWN, OUTPUT_BLOCK, dl_read, d,
 							 dl_free);

@@ -54,7 +54,15 @@ static const struct {
 	[PROB_INTERNAL] = {"internal", 500, "Internal error",
 			   "Something failed on the server; the log has details."},
 	[PROB_UNAVAILABLE] = {"unavailable", 503, "Service unavailable",
-			      "The service is shutting down or cannot reach its database."},
+			      "The service is shutting down, cannot reach its database, or is at its "
+			      "connection limit; retry after the Retry-After seconds."},
+	[PROB_TIMEOUT] = {"request-timeout", 408, "Request timeout",
+			  "The request head did not arrive in time (--head-timeout-s), or the body "
+			  "arrived slower than the minimum rate; the connection is closed."},
+	[PROB_HEAD_TOO_LARGE] = {"header-fields-too-large", 431, "Request header fields too large",
+				 "The request line and header fields exceed 32 KiB."},
+	[PROB_NOT_IMPLEMENTED] = {"not-implemented", 501, "Not implemented",
+				  "The request uses a transfer coding other than chunked."},
 };
 
 unsigned problem_status(enum problem p)
@@ -84,6 +92,13 @@ struct MHD_Response *api_problem_response(enum problem p, const char *instance,
 					  const char *field, const char *detail,
 					  unsigned *status)
 {
+	return api_problem_response_members(p, instance, field, detail, NULL, status);
+}
+
+struct MHD_Response *api_problem_response_members(enum problem p, const char *instance,
+						  const char *field, const char *detail,
+						  json_t *members, unsigned *status)
+{
 	char type[64];
 	json_t *o;
 	struct MHD_Response *resp;
@@ -95,10 +110,10 @@ struct MHD_Response *api_problem_response(enum problem p, const char *instance,
 		json_object_set_new(o, "instance", json_string(instance));
 	if (o && field && field[0])
 		json_object_set_new(o, "field", json_string(field));
-	resp = api_json_response(o);
-	if (resp)
-		MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE,
-					"application/problem+json");
+	if (o && members)
+		json_object_update_missing(o, members);
+	json_decref(members);
+	resp = api_json_response_as(o, "application/problem+json");
 	*status = problems[p].status;
 	return resp;
 }
@@ -114,7 +129,13 @@ enum MHD_Result api_problem(struct api_req *r, enum problem p, const char *field
 	va_start(ap, fmt);
 	vsnprintf(detail, sizeof detail, fmt, ap);
 	va_end(ap);
-	resp = api_problem_response(p, r->url, field, detail, &status);
+	/* Quota refusals say where the tenant stands (as of this request). */
+	resp = api_problem_response_members(
+		p, r->url, field, detail,
+		p == PROB_QUOTA ? json_pack("{s:I, s:I}", "used_bytes", (json_int_t)r->tenant.used_bytes,
+					    "quota_bytes", (json_int_t)r->tenant.quota_bytes)
+				: NULL,
+		&status);
 	if (resp && p == PROB_UNAUTHORIZED)
 		MHD_add_response_header(resp, MHD_HTTP_HEADER_WWW_AUTHENTICATE,
 					"Bearer realm=\"infilld\"");

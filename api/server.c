@@ -193,6 +193,20 @@ static enum MHD_Result start_request(struct api_req *r)
 	return MHD_YES;
 }
 
+/* Slow bodies (a slowloris on the body): once the body has taken longer
+ * than the grace, its average rate must reach the minimum, else the
+ * connection is closed (libmicrohttpd cannot answer mid-body).  Checked
+ * whenever data arrives; a body that stops altogether meets
+ * --conn-timeout-s. */
+static int body_too_slow(const struct api_req *r)
+{
+	const struct api_config *c = &r->srv->cfg;
+	int64_t ms = db_now_ms() - r->started_ms;
+
+	return c->min_body_bps > 0 && ms > (int64_t)c->body_grace_s * 1000 &&
+	       r->body_bytes * 1000 < c->min_body_bps * ms;
+}
+
 static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn, const char *url,
 				  const char *method, const char *version,
 				  const char *upload_data, size_t *upload_size, void **req_cls)
@@ -211,6 +225,7 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn, const 
 		r->url = url;
 		r->method = method;
 		r->head = !strcmp(method, "HEAD");
+		r->started_ms = db_now_ms();
 		buf_init(&r->body);
 		*req_cls = r;
 		/* Answering on this first call makes libmicrohttpd close the
@@ -236,6 +251,12 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn, const 
 	if (*upload_size) {
 		size_t n = *upload_size;
 		*upload_size = 0;
+		r->body_bytes += (int64_t)n;
+		if (body_too_slow(r)) {
+			log_msg(LOG_INFO, "http", "%s %s: body slower than %lld bytes/s; closed",
+				r->method, r->url, (long long)s->cfg.min_body_bps);
+			return MHD_NO;
+		}
 		if (r->rejected) {
 			r->discarded += n;
 			return r->discarded > API_DISCARD_MAX ? MHD_NO : MHD_YES;
@@ -254,7 +275,7 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn, const 
 		return MHD_YES;
 	}
 	if (r->rejected)
-		return api_problem(r, r->reject_p, NULL, "%s", r->reject_detail);
+		return api_problem(r, r->reject_p, r->reject_field, "%s", r->reject_detail);
 	if (r->pending) {
 		struct MHD_Response *resp = r->pending;
 		r->pending = NULL;
@@ -354,7 +375,6 @@ int api_server_start(const struct api_config *c, struct api_server **out, struct
 	struct api_server *s = calloc(1, sizeof *s);
 	struct sockaddr_storage ss;
 	char db_path[STORE_PATH_MAX];
-	const union MHD_DaemonInfo *info;
 	int rc;
 
 	if (!s)
@@ -394,32 +414,42 @@ int api_server_start(const struct api_config *c, struct api_server **out, struct
 		goto fail;
 	}
 	raise_fd_limit();
-	s->mhd = MHD_start_daemon(
-		MHD_USE_INTERNAL_POLLING_THREAD | MHD_USE_EPOLL | MHD_ALLOW_SUSPEND_RESUME |
-			MHD_USE_ERROR_LOG | (ss.ss_family == AF_INET6 ? MHD_USE_IPv6 : 0),
-		(uint16_t)c->port, accept_policy, s, on_request, s,
-		MHD_OPTION_EXTERNAL_LOGGER, mhd_log, s,
-		MHD_OPTION_SOCK_ADDR, (struct sockaddr *)&ss,
-		MHD_OPTION_THREAD_POOL_SIZE, (unsigned int)c->threads,
-		MHD_OPTION_CONNECTION_TIMEOUT, (unsigned int)c->conn_timeout_s,
-		MHD_OPTION_CONNECTION_LIMIT, (unsigned int)c->max_connections,
-		MHD_OPTION_PER_IP_CONNECTION_LIMIT, (unsigned int)c->per_ip_connections,
-		MHD_OPTION_CONNECTION_MEMORY_LIMIT, c->conn_memory_bytes,
-		MHD_OPTION_LISTEN_BACKLOG_SIZE, 1024u,
-		MHD_OPTION_NOTIFY_COMPLETED, on_completed, s,
-		MHD_OPTION_END);
-	if (!s->mhd) {
-		rc = ERR_SET(e, ERR_IO, "cannot listen on %s:%d: %s", c->host, c->port,
-			     strerror(errno));
+	if ((rc = api_gate_start(s, &ss, e))) {
+		char why[sizeof e->msg];
+		snprintf(why, sizeof why, "%s", e->msg);
+		rc = ERR_SET(e, ERR_IO, "cannot listen on %s:%d: %s", c->host, c->port, why);
 		goto fail_ticker;
 	}
-	info = MHD_get_daemon_info(s->mhd, MHD_DAEMON_INFO_BIND_PORT);
-	s->port = info ? info->port : c->port;
+	/* No listen socket: the gate (gate.c) accepts, waits for whole
+	 * heads and hands connections over; it keeps the connection and
+	 * per-address limits itself (MHD's limit only backs it up). */
+	s->mhd = MHD_start_daemon(
+		MHD_USE_INTERNAL_POLLING_THREAD | MHD_USE_EPOLL | MHD_ALLOW_SUSPEND_RESUME |
+			MHD_USE_ERROR_LOG | MHD_USE_NO_LISTEN_SOCKET | MHD_USE_ITC |
+			(ss.ss_family == AF_INET6 ? MHD_USE_IPv6 : 0),
+		0, accept_policy, s, on_request, s,
+		MHD_OPTION_EXTERNAL_LOGGER, mhd_log, s,
+		MHD_OPTION_THREAD_POOL_SIZE, (unsigned int)c->threads,
+		MHD_OPTION_CONNECTION_TIMEOUT, (unsigned int)c->conn_timeout_s,
+		MHD_OPTION_CONNECTION_LIMIT, (unsigned int)c->max_connections + 64u,
+		MHD_OPTION_CONNECTION_MEMORY_LIMIT, c->conn_memory_bytes,
+		MHD_OPTION_NOTIFY_COMPLETED, on_completed, s,
+		MHD_OPTION_NOTIFY_CONNECTION, api_gate_notify, s,
+		MHD_OPTION_END);
+	if (!s->mhd) {
+		rc = ERR_SET(e, ERR_IO, "cannot start libmicrohttpd: %s", strerror(errno));
+		goto fail_ticker;
+	}
+	if ((rc = api_gate_run(s, e))) {
+		MHD_stop_daemon(s->mhd);
+		goto fail_ticker;
+	}
 	*out = s;
 	return 0;
 fail_ticker:
 	atomic_store(&s->stopping, 1);
 	pthread_join(s->ticker, NULL);
+	api_gate_free(s);
 fail:
 	api_committer_stop(s);
 	api_analyze_stop(s);
@@ -465,7 +495,9 @@ void api_server_stop(struct api_server *s)
 	pthread_mutex_unlock(&s->wait_mu);
 	api_analyze_stop(s);
 	api_committer_stop(s);
+	api_gate_stop(s);
 	MHD_stop_daemon(s->mhd);
+	api_gate_free(s);
 	db_pool_free(s->pool);
 	pthread_mutex_destroy(&s->wait_mu);
 	pthread_mutex_destroy(&s->an_mu);

@@ -51,7 +51,8 @@ void queue_job_rows_free(struct job_row *v, int n)
 	"seq, id, tenant_id, mesh_id, engine, format, printer, params, fault, state, stage," \
 	" progress, layers_done, layers_total, attempt, max_attempts, created_at,"          \
 	" started_at, finished_at, run_after, lease_expires, error_type, error,"            \
-	" error_field, metrics, artifact, artifact_bytes, artifact_sha256, event_seq"
+	" error_field, metrics, artifact, artifact_bytes, artifact_sha256, event_seq,"       \
+	" artifact_damaged_at, mesh_name"
 
 static void read_job(sqlite3_stmt *st, struct job_row *j)
 {
@@ -85,6 +86,8 @@ static void read_job(sqlite3_stmt *st, struct job_row *j)
 	j->artifact_bytes = sqlite3_column_int64(st, 26);
 	db_col_copy(st, 27, j->artifact_sha256, sizeof j->artifact_sha256);
 	j->event_seq = sqlite3_column_int64(st, 28);
+	j->artifact_damaged_ms = sqlite3_column_int64(st, 29);
+	db_col_copy(st, 30, j->mesh_name, sizeof j->mesh_name);
 }
 
 /* Step a statement expecting no row; 0 or ERR_IO. */
@@ -584,6 +587,35 @@ static int fenced_row(struct db *db, int64_t seq, int attempt, int *max_attempts
 	return rc == SQLITE_DONE ? 0 : db_fail(db, e, "reading job");
 }
 
+/* ERR_LIMIT when bytes more would take the tenant past its storage quota
+ * (checked in the caller's transaction, so concurrent jobs of a tenant
+ * cannot pass it together). */
+static int quota_room(struct db *db, int64_t tenant_id, int64_t bytes, struct err *e)
+{
+	static const char sql[] = "SELECT quota_bytes, used_bytes FROM tenants WHERE id = ?1";
+	sqlite3_stmt *st = db_stmt(db, sql, e);
+	int64_t quota = 0, used = 0;
+	int rc;
+
+	if (!st)
+		return ERR_IO;
+	sqlite3_bind_int64(st, 1, tenant_id);
+	rc = sqlite3_step(st);
+	if (rc == SQLITE_ROW) {
+		quota = sqlite3_column_int64(st, 0);
+		used = sqlite3_column_int64(st, 1);
+	}
+	sqlite3_reset(st);
+	if (rc != SQLITE_ROW && rc != SQLITE_DONE)
+		return db_fail(db, e, "reading the quota");
+	if (quota > 0 && used + bytes > quota)
+		return ERR_SET(e, ERR_LIMIT,
+			       "the output (%lld bytes) would take the tenant past its storage quota "
+			       "of %lld bytes (%lld in use)",
+			       (long long)bytes, (long long)quota, (long long)used);
+	return 0;
+}
+
 int queue_succeed(struct db *db, int64_t seq, int attempt, const struct job_artifact *a,
 		  const char *metrics_json, struct err *e)
 {
@@ -594,7 +626,8 @@ int queue_succeed(struct db *db, int64_t seq, int attempt, const struct job_arti
 		" layers_total = COALESCE(json_extract(?7, '$.layers'), layers_total),"
 		" layers_done = COALESCE(json_extract(?7, '$.layers'), layers_total),"
 		" finished_at = ?3, artifact = ?4, artifact_bytes = ?5,"
-		" artifact_sha256 = ?6, metrics = ?7, lease_expires = NULL, worker = NULL,"
+		" artifact_sha256 = ?6, metrics = ?7, mesh_name = ?8, lease_expires = NULL,"
+		" worker = NULL,"
 		" error_type = NULL, error = NULL, error_field = NULL, event_seq = event_seq + 1"
 		" WHERE seq = ?1 AND attempt = ?2 AND state = 'running'";
 	int max_attempts, rc, ours;
@@ -619,7 +652,10 @@ int queue_succeed(struct db *db, int64_t seq, int attempt, const struct job_arti
 	sqlite3_bind_int64(st, 5, a->bytes);
 	sqlite3_bind_text(st, 6, a->sha256, -1, SQLITE_STATIC);
 	sqlite3_bind_text(st, 7, metrics_json ? metrics_json : "{}", -1, SQLITE_STATIC);
-	if ((rc = step_done(db, st, "completing job", e)) ||
+	if (a->mesh_name)
+		sqlite3_bind_text(st, 8, a->mesh_name, -1, SQLITE_STATIC);
+	if ((rc = quota_room(db, tenant_id, a->bytes, e)) ||
+	    (rc = step_done(db, st, "completing job", e)) ||
 	    (rc = db_tenant_add_usage(db, tenant_id, a->bytes, e)) ||
 	    (rc = add_event(db, seq, "state", e)) || (rc = record_duration(db, seq, e)))
 		goto out;

@@ -47,6 +47,8 @@ struct job_row {
 	int64_t artifact_bytes;
 	char artifact_sha256[65];
 	int64_t event_seq;        /* last event number */
+	int64_t artifact_damaged_ms; /* quarantined by fsck (artifact then ""), 0 = no */
+	char mesh_name[128];      /* the mesh's name when the job succeeded, "" = unknown */
 };
 
 void queue_job_row_fini(struct job_row *j);
@@ -123,7 +125,10 @@ struct job_artifact {
 	const char *name;         /* file name in the tenant's artifacts dir */
 	int64_t bytes;
 	const char *sha256;       /* hex */
+	const char *mesh_name;    /* the client's name of the input, NULL = unknown */
 };
+/* Record success and charge a->bytes to the tenant's used bytes; ERR_LIMIT
+ * (nothing recorded) when that would pass the tenant's quota. */
 int queue_succeed(struct db *db, int64_t seq, int attempt, const struct job_artifact *a,
 		  const char *metrics_json, struct err *e);
 

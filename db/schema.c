@@ -87,6 +87,12 @@ static const char *const migrations[] = {
 	"  PRIMARY KEY (state, le)) WITHOUT ROWID;"
 	"CREATE TABLE job_duration_sums("
 	"  state TEXT PRIMARY KEY, count INTEGER NOT NULL, sum_s REAL NOT NULL) WITHOUT ROWID;",
+	/* 2: `infilld fsck --quarantine` marks damaged artifacts (their
+	 * downloads answer 410). */
+	"ALTER TABLE jobs ADD COLUMN artifact_damaged_at INTEGER;",
+	/* 3: the mesh's name as the job ran it, for the download's file name
+	 * (the mesh may be deleted later). */
+	"ALTER TABLE jobs ADD COLUMN mesh_name TEXT;",
 };
 
 int db_schema_latest(void)

@@ -7,7 +7,9 @@
 #include <fcntl.h>
 #include <ftw.h>
 #include <stdio.h>
+#include <stdlib.h>
 #include <string.h>
+#include <strings.h>
 #include <sys/stat.h>
 #include <sys/statvfs.h>
 #include <unistd.h>
@@ -146,4 +148,95 @@ int64_t store_free_bytes(const char *data_dir)
 	if (statvfs(data_dir, &sv) != 0)
 		return -1;
 	return (int64_t)sv.f_bavail * (int64_t)sv.f_frsize;
+}
+
+/* Replace every occurrence of what in msg by with (within cap). */
+static void replace_all(char *msg, size_t cap, const char *what, const char *with)
+{
+	size_t wl = strlen(what), nl = strlen(with);
+	char *p = msg;
+
+	if (!wl)
+		return;
+	while ((p = strstr(p, what)) != NULL) {
+		size_t tail = strlen(p + wl);
+		size_t at = (size_t)(p - msg);
+		if (at + nl + tail + 1 > cap)
+			tail = cap > at + nl + 1 ? cap - at - nl - 1 : 0;
+		if (at + nl + 1 > cap)
+			break;
+		memmove(p + nl, p + wl, tail);
+		p[nl + tail] = '\0';
+		memcpy(p, with, nl);
+		p += nl;
+	}
+}
+
+void store_redact(char *msg, size_t cap, const char *data_dir, const char *path,
+		  const char *name)
+{
+	char abs_dir[STORE_PATH_MAX];
+
+	if (path && path[0]) {
+		const char *base = strrchr(path, '/');
+		replace_all(msg, cap, path, name ? name : "the file");
+		if (base && base[1])
+			replace_all(msg, cap, base + 1, name ? name : "the file");
+	}
+	if (data_dir && data_dir[0]) {
+		if (realpath(data_dir, abs_dir))
+			replace_all(msg, cap, abs_dir, "DATA");
+		replace_all(msg, cap, data_dir, "DATA");
+	}
+}
+
+/* Remove every (case-insensitive) "thumbnail" from s; removal may join
+ * two halves into a new one, so repeat until none is left. */
+static void drop_thumbnail(char *s)
+{
+	static const char word[] = "thumbnail";
+	const size_t wl = sizeof word - 1;
+	int found;
+
+	do {
+		found = 0;
+		for (char *p = s; *p; p++) {
+			if (!strncasecmp(p, word, wl)) {
+				memmove(p, p + wl, strlen(p + wl) + 1);
+				found = 1;
+				break;
+			}
+		}
+	} while (found);
+}
+
+static void sanitise_stem(const char *name, char *buf, size_t len)
+{
+	const char *dot = name ? strrchr(name, '.') : NULL;
+	size_t n = 0, stem = name ? (dot && dot != name ? (size_t)(dot - name) : strlen(name)) : 0;
+
+	for (size_t i = 0; i < stem && n + 1 < len && n + 1 < STORE_OUTPUT_NAME_MAX; i++) {
+		unsigned char c = (unsigned char)name[i];
+		int keep = (c >= 'a' && c <= 'z') || (c >= 'A' && c <= 'Z') || (c >= '0' && c <= '9') ||
+			   c == '-' || c == '_';
+		if (!keep && n > 0 && buf[n - 1] == '_')
+			continue; /* one '_' per run of others */
+		buf[n++] = keep ? (char)c : '_';
+	}
+	buf[n] = '\0';
+	drop_thumbnail(buf);
+	/* Nothing but separators left is no name. */
+	if (strspn(buf, "_-") == strlen(buf))
+		buf[0] = '\0';
+}
+
+void store_output_name(const char *mesh_name, const char *fallback, char *buf, size_t len)
+{
+	if (!len)
+		return;
+	sanitise_stem(mesh_name, buf, len);
+	if (!buf[0])
+		sanitise_stem(fallback, buf, len);
+	if (!buf[0])
+		snprintf(buf, len, "part");
 }

@@ -39,6 +39,20 @@ int store_tenant_dir(const char *data_dir, int64_t tenant_id, char *buf, size_t 
 int store_publish(const char *tmp_path, const char *final_path, struct err *e);
 /* rm -r of a tenant's directory (after its rows are gone). */
 int store_remove_tree(const char *path, struct err *e);
+/* Make msg (NUL-terminated, cap bytes) fit for a client: every mention of
+ * path, or of its file name, becomes name (the client's name for the
+ * file), and what remains of data_dir becomes "DATA" (path and name may
+ * be NULL).  Messages from readers and the store name our files. */
+void store_redact(char *msg, size_t cap, const char *data_dir, const char *path,
+		  const char *name);
+/* The name outputs carry (an SL1's jobDir and layer names, the download's
+ * file name) from the mesh's name: its stem without the extension, other
+ * characters than ASCII letters, digits, '-' and '_' made '_', never
+ * containing "thumbnail" in any case (PrusaSlicer's SL1 importer skips
+ * entries whose name does), at most 63 bytes; fallback when nothing is
+ * left (then "part").  buf holds at least 64 bytes. */
+#define STORE_OUTPUT_NAME_MAX 64
+void store_output_name(const char *mesh_name, const char *fallback, char *buf, size_t len);
 /* Free bytes available to us on the file system of data_dir, -1 on error. */
 int64_t store_free_bytes(const char *data_dir);
 

@@ -13,5 +13,6 @@ int cmd_worker(int argc, char **argv);    /* worker.c (started by serve) */
 int cmd_sandbox(int argc, char **argv);   /* sandbox.c (started by serve) */
 int cmd_tenant(int argc, char **argv);    /* tenant_cmd.c */
 int cmd_admin_key(int argc, char **argv); /* tenant_cmd.c */
+int cmd_fsck(int argc, char **argv);      /* fsck_cmd.c */
 
 #endif

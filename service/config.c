@@ -20,6 +20,9 @@ static const struct int_opt int_opts[] = {
 	OPT("--max-connections", max_connections, 16, 100000),
 	OPT("--per-ip-connections", per_ip_connections, 1, 100000),
 	OPT("--conn-timeout-s", conn_timeout_s, 1, 3600),
+	OPT("--head-timeout-s", head_timeout_s, 1, 3600),
+	OPT("--min-body-rate-kbps", min_body_rate_kbps, 0, 1 << 20),
+	OPT("--body-grace-s", body_grace_s, 1, 3600),
 	OPT("--conn-memory-kb", conn_memory_kb, 32, 65536),
 	OPT("--json-max-kb", json_max_kb, 1, 65536),
 	OPT("--lease-s", lease_s, 1, 3600),
@@ -41,9 +44,29 @@ const char *config_usage(void)
 {
 	return "serve [--listen HOST:PORT] [--data DIR] [--workers N] [--http-threads N]\n"
 	       "              [--max-connections N] [--per-ip-connections N] [--conn-timeout-s N]\n"
+	       "              [--head-timeout-s N] [--min-body-rate-kbps N] [--body-grace-s N]\n"
 	       "              [--lease-s N] [--max-attempts N] [--drain-s N] [--job-timeout-s N]\n"
 	       "              [--job-mem-mb N] [--job-cpu-s N] [--output-limit-mb N]\n"
 	       "              [--job-threads N] [--retention-days N] [--min-free-mb N]";
+}
+
+/* `serve --help`: the usage and what the HTTP limits mean (all options:
+ * docs/operations.md). */
+static void print_help(void)
+{
+	printf("usage: infilld %s\n\n"
+	       "HTTP limits (defaults):\n"
+	       "  --max-connections N      connections libmicrohttpd serves at once (2048); past it,\n"
+	       "                           503 + Retry-After (16 more for GET /livez, /readyz)\n"
+	       "  --per-ip-connections N   of them from one address (256); past it, 503\n"
+	       "  --conn-timeout-s N       idle connection timeout (30)\n"
+	       "  --head-timeout-s N       the whole request head must arrive within N s, else 408\n"
+	       "                           and close (10); heads wait outside the connection limit\n"
+	       "  --min-body-rate-kbps N   a request body must average N kilobits/s once it has\n"
+	       "                           taken --body-grace-s (8; 0 = off), else it is closed\n"
+	       "  --body-grace-s N         (10)\n"
+	       "See docs/operations.md for every option.\n",
+	       config_usage());
 }
 
 static int parse_listen(struct service_config *c, const char *v)
@@ -90,6 +113,9 @@ static void defaults(struct service_config *c)
 	c->max_connections = 2048;
 	c->per_ip_connections = 256;
 	c->conn_timeout_s = 30;
+	c->head_timeout_s = 10;
+	c->min_body_rate_kbps = 8;
+	c->body_grace_s = 10;
 	c->conn_memory_kb = 256;
 	c->json_max_kb = 1024;
 	c->lease_s = 30;
@@ -125,6 +151,10 @@ int config_parse(struct service_config *c, int argc, char **argv, int extra_ok)
 			v = eq + 1;
 		} else {
 			snprintf(name, sizeof name, "%s", a);
+		}
+		if (!strcmp(a, "--help") || !strcmp(a, "-h")) {
+			print_help();
+			return CONFIG_HELP;
 		}
 		if (strncmp(name, "--", 2) != 0) {
 			fprintf(stderr, "infilld %s: unexpected argument '%s'\n", argv[0], a);

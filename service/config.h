@@ -18,6 +18,9 @@ struct service_config {
 	int workers;             /* job worker processes */
 	int http_threads;
 	int max_connections, per_ip_connections, conn_timeout_s;
+	int head_timeout_s;      /* deadline for a whole request head */
+	int min_body_rate_kbps;  /* kilobits/s a body must average after the grace; 0 = off */
+	int body_grace_s;
 	int conn_memory_kb;
 	int json_max_kb;
 	int lease_s;             /* worker lease; heartbeats every lease/3 */
@@ -36,8 +39,10 @@ struct service_config {
 	char self_exe[512];      /* this binary (re-executed for workers) */
 };
 
-/* Defaults, then argv (argv[0] = command name).  Returns 0, or 2 with a
- * message on stderr for a usage error.  extra_ok: also accept the
+#define CONFIG_HELP 3 /* config_parse(): --help was printed; exit 0 */
+
+/* Defaults, then argv (argv[0] = command name).  Returns 0, 2 with a
+ * message on stderr for a usage error, or CONFIG_HELP.  extra_ok: also accept the
  * internal --worker-name. */
 int config_parse(struct service_config *c, int argc, char **argv, int extra_ok);
 /* Usage text of the serve options. */

@@ -85,8 +85,9 @@ static int out_write(void *ctx, const void *buf, size_t len, struct err *e)
 	return 0;
 }
 
-static void send_result(int fd, const struct err *e, uint64_t bytes, const char *sha,
-			const char *metrics)
+/* type: the failure's error.type, NULL = the error code's name. */
+static void send_result(int fd, const struct err *e, const char *type, uint64_t bytes,
+			const char *sha, const char *metrics)
 {
 	struct jobmsg_result r;
 	struct jobmsg_head h;
@@ -96,7 +97,7 @@ static void send_result(int fd, const struct err *e, uint64_t bytes, const char 
 	memset(&r, 0, sizeof r);
 	r.code = e ? e->code : 0;
 	if (e && e->code) {
-		snprintf(r.type, sizeof r.type, "%s", err_code_name(e->code));
+		snprintf(r.type, sizeof r.type, "%s", type ? type : err_code_name(e->code));
 		err_format(e, r.message, sizeof r.message);
 		snprintf(r.field, sizeof r.field, "%s", e->field);
 	}
@@ -137,7 +138,7 @@ static void inject_fault(const char *fault, struct progress_hooks *hooks, int fd
 			total += chunk;
 		}
 		ERR_SET(&e, ERR_NOMEM, "out of memory after %zu MB", total >> 20);
-		send_result(fd, &e, 0, NULL, NULL);
+		send_result(fd, &e, NULL, 0, NULL, NULL);
 		_exit(0);
 	} else if (!strcmp(fault, "hang")) {
 		/* Cooperative: polls the cancel hook like an engine's loop. */
@@ -145,7 +146,7 @@ static void inject_fault(const char *fault, struct progress_hooks *hooks, int fd
 		err_clear(&e);
 		for (int i = 0;; i++) {
 			if (progress_update(&p, 1.0 - 1.0 / (1.0 + i * 0.01), &e)) {
-				send_result(fd, &e, 0, NULL, NULL);
+				send_result(fd, &e, NULL, 0, NULL, NULL);
 				_exit(0);
 			}
 			nanosleep(&ts, NULL);
@@ -173,7 +174,7 @@ void jobproc_main(const struct jobproc_args *a)
 	char *metrics_text = NULL;
 	unsigned char digest[32];
 	char sha[65];
-	int rc;
+	int rc, quota_hit = 0;
 
 	/* Die with the worker; stop on SIGUSR1; EFBIG instead of SIGXFSZ. */
 	prctl(PR_SET_PDEATHSIG, SIGKILL);
@@ -208,7 +209,7 @@ void jobproc_main(const struct jobproc_args *a)
 		js.input_path = a->mesh_path;
 		js.threads = c->job_threads;
 		js.output_limit_bytes = (uint64_t)c->output_limit_mb << 20;
-		js.job_name = j->id;
+		js.job_name = a->output_name;
 		js.created_unix = j->created_ms / 1000;
 		/* Temporary files beside the artifact, inside the data directory. */
 		slash = strrchr(a->out_tmp, '/');
@@ -228,7 +229,19 @@ void jobproc_main(const struct jobproc_args *a)
 		sink.ctx = &jp;
 		sink.bytes = 0;
 		sink.limit = js.output_limit_bytes;
+		/* The tenant's quota bounds the output too: the job stops once
+		 * its output would pass it (error type "quota"). */
+		if (a->quota_bytes > 0 && (uint64_t)a->quota_left_bytes < sink.limit)
+			sink.limit = (uint64_t)a->quota_left_bytes;
 		rc = engine_run(&js, &sink, &hooks, &m, &e);
+		if (rc == ERR_LIMIT && sink.limit < js.output_limit_bytes) {
+			err_clear(&e);
+			rc = ERR_SET(&e, ERR_LIMIT,
+				     "the output would take the tenant past its storage quota of %lld "
+				     "bytes (%lld bytes were left)",
+				     (long long)a->quota_bytes, (long long)a->quota_left_bytes);
+			quota_hit = 1;
+		}
 		if (!rc && fsync(jp.out_fd) != 0)
 			rc = ERR_SET(&e, ERR_IO, "fsync output: %s", strerror(errno));
 		close(jp.out_fd);
@@ -239,9 +252,9 @@ void jobproc_main(const struct jobproc_args *a)
 		json_decref(mj);
 		sha256_digest(&jp.sha, sizeof digest, digest);
 		db_sha256_hex(digest, sha);
-		send_result(a->fd, NULL, sink.bytes, sha, metrics_text ? metrics_text : "{}");
+		send_result(a->fd, NULL, NULL, sink.bytes, sha, metrics_text ? metrics_text : "{}");
 	} else {
-		send_result(a->fd, &e, 0, NULL, NULL);
+		send_result(a->fd, &e, quota_hit ? "quota" : NULL, 0, NULL, NULL);
 	}
 	/* No cleanup needed: the process ends here. */
 	_exit(0);

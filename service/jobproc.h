@@ -45,6 +45,9 @@ struct jobproc_args {
 	const char *mesh_path;
 	const char *out_tmp;       /* where the output goes */
 	int fd;                    /* write end of the report pipe */
+	int64_t quota_bytes;       /* tenant's storage quota, 0 = none ... */
+	int64_t quota_left_bytes;  /* ... and what was left of it at the claim */
+	char output_name[64];      /* store_output_name() of the mesh: SL1 jobDir, G-code job */
 };
 
 /* Runs in the forked child; never returns. */

@@ -28,6 +28,10 @@ static const struct command commands[] = {
 	 "tenant add NAME [--max-jobs N] [--max-upload-mb N] [--quota-gb N] [--data DIR]\n"
 	 "              tenant list | key-rotate NAME | remove NAME [--data DIR]"},
 	{"admin-key", cmd_admin_key, "admin-key [--data DIR]               (new admin key, shown once)"},
+	{"fsck", cmd_fsck,
+	 "fsck [--data DIR] [--quarantine]     (check artifacts against their recorded SHA-256;\n"
+	 "              exit 1 when any is damaged or missing; --quarantine moves damaged ones\n"
+	 "              to DATA/quarantine/ and their downloads answer 410)"},
 	/* Internal: started by serve, not listed. */
 	{"worker", cmd_worker, ""},
 	{"sandbox", cmd_sandbox, ""},

@@ -98,7 +98,7 @@ int cmd_serve(int argc, char **argv)
 	int lock_fd, n, rc = config_parse(&c, argc, argv, 0);
 
 	if (rc)
-		return rc;
+		return rc == CONFIG_HELP ? 0 : rc;
 	if (getenv("INFILLD_LOG") && !strcmp(getenv("INFILLD_LOG"), "debug"))
 		log_set_level(LOG_DEBUG);
 	err_clear(&e);
@@ -145,6 +145,9 @@ int cmd_serve(int argc, char **argv)
 	ac.max_connections = c.max_connections;
 	ac.per_ip_connections = c.per_ip_connections;
 	ac.conn_timeout_s = c.conn_timeout_s;
+	ac.head_timeout_s = c.head_timeout_s;
+	ac.min_body_bps = (int64_t)c.min_body_rate_kbps * 1000 / 8;
+	ac.body_grace_s = c.body_grace_s;
 	ac.conn_memory_bytes = (size_t)c.conn_memory_kb << 10;
 	ac.json_max_bytes = (size_t)c.json_max_kb << 10;
 	ac.max_attempts = c.max_attempts;

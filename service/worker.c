@@ -10,6 +10,7 @@
 #include "db/meshes.h"
 #include "db/queue.h"
 #include "db/store.h"
+#include "db/tenants.h"
 #include "engine/engine.h"
 #include "service/commands.h"
 #include "service/config.h"
@@ -59,6 +60,8 @@ struct attempt {
 	int timed_out, shutdown;
 	double stop_sent_s;       /* when SIGUSR1 went out */
 	double stop_seen_s;       /* when the worker was told to stop */
+	const char *mesh_path;    /* the job's input, named ... */
+	char mesh_name[128];      /* ... by the client's name in messages */
 };
 
 /* Parse complete records from a->in. */
@@ -133,7 +136,7 @@ static void finish(struct attempt *a, int status)
 	const struct service_config *c = a->cfg;
 	struct job_row *j = a->job;
 	struct job_failure f = {NULL, NULL, "", 0};
-	char msg[ERR_MSG_MAX + 256];
+	char msg[ERR_MSG_MAX + 256], redacted[ERR_MSG_MAX + 256];
 	char tmp[STORE_PATH_MAX], final_path[STORE_PATH_MAX], name[128];
 	struct err e;
 	int rc;
@@ -165,7 +168,16 @@ static void finish(struct attempt *a, int status)
 		art.name = name;
 		art.bytes = (int64_t)a->result.bytes;
 		art.sha256 = a->result.sha256;
+		art.mesh_name = a->mesh_name;
 		rc = queue_succeed(a->db, j->seq, j->attempt, &art, a->metrics, &e);
+		if (rc == ERR_LIMIT) {
+			/* Another output of the tenant took the room meanwhile. */
+			unlink(final_path);
+			snprintf(msg, sizeof msg, "%s", e.msg);
+			f.type = "quota";
+			f.message = msg;
+			goto fail;
+		}
 		if (rc != 1) {
 			unlink(final_path); /* fenced out (or the db failed): not ours */
 			log_msg(rc < 0 ? LOG_ERROR : LOG_INFO, "worker",
@@ -220,6 +232,14 @@ static void finish(struct attempt *a, int status)
 		f.message = msg;
 	}
 fail:
+	/* Messages name our files (the mesh by its id, the .part file, the
+	 * data directory); the client knows the mesh by its own name. */
+	if (f.message != redacted) {
+		snprintf(redacted, sizeof redacted, "%s", f.message);
+		store_redact(redacted, sizeof redacted, NULL, tmp, "the output");
+		store_redact(redacted, sizeof redacted, c->data_dir, a->mesh_path, a->mesh_name);
+		f.message = redacted;
+	}
 	rc = queue_fail(a->db, j->seq, j->attempt, &f, &e);
 	log_msg(LOG_INFO, "worker", "job %s attempt %d failed (%s: %s)%s", j->id, j->attempt, f.type,
 		f.message, rc == 1 ? "" : " - not recorded, job no longer ours");
@@ -289,6 +309,7 @@ static void run_attempt(const struct service_config *c, struct db *db, struct jo
 	struct attempt a;
 	struct mesh_rec m;
 	struct jobproc_args args;
+	struct tenant t;
 	char mesh_path[STORE_PATH_MAX], tmp[STORE_PATH_MAX];
 	int p[2];
 	struct err e;
@@ -304,6 +325,8 @@ static void run_attempt(const struct service_config *c, struct db *db, struct jo
 		return;
 	}
 	store_mesh_path(c->data_dir, j->tenant_id, m.id, m.format, mesh_path, sizeof mesh_path);
+	a.mesh_path = mesh_path;
+	snprintf(a.mesh_name, sizeof a.mesh_name, "%s", m.name);
 	db_mesh_rec_fini(&m);
 	store_tmp_path(c->data_dir, "", tmp, sizeof tmp);
 	snprintf(tmp + strlen(tmp), sizeof tmp - strlen(tmp), "%s-a%d.part", j->id, j->attempt);
@@ -312,6 +335,23 @@ static void run_attempt(const struct service_config *c, struct db *db, struct jo
 		queue_fail(db, j->seq, j->attempt, &f, &e);
 		return;
 	}
+	memset(&args, 0, sizeof args);
+	if (db_tenant_get_id(db, j->tenant_id, &t, &e) == 0 && t.quota_bytes > 0) {
+		args.quota_bytes = t.quota_bytes;
+		args.quota_left_bytes = t.quota_bytes > t.used_bytes ? t.quota_bytes - t.used_bytes : 0;
+		if (args.quota_left_bytes == 0) {
+			char msg[160];
+			struct job_failure f = {"quota", msg, "", 0};
+			snprintf(msg, sizeof msg,
+				 "the tenant's storage quota of %lld bytes is used up (%lld in use)",
+				 (long long)t.quota_bytes, (long long)t.used_bytes);
+			close(p[0]);
+			close(p[1]);
+			queue_fail(db, j->seq, j->attempt, &f, &e);
+			return;
+		}
+	}
+	store_output_name(a.mesh_name, j->id, args.output_name, sizeof args.output_name);
 	args.cfg = c;
 	args.job = j;
 	args.mesh_path = mesh_path;

@@ -73,7 +73,7 @@ int main(int argc, char **argv)
 	sqlite3_exec(sq, "COMMIT; ANALYZE", NULL, NULL, NULL);
 	sqlite3_close(sq);
 	for (int i = 0; i < CLAIMS; i++) {
-		struct job_artifact a = {"x", 1, "00"};
+		struct job_artifact a = {"x", 1, "00", NULL};
 		int got;
 		t0 = now_s();
 		if (queue_claim(db, "bench", 60000, &j, &got, &e) || !got) {

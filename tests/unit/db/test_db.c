@@ -10,6 +10,7 @@
 #include "db/db.h"
 #include "db/meshes.h"
 #include "db/queue.h"
+#include "db/store.h"
 #include "db/tenants.h"
 #include "engine/core/err.h"
 
@@ -276,7 +277,7 @@ static void test_fencing_and_rescue(void)
 	struct job_row j, k;
 	struct job_progress p = {"layers", 0.5, 10, 20};
 	struct job_failure lost = {"io", "disk hiccup", "", 1};
-	struct job_artifact art = {"x.sl1", 42, "ab"};
+	struct job_artifact art = {"x.sl1", 42, "ab", NULL};
 	char mid[DB_ID_MAX];
 	struct err e;
 	int64_t a;
@@ -351,7 +352,7 @@ static void test_succeed_cancel_events(void)
 	struct db *db = fresh();
 	struct job_row j, k;
 	struct job_event *ev;
-	struct job_artifact art = {"j.sl1", 4242, "abcd"};
+	struct job_artifact art = {"j.sl1", 4242, "abcd", "femur.off"};
 	struct job_failure bad = {"parse", "facet 3: NaN", "", 0};
 	struct tenant t;
 	char mid[DB_ID_MAX];
@@ -486,6 +487,33 @@ static void test_claim_plan(void)
 		fprintf(stderr, "plan:\n%s", plan);
 }
 
+/* Output names: ASCII letters, digits, - and _ only, never "thumbnail". */
+static void test_output_names(void)
+{
+	static const char *const cases[][3] = {
+		{"femur.off", "j_x", "femur"},
+		{"my part (v2).stl", "j_x", "my_part_v2_"},
+		{"\xc3\xa9l\xc3\xa9phant.obj", "j_x", "_l_phant"},
+		{"Thumbnail.stl", "j_x", "j_x"},
+		{"ThumbThumbnailNail.stl", "j_x", "j_x"},
+		{"gear_thumbnail-v1.stl", "j_x", "gear_-v1"},
+		{".stl", "j_x", "_stl"},
+		{"", "", "part"},
+		{NULL, "j_abc", "j_abc"},
+		{"\xc3\xa9.stl", "j_y", "j_y"},
+	};
+	char out[STORE_OUTPUT_NAME_MAX], big[300];
+
+	for (size_t i = 0; i < sizeof cases / sizeof cases[0]; i++) {
+		store_output_name(cases[i][0], cases[i][1], out, sizeof out);
+		CHECK_STR(out, cases[i][2]);
+	}
+	memset(big, 'a', sizeof big - 1);
+	big[sizeof big - 1] = '\0';
+	store_output_name(big, "j_x", out, sizeof out);
+	CHECK_EQ_INT((int)strlen(out), STORE_OUTPUT_NAME_MAX - 1);
+}
+
 int main(void)
 {
 	snprintf(dir, sizeof dir, "/tmp/infilld-test-db-XXXXXX");
@@ -501,6 +529,7 @@ int main(void)
 	RUN(test_succeed_cancel_events);
 	RUN(test_list_paging);
 	RUN(test_claim_plan);
+	RUN(test_output_names);
 	{
 		char cmd[300];
 		snprintf(cmd, sizeof cmd, "rm -rf '%s'", dir);

@@ -1,0 +1,151 @@
+/* fsck_cmd.c - `infilld fsck --data DIR [--quarantine]`: check every
+ * artifact against the size and SHA-256 the database recorded when it was
+ * published; report missing and damaged ones; with --quarantine move the
+ * damaged files to DATA/quarantine/<tenant id>/ and mark their jobs, so
+ * downloads answer 410 (db/artifacts.h).  Exit 0 when all are intact, 1
+ * when any is missing or damaged, 2 for usage.  Safe while serve runs.
+ */
+#include "db/artifacts.h"
+#include "db/db.h"
+#include "db/store.h"
+#include "db/tenants.h"
+#include "engine/core/err.h"
+#include "service/commands.h"
+#include "service/config.h"
+
+#include <errno.h>
+#include <fcntl.h>
+#include <nettle/sha2.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+static const char fsck_usage[] = "usage: infilld fsck [--data DIR] [--quarantine]\n";
+
+/* Size and SHA-256 (hex) of path: 0, or -1 with errno when unreadable. */
+static int digest_file(const char *path, int64_t *bytes, char hex[65])
+{
+	static unsigned char block[1 << 16];
+	struct sha256_ctx sha;
+	uint8_t digest[SHA256_DIGEST_SIZE];
+	int64_t total = 0;
+	ssize_t n;
+	int fd = open(path, O_RDONLY | O_CLOEXEC);
+
+	if (fd < 0)
+		return -1;
+	sha256_init(&sha);
+	while ((n = read(fd, block, sizeof block)) > 0) {
+		sha256_update(&sha, (size_t)n, block);
+		total += n;
+	}
+	close(fd);
+	if (n < 0)
+		return -1;
+	sha256_digest(&sha, sizeof digest, digest);
+	db_sha256_hex(digest, hex);
+	*bytes = total;
+	return 0;
+}
+
+/* Move a damaged file aside and mark its job; 0 or -1 (printed). */
+static int quarantine(struct db *db, const char *data, const struct artifact_rec *a,
+		      const char *path)
+{
+	char dir[STORE_PATH_MAX], dest[STORE_PATH_MAX];
+	struct err e;
+
+	err_clear(&e);
+	snprintf(dir, sizeof dir, "%s/quarantine/%lld", data, (long long)a->tenant_id);
+	if (snprintf(dest, sizeof dest, "%s/%s", dir, a->name) >= (int)sizeof dest ||
+	    store_mkdirs(dir, &e) || rename(path, dest) != 0) {
+		fprintf(stderr, "infilld fsck: cannot move %s aside: %s\n", path,
+			e.msg[0] ? e.msg : strerror(errno));
+		return -1;
+	}
+	if (db_artifact_quarantine(db, a->seq, &e)) {
+		fprintf(stderr, "infilld fsck: cannot mark job %s: %s\n", a->job_id, e.msg);
+		return -1;
+	}
+	printf("quarantined %s -> %s\n", a->job_id, dest);
+	return 0;
+}
+
+int cmd_fsck(int argc, char **argv)
+{
+	const char *data = getenv("INFILLD_DATA") && *getenv("INFILLD_DATA") ? getenv("INFILLD_DATA")
+									   : CONFIG_DEFAULT_DATA;
+	char path[STORE_PATH_MAX];
+	int64_t after = 0;
+	long checked = 0, missing = 0, damaged = 0;
+	int quarantine_on = 0, failed = 0;
+	struct db *db;
+	struct err e;
+
+	for (int i = 1; i < argc; i++) {
+		if (!strcmp(argv[i], "--data") && i + 1 < argc) {
+			data = argv[++i];
+		} else if (!strncmp(argv[i], "--data=", 7)) {
+			data = argv[i] + 7;
+		} else if (!strcmp(argv[i], "--quarantine")) {
+			quarantine_on = 1;
+		} else {
+			fputs(fsck_usage, stderr);
+			return 2;
+		}
+	}
+	err_clear(&e);
+	if (store_db_path(data, path, sizeof path) || access(path, F_OK) != 0 ||
+	    db_open(path, &db, &e)) {
+		fprintf(stderr, "infilld fsck: no database in %s%s%s\n", data, e.msg[0] ? ": " : "",
+			e.msg);
+		return 1;
+	}
+	for (;;) {
+		struct artifact_rec *v;
+		int n;
+
+		if (db_artifact_list(db, after, 256, &v, &n, &e)) {
+			fprintf(stderr, "infilld fsck: %s\n", e.msg);
+			db_close(db);
+			return 1;
+		}
+		for (int i = 0; i < n; i++) {
+			const struct artifact_rec *a = &v[i];
+			char hex[65];
+			int64_t bytes;
+
+			checked++;
+			store_artifact_path(data, a->tenant_id, a->name, path, sizeof path);
+			if (digest_file(path, &bytes, hex) != 0) {
+				missing++;
+				printf("missing %s %s: %s\n", a->job_id, path, strerror(errno));
+				/* Downloads already answer 410 for a missing file. */
+				continue;
+			}
+			if (bytes == a->bytes && !strcmp(hex, a->sha256))
+				continue;
+			damaged++;
+			if (bytes != a->bytes)
+				printf("damaged %s %s: %lld bytes, %lld recorded\n", a->job_id, path,
+				       (long long)bytes, (long long)a->bytes);
+			else
+				printf("damaged %s %s: SHA-256 %s, %s recorded\n", a->job_id, path, hex,
+				       a->sha256);
+			if (quarantine_on && quarantine(db, data, a, path))
+				failed = 1;
+		}
+		if (n > 0)
+			after = v[n - 1].seq;
+		free(v);
+		if (n < 256)
+			break;
+	}
+	printf("%ld artifact(s) checked: %ld damaged, %ld missing%s\n", checked, damaged, missing,
+	       quarantine_on && damaged ? (failed ? " (some not quarantined)" : ", damaged quarantined")
+					: "");
+	db_close(db);
+	return damaged || missing ? 1 : 0;
+}
