@@ -65,7 +65,14 @@ def test_json_errors():
              ({"params": {"height_mm": "tall"}}, "height_mm"),
              ({"params": {"height_mm": -3}}, "height_mm"), ({"params": {"bogus": 1}}, "bogus"),
              ({"params": {"up": 7}}, "up"), ({"params": []}, "params"),
-             ({"printer": "nosuch"}, "printer"), ({"fault": "segv"}, "fault")]
+             ({"printer": "nosuch"}, "printer"), ({"fault": "segv"}, "fault"),
+             # generic-resin display keys (docs/printers.md): impossible values, and the
+             # SL1's firmware-fixed display
+             ({"printer": "generic-resin", "format": "zip", "params": {"display_px_x": 0}},
+              "display_px_x"),
+             ({"printer": "generic-resin", "format": "zip", "params": {"display_mm_y": 1}},
+              "display_mm_y"),
+             ({"params": {"display_px_x": 3840}}, "display_px_x")]
     for extra, field in cases:
         body = {"mesh_id": S["mesh"]}
         body.update(extra)

@@ -91,8 +91,8 @@ def follow(job_id):
     return ev
 
 
-def run_job(fmt, params, expect_ext, content_type):
-    r = srv.submit(srv.key, S["mesh"], engine="solid", format=fmt, params=params)
+def run_job(fmt, params, expect_ext, content_type, **fields):
+    r = srv.submit(srv.key, S["mesh"], engine="solid", format=fmt, params=params, **fields)
     oas.check_response("POST", "/v1/jobs", r)
     job = r.json()
     check(r.header("Location") == "/v1/jobs/" + job["id"], "Location")
@@ -151,6 +151,25 @@ def test_sl1_job():
     check(len(pngs) == j["layers_total"] == 800, "one PNG per layer: %d" % len(pngs))
     check(zf.testzip() is None, "zip CRCs")
     S["sl1_job"] = j["id"]
+
+
+def test_generic_resin_zip_job():
+    """The job's printer field picks generic-resin; its display keys set the PNG size."""
+    import struct
+    params = {"height_mm": 10, "layer_mm": 0.2, "display_px_x": 1920, "display_px_y": 1080,
+              "display_mm_x": 76.8, "display_mm_y": 43.2, "mirror_x": True}
+    j, data = run_job("zip", params, ".zip", "application/zip", printer="generic-resin")
+    check(j["printer"] == "generic-resin", "printer recorded: %r" % j["printer"])
+    zf = zipfile.ZipFile(io.BytesIO(data))
+    pngs = [n for n in zf.namelist() if n.endswith(".png")]
+    check(len(pngs) == j["layers_total"] > 0, "one PNG per layer: %d" % len(pngs))
+    for n in pngs[:3] + pngs[-1:]:
+        head = zf.read(n)[:24]
+        check(head[12:16] == b"IHDR" and struct.unpack(">II", head[16:24]) == (1920, 1080),
+              "%s is 1920 x 1080: %r" % (n, head[16:24]))
+    man = json.loads(zf.read("manifest.json"))
+    check(abs(man["pixel_um"][0] - 40) < 1e-6 and abs(man["pixel_um"][1] - 40) < 1e-6,
+          "40 um pixels: %r" % man["pixel_um"])
 
 
 def test_gcode_job():
@@ -265,7 +284,8 @@ def teardown():
 if __name__ == "__main__":
     try:
         setup()
-        run([test_upload_raw, test_upload_multipart_checksum, test_sl1_job, test_gcode_job,
+        run([test_upload_raw, test_upload_multipart_checksum, test_sl1_job,
+             test_generic_resin_zip_job, test_gcode_job,
              test_list_paginate, test_idempotency, test_cancel_running,
              test_metrics_and_delete, teardown])
     finally:

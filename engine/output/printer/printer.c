@@ -68,8 +68,10 @@ int printer_check(const struct printer *p, struct err *e)
 			     e);
 	if (rc)
 		return rc;
-	return p->kind == PRINTER_RESIN ? printer_resin_check(&p->resin, e)
-					: printer_fdm_check(&p->fdm, e);
+	if (p->kind == PRINTER_FDM)
+		return printer_fdm_check(&p->fdm, e);
+	rc = printer_resin_check_display(p, e);
+	return rc ? rc : printer_resin_check(&p->resin, e);
 }
 
 void printer_center(const struct printer *p, double *x_mm, double *y_mm)

@@ -1,6 +1,6 @@
 /* printer.h - printer profiles: build volume, pixel grid, FDM settings.
  *
- * Profiles are compiled in (sl1, sl1s, generic-fdm; docs/printers.md has
+ * Profiles are compiled in (sl1, sl1s, generic-resin, generic-fdm; docs/printers.md has
  * their values and sources).  A job copies one and applies `--set`
  * overrides through printer_param_table(); the result is validated with
  * printer_check().  Two kinds with separate parameter structs, so resin
@@ -25,7 +25,7 @@ enum printer_kind { PRINTER_RESIN, PRINTER_FDM };
 enum resin_print_speed { RESIN_SPEED_FAST, RESIN_SPEED_SLOW, RESIN_SPEED_HIGH_VISCOSITY };
 
 struct resin_printer {
-	char model[8];          /* config.ini printerModel: "SL1" / "SL1S" */
+	char model[8];          /* config.ini printerModel: "SL1" / "SL1S"; "GENERIC" */
 	char variant[16];       /* printerVariant */
 	char profile[48];       /* printerProfile: PrusaSlicer's preset name */
 	int pixels_x, pixels_y; /* display_pixels_x/_y as PrusaSlicer stores them */

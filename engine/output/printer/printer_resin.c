@@ -1,5 +1,5 @@
-/* printer_resin.c - resin printer profiles (sl1, sl1s), their override
- * table, checks, and the printer-mm -> image-pixel map.
+/* printer_resin.c - resin printer profiles (sl1, sl1s, generic-resin),
+ * their override table, checks, and the printer-mm -> image-pixel map.
  *
  * Values and sources: docs/printers.md (PrusaSlicer 2.5.2,
  * resources/profiles/PrusaResearch.ini and PrintConfig.cpp defaults).
@@ -19,6 +19,13 @@
 #define RESIN_EXPOSURE_MAX_S 60.0
 #define RESIN_EXPOSURE_FIRST_MIN_S 10.0
 #define RESIN_EXPOSURE_FIRST_MAX_S 120.0
+
+/* Display limits for generic-resin overrides: 16384 px covers 16K
+ * panels; MSLA pixels are 0.019..0.05 mm, so 0.005..0.2 mm only catches
+ * swapped or mistyped values (a pixel count given as mm, inches...). */
+#define RESIN_DISPLAY_MAX_PX 16384
+#define RESIN_PITCH_MIN_MM 0.005
+#define RESIN_PITCH_MAX_MM 0.2
 
 const struct printer printer_resin_profiles[] = {
 	{
@@ -79,6 +86,38 @@ const struct printer printer_resin_profiles[] = {
 				.material = "Prusa Orange Tough @0.05 SL1S",
 			},
 	},
+	{
+		/* Any other MSLA printer, for zip stacks: a round 4K panel of
+		 * 40 um pixels, landscape, unmirrored; farms set the display_*
+		 * and mirror_* keys to their own printer's. */
+		.name = "generic-resin",
+		.kind = PRINTER_RESIN,
+		.resin =
+			{
+				.model = "GENERIC",
+				.variant = "default",
+				.profile = "Generic MSLA",
+				.pixels_x = 3840,
+				.pixels_y = 2400,
+				.display_w_mm = 153.6,
+				.display_h_mm = 96,
+				.portrait = 0,
+				.mirror_x = 0,
+				.mirror_y = 0,
+				.max_z_mm = 150,
+				.layer_mm = 0.05,
+				.exposure_s = 2.5,
+				.exposure_first_s = 25,
+				.fade_layers = 10,
+				.antialias = 1,
+				.print_speed = RESIN_SPEED_FAST,
+				.tilt_fast_s = 5,
+				.tilt_slow_s = 8,
+				.tilt_hv_s = 10,
+				.slow_area_pct = 50,
+				.material = "Generic resin",
+			},
+	},
 };
 const size_t printer_resin_profile_count =
 	sizeof printer_resin_profiles / sizeof printer_resin_profiles[0];
@@ -112,6 +151,23 @@ static const struct param_desc resin_desc[] = {
 	{.name = "slow_area_pct", .type = PARAM_NUM, .offset = RF(slow_area_pct), .min = 0,
 	 .max = 100, .def = 50, .unit = "%",
 	 .help = "layers covering more than this share of the display use the slow tilt"},
+	{.name = "display_px_x", .type = PARAM_INT, .offset = RF(pixels_x), .min = 1,
+	 .max = RESIN_DISPLAY_MAX_PX, .def = 3840, .unit = "px",
+	 .help = "display pixels along printer X, the image width (generic-resin only)"},
+	{.name = "display_px_y", .type = PARAM_INT, .offset = RF(pixels_y), .min = 1,
+	 .max = RESIN_DISPLAY_MAX_PX, .def = 2400, .unit = "px",
+	 .help = "display pixels along printer Y, the image height (generic-resin only)"},
+	{.name = "display_mm_x", .type = PARAM_NUM, .offset = RF(display_w_mm), .min = 0,
+	 .max = 1000, .def = 153.6, .flags = PARAM_F_MIN_EXCL, .unit = "mm",
+	 .help = "width of the lit display area along printer X (generic-resin only)"},
+	{.name = "display_mm_y", .type = PARAM_NUM, .offset = RF(display_h_mm), .min = 0,
+	 .max = 1000, .def = 96, .flags = PARAM_F_MIN_EXCL, .unit = "mm",
+	 .help = "height of the lit display area along printer Y (generic-resin only)"},
+	{.name = "mirror_x", .type = PARAM_BOOL, .offset = RF(mirror_x), .def = 0, .unit = "",
+	 .help = "flip every image left-right, for displays seen from below (generic-resin "
+		 "only)"},
+	{.name = "mirror_y", .type = PARAM_BOOL, .offset = RF(mirror_y), .def = 0, .unit = "",
+	 .help = "flip every image top-bottom (generic-resin only)"},
 	{.name = "material", .type = PARAM_STR, .offset = RF(material), .min = 1, .max = 47,
 	 .str_cap = sizeof(((struct resin_printer *)0)->material),
 	 .def_str = "Prusa Orange Tough @0.05", .unit = "",
@@ -124,13 +180,30 @@ const struct param_table printer_resin_table = {"resin", resin_desc,
 
 int printer_resin_check(const struct resin_printer *r, struct err *e)
 {
-	if (r->pixels_x < 1 || r->pixels_y < 1 || r->pixels_x > 65535 || r->pixels_y > 65535)
-		return ERR_FIELD(e, "printer", "display of %d x %d pixels is outside 1..65535",
-				 r->pixels_x, r->pixels_y);
-	if (!(r->display_w_mm > 0) || !(r->display_h_mm > 0) || !isfinite(r->display_w_mm) ||
-	    !isfinite(r->display_h_mm))
-		return ERR_FIELD(e, "printer", "display of %g x %g mm is not a positive size",
-				 r->display_w_mm, r->display_h_mm);
+	const struct {
+		const char *px_key, *mm_key;
+		int px;
+		double mm;
+	} ax[2] = {{"display_px_x", "display_mm_x", r->pixels_x, r->display_w_mm},
+		   {"display_px_y", "display_mm_y", r->pixels_y, r->display_h_mm}};
+
+	for (int i = 0; i < 2; i++) {
+		double pitch_mm;
+
+		if (ax[i].px < 1 || ax[i].px > RESIN_DISPLAY_MAX_PX)
+			return ERR_FIELD(e, ax[i].px_key, "%s = %d px is outside 1..%d",
+					 ax[i].px_key, ax[i].px, RESIN_DISPLAY_MAX_PX);
+		if (!(ax[i].mm > 0) || !isfinite(ax[i].mm))
+			return ERR_FIELD(e, ax[i].mm_key, "%s = %g mm is not a positive size",
+					 ax[i].mm_key, ax[i].mm);
+		pitch_mm = ax[i].mm / ax[i].px;
+		if (!(pitch_mm >= RESIN_PITCH_MIN_MM && pitch_mm <= RESIN_PITCH_MAX_MM))
+			return ERR_FIELD(e, ax[i].mm_key,
+					 "%s = %g mm over %s = %d px gives %g mm pixels, outside "
+					 "%g..%g mm: check both values",
+					 ax[i].mm_key, ax[i].mm, ax[i].px_key, ax[i].px, pitch_mm,
+					 RESIN_PITCH_MIN_MM, RESIN_PITCH_MAX_MM);
+	}
 	if (!(r->max_z_mm > 0) || !isfinite(r->max_z_mm))
 		return ERR_FIELD(e, "printer", "printable height %g mm is not positive",
 				 r->max_z_mm);
@@ -150,6 +223,45 @@ int printer_resin_check(const struct resin_printer *r, struct err *e)
 	if (r->model[0] == '\0')
 		return ERR_FIELD(e, "printer", "resin profile without a printerModel");
 	return 0;
+}
+
+/* The display of a profile whose model is SL1 or SL1S is the firmware's:
+ * refuse any change, naming the first key that differs from the compiled
+ * profile of the same name (a profile not found here is a caller's own,
+ * e.g. a test's, and is left alone). */
+int printer_resin_check_display(const struct printer *p, struct err *e)
+{
+	const struct resin_printer *r = &p->resin, *f = NULL;
+	const char *key = NULL;
+
+	if (strcmp(r->model, "SL1") != 0 && strcmp(r->model, "SL1S") != 0)
+		return 0;
+	for (size_t i = 0; i < printer_resin_profile_count; i++)
+		if (strcmp(printer_resin_profiles[i].name, p->name) == 0)
+			f = &printer_resin_profiles[i].resin;
+	if (!f)
+		return 0;
+	if (r->pixels_x != f->pixels_x)
+		key = "display_px_x";
+	else if (r->pixels_y != f->pixels_y)
+		key = "display_px_y";
+	else if (r->display_w_mm != f->display_w_mm)
+		key = "display_mm_x";
+	else if (r->display_h_mm != f->display_h_mm)
+		key = "display_mm_y";
+	else if (r->mirror_x != f->mirror_x)
+		key = "mirror_x";
+	else if (r->mirror_y != f->mirror_y)
+		key = "mirror_y";
+	else if (r->portrait != f->portrait)
+		key = "printer";
+	if (!key)
+		return 0;
+	return ERR_FIELD(e, key,
+			 "%s cannot be overridden on printer '%s': the %s firmware fixes its "
+			 "display (%d x %d px, %g x %g mm); use --printer generic-resin",
+			 key, p->name, r->model, f->pixels_x, f->pixels_y, f->display_w_mm,
+			 f->display_h_mm);
 }
 
 /* PrusaSlicer's display_width always spans the printer X axis (its

@@ -22,7 +22,7 @@ static void test_profiles(void)
 	const struct printer *sl1 = profile("sl1"), *sl1s = profile("sl1s");
 	struct err e;
 
-	REQUIRE(sl1 && sl1s);
+	REQUIRE(sl1 && sl1s && profile("generic-resin"));
 	CHECK_STR(sl1->resin.model, "SL1");
 	CHECK_EQ_INT(sl1->resin.pixels_x, 2560);
 	CHECK_EQ_INT(sl1->resin.pixels_y, 1440);
@@ -75,6 +75,7 @@ static void test_overrides_and_checks(void)
 	p = *profile("sl1");
 	p.resin.pixels_x = 0;
 	CHECK_EQ_INT(printer_resin_check(&p.resin, &e), ERR_PARAM);
+	CHECK_STR(e.field, "display_px_x");
 }
 
 /* The map against REFERENCE.md: column = Y / 0.04725, row = (120.96 - X)
@@ -225,12 +226,116 @@ static void test_config_ini_text(void)
 	CHECK_STR(stamp, "2023-11-14 at 22:13:20 UTC");
 }
 
+/* generic-resin: the display keys set a 3840 x 2400 px, 153.36 x 95.76 mm
+ * landscape display (39.9375 x 39.9 um pixels); mirror_x flips columns. */
+static void set_ok(struct printer *p, const char *key, const char *value)
+{
+	struct err e;
+
+	err_clear(&e);
+	REQUIRE_OK(param_set(&printer_resin_table, &p->resin, key, value, &e), &e);
+}
+
+static void test_generic_resin(void)
+{
+	const double pitch_x = 153.36 / 3840, pitch_y = 95.76 / 2400; /* mm per pixel */
+	struct printer p;
+	struct raster_map map;
+	struct err e;
+	double u, v, x, y;
+	int w, h;
+
+	err_clear(&e);
+	REQUIRE_OK(printer_lookup("generic-resin", &p, &e), &e);
+	CHECK_EQ_INT(p.kind, PRINTER_RESIN);
+	CHECK_EQ_INT(p.resin.portrait, 0);
+	REQUIRE_OK(printer_check(&p, &e), &e);
+	set_ok(&p, "display_px_x", "3840");
+	set_ok(&p, "display_px_y", "2400");
+	set_ok(&p, "display_mm_x", "153.36");
+	set_ok(&p, "display_mm_y", "95.76");
+	set_ok(&p, "mirror_x", "false");
+	set_ok(&p, "exposure_s", "3");
+	set_ok(&p, "exposure_first_s", "30");
+	set_ok(&p, "fade_layers", "5");
+	REQUIRE_OK(printer_check(&p, &e), &e);
+	CHECK_NUM(printer_build_volume(&p).hi.x, ==, 153.36);
+	CHECK_NUM(printer_build_volume(&p).hi.y, ==, 95.76);
+
+	printer_raster_geometry(&p, &map, &w, &h);
+	CHECK_EQ_INT(w, 3840);
+	CHECK_EQ_INT(h, 2400);
+	CHECK_NEAR(raster_map_pixel_area_mm2(&map), pitch_x * pitch_y, 1e-15);
+	raster_map_apply(&map, 10, 20, &u, &v);
+	CHECK_NEAR(u, 10 / pitch_x, 1e-9);
+	CHECK_NEAR(v, 2400 - 20 / pitch_y, 1e-9); /* rows grow downwards, Y upwards */
+	raster_map_apply(&map, 153.36, 0, &u, &v);
+	CHECK_NEAR(u, 3840, 1e-9);
+	CHECK_NEAR(v, 2400, 1e-9);
+
+	set_ok(&p, "mirror_x", "true");
+	REQUIRE_OK(printer_check(&p, &e), &e);
+	printer_raster_geometry(&p, &map, &w, &h);
+	CHECK_EQ_INT(w, 3840);
+	raster_map_apply(&map, 10, 20, &u, &v);
+	CHECK_NEAR(u, 3840 - 10 / pitch_x, 1e-9);
+	CHECK_NEAR(v, 2400 - 20 / pitch_y, 1e-9);
+	REQUIRE(raster_map_invert(&map, u, v, &x, &y) == 0);
+	CHECK_NEAR(x, 10, 1e-9);
+	CHECK_NEAR(y, 20, 1e-9);
+	set_ok(&p, "mirror_y", "true");
+	printer_raster_geometry(&p, &map, &w, &h);
+	raster_map_apply(&map, 10, 20, &u, &v);
+	CHECK_NEAR(u, 3840 - 10 / pitch_x, 1e-9);
+	CHECK_NEAR(v, 20 / pitch_y, 1e-9);
+
+	/* impossible values, each naming its key */
+	CHECK_EQ_INT(param_set(&printer_resin_table, &p.resin, "display_px_x", "0", &e),
+		     ERR_PARAM);
+	CHECK_STR(e.field, "display_px_x");
+	CHECK_EQ_INT(param_set(&printer_resin_table, &p.resin, "display_px_y", "-4", &e),
+		     ERR_PARAM);
+	CHECK_STR(e.field, "display_px_y");
+	CHECK_EQ_INT(param_set(&printer_resin_table, &p.resin, "display_px_x", "16385", &e),
+		     ERR_PARAM);
+	CHECK_EQ_INT(param_set(&printer_resin_table, &p.resin, "display_mm_y", "0", &e),
+		     ERR_PARAM);
+	CHECK_STR(e.field, "display_mm_y");
+	set_ok(&p, "display_mm_x", "15.336"); /* 4 um pixels */
+	CHECK_EQ_INT(printer_check(&p, &e), ERR_PARAM);
+	CHECK_STR(e.field, "display_mm_x");
+	set_ok(&p, "display_mm_x", "153.36");
+	set_ok(&p, "display_px_y", "100"); /* 0.9576 mm pixels */
+	CHECK_EQ_INT(printer_check(&p, &e), ERR_PARAM);
+	CHECK_STR(e.field, "display_mm_y");
+	set_ok(&p, "display_px_y", "2400");
+	REQUIRE_OK(printer_check(&p, &e), &e);
+
+	/* the SL1/SL1S display is the firmware's: any display key is refused */
+	static const char *const keys[][2] = {{"display_px_x", "3840"}, {"display_px_y", "2400"},
+					      {"display_mm_x", "100"}, {"display_mm_y", "60"},
+					      {"mirror_x", "false"}, {"mirror_y", "true"}};
+	for (size_t i = 0; i < sizeof keys / sizeof keys[0]; i++) {
+		REQUIRE_OK(printer_lookup(i % 2 ? "sl1s" : "sl1", &p, &e), &e);
+		REQUIRE_OK(printer_check(&p, &e), &e);
+		set_ok(&p, keys[i][0], keys[i][1]);
+		CHECK_EQ_INT(printer_check(&p, &e), ERR_PARAM);
+		CHECK_STR(e.field, keys[i][0]);
+	}
+	/* a value equal to the firmware's is no override */
+	REQUIRE_OK(printer_lookup("sl1", &p, &e), &e);
+	set_ok(&p, "display_px_x", "2560");
+	set_ok(&p, "mirror_x", "true");
+	REQUIRE_OK(printer_check(&p, &e), &e);
+}
+
 int main(void)
 {
 	RUN(test_profiles);
 	RUN(test_overrides_and_checks);
 	RUN(test_raster_geometry);
 	RUN(test_raster_geometry_flags);
+	RUN(test_generic_resin);
 	RUN(test_job_dir);
 	RUN(test_exposure_and_time);
 	RUN(test_config_ini_text);
