@@ -110,6 +110,26 @@ int job_check_fit(const struct box3 *part, const struct printer *p, struct err *
 		       ps.x, ps.y, ps.z, p->name, vs.x, vs.y, vs.z, over);
 }
 
+/* A part a few millimetres across is most often a file in other units
+ * (femur.off is 1 unit tall: metres or a normalised scan) or a scale
+ * forgotten: it slices into a handful of layers and prints as a speck
+ * (5 mm is about 100 resin pixels or 12 FDM lines across). */
+int job_warn_small_part(struct metrics *m, const struct box3 *part)
+{
+	struct vec3 s = box3_size(*part);
+	double big = fmax(s.x, fmax(s.y, s.z));
+	char msg[320];
+
+	if (!(big < JOB_SMALL_PART_MM))
+		return 0;
+	snprintf(msg, sizeof msg,
+		 "the part is only %.3g x %.3g x %.3g mm (largest extent below %g mm), too small "
+		 "to print sensibly: set height_mm (e.g. height_mm=50) or units (cm, m, in) if the "
+		 "file is not in millimetres",
+		 s.x, s.y, s.z, JOB_SMALL_PART_MM);
+	return metrics_append_str(m, "warnings", msg);
+}
+
 int job_record_mesh_metrics(struct metrics *m, const struct job_mesh_info *mi)
 {
 	const struct mesh_report *r = &mi->placed;
@@ -256,7 +276,7 @@ int engine_run(const struct job_spec *js, struct sink *out, const struct progres
 		if (rc)
 			goto out;
 		part_volume = mi.placed.volume_mm3;
-		if (job_record_mesh_metrics(m, &mi)) {
+		if (job_record_mesh_metrics(m, &mi) || job_warn_small_part(m, &mi.placed.bbox)) {
 			rc = ERR_SET(e, ERR_NOMEM, "out of memory recording metrics");
 			goto out;
 		}
@@ -404,6 +424,7 @@ int engine_analyze(const struct job_spec *js, struct metrics *m, struct err *e)
 				   job_check_fit(&mi.placed.bbox, &js->printer, &fit) == 0);
 		if (fit.code)
 			rc |= metrics_str(m, "fit_error", fit.msg);
+		rc |= job_warn_small_part(m, &mi.placed.bbox);
 		if (rc)
 			rc = ERR_SET(e, ERR_NOMEM, "out of memory recording metrics");
 	}
