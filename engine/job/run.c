@@ -130,6 +130,37 @@ int job_warn_small_part(struct metrics *m, const struct box3 *part)
 	return metrics_append_str(m, "warnings", msg);
 }
 
+int engine_check_fit_size(const struct job_spec *js, struct vec3 size, struct err *e)
+{
+	/* the box as a mesh: mesh_place() takes the box of the triangles' vertices */
+	struct vec3 v[8];
+	uint32_t tri[9] = {0, 1, 2, 3, 4, 5, 6, 7, 0};
+	struct mesh m = {v, tri, 8, 3};
+	struct mesh_placement pl;
+	struct box3 b = box3_empty();
+	int rc;
+
+	if (!(size.x >= 0 && size.y >= 0 && size.z >= 0))
+		return ERR_SET(e, ERR_PARAM, "bad part size");
+	for (int k = 0; k < 8; k++)
+		v[k] = v3((k & 1) ? size.x : 0, (k & 2) ? size.y : 0, (k & 4) ? size.z : 0);
+	memset(&pl, 0, sizeof pl);
+	pl.units = js->common.units;
+	pl.scale = js->common.scale;
+	pl.height_mm = js->common.height_mm;
+	pl.up = js->common.up;
+	printer_center(&js->printer, &pl.center_x_mm, &pl.center_y_mm);
+	if ((rc = mesh_place(&m, &pl, e)) != 0)
+		return rc;
+	for (int k = 0; k < 8; k++)
+		box3_add(&b, v[k]);
+	rc = job_check_fit(&b, &js->printer, e);
+	if (rc)
+		snprintf(e->field, sizeof e->field, "%s",
+			 js->common.height_mm > 0 ? "height_mm" : "scale");
+	return rc;
+}
+
 int job_record_mesh_metrics(struct metrics *m, const struct job_mesh_info *mi)
 {
 	const struct mesh_report *r = &mi->placed;
