@@ -4,6 +4,7 @@
  */
 #include "api/api_internal.h"
 #include "api/api_json.h"
+#include "db/meshes.h"
 #include "db/queue.h"
 #include "engine/core/err.h"
 #include "engine/engine.h"
@@ -66,6 +67,43 @@ static enum MHD_Result spec_problem(struct api_req *r, struct err *e, const char
 
 	snprintf(field, sizeof field, "%s", e->field[0] ? e->field : default_field);
 	return api_problem(r, PROB_INVALID_PARAM, field, "%s", err_format(e, text, sizeof text));
+}
+
+/* Refuse at submission a part the mesh's stored analysis (size_mm, the
+ * default placement) already shows cannot fit js's printer, with the
+ * engine's own placement and fit check (engine_check_fit_size): 0 to go
+ * on (also when the mesh or its analysis is missing: the worker decides),
+ * else a 422 is queued in *ret. */
+static int fit_refused(struct api_req *r, const struct job_spec *js, const char *mesh_id,
+		       enum MHD_Result *ret)
+{
+	struct mesh_rec m;
+	struct db *db = db_pool_get(r->srv->pool);
+	json_t *a = NULL, *sz;
+	struct err e;
+	int rc, refused = 0;
+
+	memset(&m, 0, sizeof m);
+	err_clear(&e);
+	rc = db ? db_mesh_get(db, r->tenant.id, mesh_id, &m, &e) : -1;
+	if (db)
+		db_pool_put(r->srv->pool, db);
+	if (rc == 0 && m.analysis)
+		a = json_loads(m.analysis, 0, NULL);
+	sz = a ? json_object_get(a, "size_mm") : NULL;
+	if (json_is_object(sz)) {
+		struct vec3 size = v3(json_number_value(json_object_get(sz, "x")),
+				      json_number_value(json_object_get(sz, "y")),
+				      json_number_value(json_object_get(sz, "z")));
+		err_clear(&e);
+		if (engine_check_fit_size(js, size, &e) == ERR_FIT) {
+			*ret = spec_problem(r, &e, "params");
+			refused = 1;
+		}
+	}
+	json_decref(a);
+	db_mesh_rec_fini(&m);
+	return refused;
 }
 
 /* Idempotency-Key: 1..255 visible ASCII characters. */
@@ -168,6 +206,10 @@ enum MHD_Result api_job_submit(struct api_req *r)
 		const char *df = !js.engine ? "engine" : "params";
 		job_spec_fini(&js);
 		ret = spec_problem(r, &e, df);
+		goto out;
+	}
+	if (fit_refused(r, &js, mesh_id, &ret)) {
+		job_spec_fini(&js);
 		goto out;
 	}
 	{

@@ -35,6 +35,23 @@ static json_t *parent_for(json_t *root, const char *key, char *buf, size_t len,
 	return cur;
 }
 
+/* A METRIC_STRS list ('\n'-joined, ival entries) as a JSON array. */
+static json_t *strs_json(const struct metric *x)
+{
+	json_t *a = json_array();
+	const char *p = x->str ? x->str : "";
+
+	for (long long i = 0; a && i < x->ival; i++) {
+		size_t n = strcspn(p, "\n");
+		if (json_array_append_new(a, json_stringn(p, n))) {
+			json_decref(a);
+			return NULL;
+		}
+		p += n + (p[n] == '\n');
+	}
+	return a;
+}
+
 json_t *api_metrics_json(const struct metrics *m)
 {
 	json_t *root = json_object();
@@ -54,6 +71,7 @@ json_t *api_metrics_json(const struct metrics *m)
 		case METRIC_INT: v = json_integer(x->ival); break;
 		case METRIC_BOOL: v = json_boolean(x->ival); break;
 		case METRIC_STR: v = json_string(x->str ? x->str : ""); break;
+		case METRIC_STRS: v = strs_json(x); break;
 		}
 		if (!v || json_object_set_new(obj, leaf, v)) {
 			json_decref(root);

@@ -146,4 +146,13 @@ int engine_run(const struct job_spec *js, struct sink *out, const struct progres
  * (`infilld analyze`, POST /v1/meshes). */
 int engine_analyze(const struct job_spec *js, struct metrics *m, struct err *e);
 
+/* Would a mesh whose extent is size (mm, as `infilld analyze` reports it
+ * with the default placement: units mm, scale 1, up z; the stored analysis
+ * of an uploaded mesh) fit js's printer once placed by js's units, scale,
+ * height_mm and up, as engine_run() places it?  0, or ERR_FIT saying by
+ * how much and along which axis, field "height_mm" when js sets one, else
+ * "scale".  Placement is a rotation by a multiple of 90 degrees and a
+ * uniform scale, so the extent decides the fit exactly. */
+int engine_check_fit_size(const struct job_spec *js, struct vec3 size, struct err *e);
+
 #endif

@@ -193,6 +193,19 @@ static int write_json_file(const char *path, json_t *j, struct err *e)
 	return 0;
 }
 
+/* The run's "warnings" list (docs/metrics.md), one line each on stderr. */
+static void print_warnings(const struct metrics *m)
+{
+	const struct metric *w = metrics_get(m, "warnings");
+	const char *p = w && w->type == METRIC_STRS && w->str ? w->str : NULL;
+
+	for (long long i = 0; p && i < w->ival; i++) {
+		size_t n = strcspn(p, "\n");
+		fprintf(stderr, "infilld: warning: %.*s\n", (int)n, p);
+		p += n + (p[n] == '\n');
+	}
+}
+
 int cmd_run(int argc, char **argv)
 {
 	struct cli_opts o;
@@ -279,6 +292,8 @@ int cmd_run(int argc, char **argv)
 		       : ERR_SET(&e, ERR_NOMEM, "out of memory writing metrics");
 		json_decref(j);
 	}
+	if (!rc && !o.quiet)
+		print_warnings(&m); /* --quiet: in the metrics only */
 	if (!rc && !o.quiet && !to_stdout) {
 		const struct metric *mv = metrics_get(&m, "material_volume_mm3");
 		const struct metric *el = metrics_get(&m, "elapsed_s");
@@ -313,6 +328,8 @@ int cmd_analyze(int argc, char **argv)
 		js.input_path = o.input;
 		rc = engine_analyze(&js, &m, &e);
 	}
+	if (!rc)
+		print_warnings(&m);
 	if (!rc) {
 		j = api_metrics_json(&m);
 		if (!j)

@@ -1,10 +1,13 @@
 /* cli_verify.c - `infilld verify ARCHIVE [--alpha-deg A] [--layer-mm H]
- * [--pixel-mm P] [--strict]`: check a written SL1/SL1S/zip layer stack
- * for interior overhangs, floating islands and wall thickness
- * (engine/verify/, docs/verify.md) and print the report as JSON.  Works on
- * any producer's archive; it knows nothing of the engine that made it.
- * Exit 0 when checked (with --strict: 3 if interior overhangs or floating
- * islands were found), 1 on errors, 2 on usage errors. */
+ * [--pixel-mm P] [--solid SOLID_ARCHIVE] [--strict]`: check a written
+ * SL1/SL1S/zip layer stack for interior overhangs, floating islands and
+ * wall thickness (engine/verify/, docs/verify.md) and print the report as
+ * JSON.  Works on any producer's archive; it knows nothing of the engine
+ * that made it.  --solid names the solid engine's archive of the same part
+ * and printer: islands the part itself does not have are reported as
+ * islands_added.  Exit 0 when checked (with --strict: 3 if interior
+ * overhangs or floating islands were found, with --solid only added
+ * islands count), 1 on errors, 2 on usage errors. */
 #include <errno.h>
 #include <math.h>
 #include <stdio.h>
@@ -38,8 +41,8 @@ int cmd_verify(int argc, char **argv)
 	struct verify_report rep;
 	struct metrics m;
 	struct err e;
-	const char *path = NULL;
-	int strict = 0, rc;
+	const char *path = NULL, *solid = NULL;
+	int strict = 0, rc, bad;
 	json_t *j;
 
 	memset(&vp, 0, sizeof vp);
@@ -50,6 +53,13 @@ int cmd_verify(int argc, char **argv)
 
 		if (!strcmp(a, "--strict")) {
 			strict = 1;
+			continue;
+		} else if (!strcmp(a, "--solid")) {
+			if (++i >= argc) {
+				fprintf(stderr, "infilld verify: %s needs a value\n", a);
+				return 2;
+			}
+			solid = argv[i];
 			continue;
 		} else if (!strcmp(a, "--alpha-deg")) {
 			slot = &vp.alpha_deg;
@@ -84,17 +94,20 @@ int cmd_verify(int argc, char **argv)
 	vp.pixel_y_mm = vp.pixel_x_mm;
 	err_clear(&e);
 	memset(&rep, 0, sizeof rep);
-	rc = verify_archive(path, &vp, &rep, &e);
+	rc = verify_archive_ref(path, solid, &vp, &rep, &e);
 	if (rc) {
 		char line[ERR_MSG_MAX + 256];
 		fprintf(stderr, "infilld: %s\n", err_format(&e, line, sizeof line));
 		return 1;
 	}
+	/* with the solid part to compare with, its own islands (first contacts
+	 * it needs supports for anyway) do not make the fill unprintable */
+	bad = rep.interior_overhang_px > 0 ||
+	      (solid ? rep.islands_added > 0 : rep.islands > 0);
 	metrics_init(&m);
 	rc = verify_report_metrics(&rep, "verify", &m, &e);
 	if (!rc)
-		rc = metrics_bool(&m, "verify.printable",
-				  rep.interior_overhang_px == 0 && rep.islands == 0);
+		rc = metrics_bool(&m, "verify.printable", !bad);
 	j = rc ? NULL : api_metrics_json(&m);
 	if (j) {
 		json_dumpf(json_object_get(j, "verify"), stdout,
@@ -106,7 +119,7 @@ int cmd_verify(int argc, char **argv)
 		rc = 1;
 	}
 	metrics_fini(&m);
-	if (!rc && strict && (rep.interior_overhang_px > 0 || rep.islands > 0))
+	if (!rc && strict && bad)
 		rc = 3;
 	verify_report_fini(&rep);
 	return rc;

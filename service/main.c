@@ -21,7 +21,7 @@ static const struct command commands[] = {
 	{"analyze", cmd_analyze, "analyze MESH [--set KEY=VALUE]...   (JSON report on stdout)"},
 	{"engines", cmd_engines, "engines                              (JSON: engines and parameters)"},
 	{"verify", cmd_verify,
-	 "verify ARCHIVE [--alpha-deg A] [--layer-mm H] [--pixel-mm P] [--strict]\n"
+	 "verify ARCHIVE [--alpha-deg A] [--layer-mm H] [--pixel-mm P] [--solid SOLID] [--strict]\n"
 	 "              (JSON: interior overhangs, floating islands, walls of an SL1/zip stack)"},
 	{"serve", cmd_serve, NULL}, /* usage from config_usage() */
 	{"tenant", cmd_tenant,

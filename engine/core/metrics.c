@@ -97,3 +97,34 @@ int metrics_str(struct metrics *m, const char *key, const char *v)
 	x->str = mem_strdup(v ? v : "");
 	return x->str ? 0 : ERR_NOMEM;
 }
+
+int metrics_append_str(struct metrics *m, const char *key, const char *v)
+{
+	const struct metric *old = metrics_get(m, key);
+	size_t ol = old && old->type == METRIC_STRS && old->str ? strlen(old->str) : 0;
+	size_t vl = strlen(v ? v : "");
+	long long count = old && old->type == METRIC_STRS ? old->ival : 0;
+	char *buf = mem_alloc(ol + 1 + vl + 1), *q;
+	struct metric *x;
+
+	if (!buf)
+		return ERR_NOMEM;
+	q = buf;
+	if (count) {
+		memcpy(q, old->str, ol);
+		q += ol;
+		*q++ = '\n';
+	}
+	for (size_t i = 0; i < vl; i++)
+		*q++ = v[i] == '\n' || v[i] == '\r' ? ' ' : v[i];
+	*q = 0;
+	x = slot(m, key); /* frees the old list */
+	if (!x) {
+		mem_free(buf);
+		return ERR_NOMEM;
+	}
+	x->type = METRIC_STRS;
+	x->str = buf;
+	x->ival = count + 1;
+	return 0;
+}

@@ -10,14 +10,15 @@
 
 #include <stddef.h>
 
-enum metric_type { METRIC_NUM, METRIC_INT, METRIC_BOOL, METRIC_STR };
+enum metric_type { METRIC_NUM, METRIC_INT, METRIC_BOOL, METRIC_STR, METRIC_STRS };
 
 struct metric {
 	char *key; /* owned */
 	enum metric_type type;
 	double num;     /* METRIC_NUM (non-finite values are stored as NaN -> JSON null) */
 	long long ival; /* METRIC_INT, METRIC_BOOL (0/1) */
-	char *str;      /* METRIC_STR, owned */
+	char *str;      /* METRIC_STR, owned; METRIC_STRS: the list's strings joined
+			 * by '\n' (none holds one), ival of them */
 };
 
 struct metrics {
@@ -33,6 +34,10 @@ int metrics_num(struct metrics *m, const char *key, double v);
 int metrics_int(struct metrics *m, const char *key, long long v);
 int metrics_bool(struct metrics *m, const char *key, int v);
 int metrics_str(struct metrics *m, const char *key, const char *v);
+/* Append v to the list of strings under key (a JSON array of strings;
+ * created on first use, replacing a value of another type).  Newlines in v
+ * become spaces. */
+int metrics_append_str(struct metrics *m, const char *key, const char *v);
 
 /* The entry for key, or NULL.  Borrowed: valid until the next metrics_*
  * call that adds a key (the array may move). */

@@ -110,6 +110,57 @@ int job_check_fit(const struct box3 *part, const struct printer *p, struct err *
 		       ps.x, ps.y, ps.z, p->name, vs.x, vs.y, vs.z, over);
 }
 
+/* A part a few millimetres across is most often a file in other units
+ * (femur.off is 1 unit tall: metres or a normalised scan) or a scale
+ * forgotten: it slices into a handful of layers and prints as a speck
+ * (5 mm is about 100 resin pixels or 12 FDM lines across). */
+int job_warn_small_part(struct metrics *m, const struct box3 *part)
+{
+	struct vec3 s = box3_size(*part);
+	double big = fmax(s.x, fmax(s.y, s.z));
+	char msg[320];
+
+	if (!(big < JOB_SMALL_PART_MM))
+		return 0;
+	snprintf(msg, sizeof msg,
+		 "the part is only %.3g x %.3g x %.3g mm (largest extent below %g mm), too small "
+		 "to print sensibly: set height_mm (e.g. height_mm=50) or units (cm, m, in) if the "
+		 "file is not in millimetres",
+		 s.x, s.y, s.z, JOB_SMALL_PART_MM);
+	return metrics_append_str(m, "warnings", msg);
+}
+
+int engine_check_fit_size(const struct job_spec *js, struct vec3 size, struct err *e)
+{
+	/* the box as a mesh: mesh_place() takes the box of the triangles' vertices */
+	struct vec3 v[8];
+	uint32_t tri[9] = {0, 1, 2, 3, 4, 5, 6, 7, 0};
+	struct mesh m = {v, tri, 8, 3};
+	struct mesh_placement pl;
+	struct box3 b = box3_empty();
+	int rc;
+
+	if (!(size.x >= 0 && size.y >= 0 && size.z >= 0))
+		return ERR_SET(e, ERR_PARAM, "bad part size");
+	for (int k = 0; k < 8; k++)
+		v[k] = v3((k & 1) ? size.x : 0, (k & 2) ? size.y : 0, (k & 4) ? size.z : 0);
+	memset(&pl, 0, sizeof pl);
+	pl.units = js->common.units;
+	pl.scale = js->common.scale;
+	pl.height_mm = js->common.height_mm;
+	pl.up = js->common.up;
+	printer_center(&js->printer, &pl.center_x_mm, &pl.center_y_mm);
+	if ((rc = mesh_place(&m, &pl, e)) != 0)
+		return rc;
+	for (int k = 0; k < 8; k++)
+		box3_add(&b, v[k]);
+	rc = job_check_fit(&b, &js->printer, e);
+	if (rc)
+		snprintf(e->field, sizeof e->field, "%s",
+			 js->common.height_mm > 0 ? "height_mm" : "scale");
+	return rc;
+}
+
 int job_record_mesh_metrics(struct metrics *m, const struct job_mesh_info *mi)
 {
 	const struct mesh_report *r = &mi->placed;
@@ -246,7 +297,7 @@ int engine_run(const struct job_spec *js, struct sink *out, const struct progres
 		if (rc)
 			goto out;
 		part_volume = mi.placed.volume_mm3;
-		if (job_record_mesh_metrics(m, &mi)) {
+		if (job_record_mesh_metrics(m, &mi) || job_warn_small_part(m, &mi.placed.bbox)) {
 			rc = ERR_SET(e, ERR_NOMEM, "out of memory recording metrics");
 			goto out;
 		}
@@ -391,6 +442,7 @@ int engine_analyze(const struct job_spec *js, struct metrics *m, struct err *e)
 				   job_check_fit(&mi.placed.bbox, &js->printer, &fit) == 0);
 		if (fit.code)
 			rc |= metrics_str(m, "fit_error", fit.msg);
+		rc |= job_warn_small_part(m, &mi.placed.bbox);
 		if (rc)
 			rc = ERR_SET(e, ERR_NOMEM, "out of memory recording metrics");
 	}

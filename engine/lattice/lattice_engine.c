@@ -23,6 +23,11 @@
 
 #define GRID_MAX_PIXELS (64u << 20) /* field grid for G-code regions */
 #define RESIN_MIN_RADIUS_MM 0.25     /* ~10 pixels across on SL1-class printers */
+/* Default skin (mm) around a lattice generated in a mesh: the part's thin
+ * limbs are solid and carry the lattice from the plate (docs/lattice.md
+ * section 10: the camel's 1.5-2.3 mm legs take no lattice cell, so a bare
+ * lattice starts 16.75 mm up in the air). */
+#define LATTICE_SKIN_MM 1.0
 
 struct lattice_params {
 	double density;
@@ -49,6 +54,7 @@ struct lattice_params {
 	double sort_budget_mb;
 	char tmp_dir[256];
 	char export_lattice[512];
+	double skin_mm;
 };
 
 static const char *const density_modes[] = {"constant", "gradient", "radial", "file", NULL};
@@ -135,6 +141,12 @@ static const struct param_desc lattice_desc[] = {
 	 .str_cap = 512, .flags = PARAM_F_PATH, .unit = "path",
 	 .help = "Also write the generated lattice to this binary lattice file, to slice it "
 		 "again later or elsewhere."},
+	{.name = "skin_mm", .type = PARAM_NUM, .offset = P(skin_mm), .min = 0, .max = 100,
+	 .def = LATTICE_SKIN_MM, .unit = "mm",
+	 .help = "Solid skin kept around a lattice generated in a mesh: parts thinner than "
+		 "twice it print solid and the skin carries the lattice from the plate. 0 = the "
+		 "bare lattice (it starts where its lowest node is, often in mid-air). A common "
+		 "shell_mm > 0 replaces it; lattice files have no surface and get none."},
 };
 #undef P
 
@@ -177,7 +189,7 @@ struct lat_state {
 	double s_load, s_sort, s_layers;
 	int layers;
 	double volume_mm3;
-	struct lattice_skin *skin; /* shell_mm > 0 */
+	struct lattice_skin *skin; /* shell_mm > 0 (shell_mm, else skin_mm) */
 	double shell_mm, shell_pixel_mm, layer_mm;
 };
 
@@ -507,9 +519,12 @@ static int lat_prepare(const struct engine_ctx *ctx, const void *params, void **
 	}
 	if (rc)
 		goto fail;
-	if (ctx->common->shell_mm > 0) {
+	/* the skin: shell_mm when given, else the engine's skin_mm (mesh input) */
+	s->shell_mm = ctx->common->shell_mm > 0 ? ctx->common->shell_mm
+		      : ctx->mesh		  ? s->p.skin_mm
+						  : 0;
+	if (s->shell_mm > 0) {
 		const struct box3 *bb = &ctx->report->bbox;
-		s->shell_mm = ctx->common->shell_mm;
 		s->shell_pixel_mm = ctx->map ? sqrt(raster_map_pixel_area_mm2(ctx->map)) : 0.05;
 		if ((rc = lattice_skin_new(ctx->mesh, s->shell_mm, s->shell_pixel_mm, ctx->layer_mm,
 					   s->extent.hi.z, bb->lo.x, bb->lo.y, bb->hi.x, bb->hi.y,

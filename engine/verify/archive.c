@@ -5,8 +5,9 @@
  * are parsed, layer PNGs (every *.png outside thumbnail/) kept compressed
  * in memory (a few KB each), then decoded one at a time in file-name order
  * (zero-padded names sort in print order) and fed to the checker, so at
- * most one decoded image exists at a time.  Every size read from the
- * archive is checked before allocating.
+ * most one decoded image exists at a time (two with a reference archive,
+ * read in lockstep).  Every size read from the archive is checked before
+ * allocating.
  */
 #include "engine/verify/verify.h"
 
@@ -119,21 +120,34 @@ static int read_entry(struct archive *a, size_t size, unsigned char **out, const
 	return 0;
 }
 
-int verify_archive(const char *path, const struct verify_params *p, struct verify_report *out,
-		   struct err *e)
+/* The layer PNGs of one archive (compressed, sorted by name) and its ini
+ * values.  Owned; layer_set_fini() frees. */
+struct layer_set {
+	struct png_ent *L;
+	size_t n, cap;
+	struct ini_vals iv;
+};
+
+static void layer_set_fini(struct layer_set *ls)
+{
+	for (size_t k = 0; k < ls->n; k++) {
+		mem_free(ls->L[k].name);
+		mem_free(ls->L[k].data);
+	}
+	mem_free(ls->L);
+	memset(ls, 0, sizeof *ls);
+}
+
+/* Read path's entries once: ini files parsed, layer PNGs kept compressed
+ * and sorted by name.  ls must be zeroed; on failure it holds what was
+ * read (layer_set_fini frees it). */
+static int load_layers(const char *path, struct layer_set *ls, struct err *e)
 {
 	struct archive *a = archive_read_new();
 	struct archive_entry *ent;
-	struct png_ent *L = NULL;
-	size_t n = 0, cap = 0;
 	unsigned long long total = 0;
-	struct ini_vals iv;
-	struct verify_params vp = *p;
-	struct verify *v = NULL;
-	struct raster *img = NULL;
 	int rc = 0, r;
 
-	memset(&iv, 0, sizeof iv);
 	if (!a)
 		return ERR_SET(e, ERR_NOMEM, "verify: out of memory");
 	archive_read_support_format_zip(a);
@@ -155,7 +169,7 @@ int verify_archive(const char *path, const struct verify_params *p, struct verif
 			rc = read_entry(a, (size_t)sz, &data, name, e);
 			if (rc)
 				goto out;
-			parse_ini((const char *)data, &iv);
+			parse_ini((const char *)data, &ls->iv);
 			mem_free(data);
 			continue;
 		}
@@ -167,46 +181,109 @@ int verify_archive(const char *path, const struct verify_params *p, struct verif
 			goto out;
 		}
 		total += (unsigned long long)sz;
-		if (total > VA_MAX_TOTAL || n >= VA_MAX_LAYERS) {
+		if (total > VA_MAX_TOTAL || ls->n >= VA_MAX_LAYERS) {
 			rc = ERR_SET(e, ERR_LIMIT, "verify: %s has too many or too large layers", path);
 			goto out;
 		}
-		if (n == cap) {
-			void *arr = L;
-			if (mem_grow(&arr, &cap, n + 1, sizeof *L)) {
+		if (ls->n == ls->cap) {
+			void *arr = ls->L;
+			if (mem_grow(&arr, &ls->cap, ls->n + 1, sizeof *ls->L)) {
 				rc = ERR_SET(e, ERR_NOMEM, "verify: out of memory");
 				goto out;
 			}
-			L = arr;
+			ls->L = arr;
 		}
-		memset(&L[n], 0, sizeof L[n]);
-		L[n].name = mem_strdup(name);
-		if (!L[n].name) {
+		memset(&ls->L[ls->n], 0, sizeof ls->L[ls->n]);
+		ls->L[ls->n].name = mem_strdup(name);
+		if (!ls->L[ls->n].name) {
 			rc = ERR_SET(e, ERR_NOMEM, "verify: out of memory");
 			goto out;
 		}
-		n++;
-		rc = read_entry(a, (size_t)sz, &L[n - 1].data, name, e);
+		ls->n++;
+		rc = read_entry(a, (size_t)sz, &ls->L[ls->n - 1].data, name, e);
 		if (rc)
 			goto out;
-		L[n - 1].len = (size_t)sz;
+		ls->L[ls->n - 1].len = (size_t)sz;
 	}
 	if (r != ARCHIVE_EOF) {
 		rc = ERR_SET(e, ERR_PARSE, "verify: %s: %s", path, archive_error_string(a));
 		goto out;
 	}
-	if (n == 0) {
+	if (ls->n == 0) {
 		rc = ERR_SET(e, ERR_PARSE, "verify: %s holds no layer images", path);
 		goto out;
 	}
-	qsort(L, n, sizeof *L, cmp_ent);
+	qsort(ls->L, ls->n, sizeof *ls->L, cmp_ent);
+out:
+	archive_read_free(a);
+	return rc;
+}
+
+/* Decode ent into *img (reallocated when its size differs; caller frees
+ * with raster_free) and drop ent's compressed copy. */
+static int decode_layer(struct png_ent *ent, struct raster **img, struct err *e)
+{
+	png_image pi;
+
+	memset(&pi, 0, sizeof pi);
+	pi.version = PNG_IMAGE_VERSION;
+	if (!png_image_begin_read_from_memory(&pi, ent->data, ent->len))
+		return ERR_SET(e, ERR_PARSE, "verify: %s: %s", ent->name, pi.message);
+	pi.format = PNG_FORMAT_GRAY;
+	if (pi.width < 1 || pi.height < 1 || pi.width > 65535 || pi.height > 65535) {
+		png_image_free(&pi);
+		return ERR_SET(e, ERR_LIMIT, "verify: %s is %ux%u pixels", ent->name, pi.width,
+			       pi.height);
+	}
+	if (!*img || (*img)->w != (int)pi.width || (*img)->h != (int)pi.height) {
+		raster_free(*img);
+		*img = raster_new((int)pi.width, (int)pi.height);
+		if (!*img) {
+			png_image_free(&pi);
+			return ERR_SET(e, ERR_NOMEM, "verify: out of memory");
+		}
+	}
+	if (!png_image_finish_read(&pi, NULL, (*img)->px, (png_int_32)(*img)->stride, NULL)) {
+		int rc = ERR_SET(e, ERR_PARSE, "verify: %s: %s", ent->name, pi.message);
+		png_image_free(&pi);
+		return rc;
+	}
+	mem_free(ent->data); /* decoded: drop the compressed copy early */
+	ent->data = NULL;
+	return 0;
+}
+
+int verify_archive(const char *path, const struct verify_params *p, struct verify_report *out,
+		   struct err *e)
+{
+	return verify_archive_ref(path, NULL, p, out, e);
+}
+
+int verify_archive_ref(const char *path, const char *ref_path, const struct verify_params *p,
+		       struct verify_report *out, struct err *e)
+{
+	struct layer_set ls, rs;
+	struct verify_params vp = *p;
+	struct verify *v = NULL;
+	struct raster *img = NULL, *rimg = NULL;
+	int rc;
+
+	memset(&ls, 0, sizeof ls);
+	memset(&rs, 0, sizeof rs);
+	if ((rc = load_layers(path, &ls, e)) != 0)
+		goto out;
+	if (ref_path && (rc = load_layers(ref_path, &rs, e)) != 0) {
+		err_prefix(e, "reference");
+		goto out;
+	}
 	if (!(vp.layer_mm > 0))
-		vp.layer_mm = iv.layer_mm;
+		vp.layer_mm = ls.iv.layer_mm;
 	if (!(vp.pixel_x_mm > 0) || !(vp.pixel_y_mm > 0)) {
-		if (iv.disp_w > 0 && iv.disp_h > 0 && iv.pix_x > 0 && iv.pix_y > 0) {
+		const struct ini_vals *iv = &ls.iv;
+		if (iv->disp_w > 0 && iv->disp_h > 0 && iv->pix_x > 0 && iv->pix_y > 0) {
 			/* portrait: image columns run along the display's short side */
-			vp.pixel_x_mm = iv.portrait ? iv.disp_h / iv.pix_y : iv.disp_w / iv.pix_x;
-			vp.pixel_y_mm = iv.portrait ? iv.disp_w / iv.pix_x : iv.disp_h / iv.pix_y;
+			vp.pixel_x_mm = iv->portrait ? iv->disp_h / iv->pix_y : iv->disp_w / iv->pix_x;
+			vp.pixel_y_mm = iv->portrait ? iv->disp_w / iv->pix_x : iv->disp_h / iv->pix_y;
 		}
 	}
 	if (!(vp.layer_mm > 0) || !(vp.pixel_x_mm > 0)) {
@@ -219,38 +296,16 @@ int verify_archive(const char *path, const struct verify_params *p, struct verif
 	rc = verify_new(&vp, &v, e);
 	if (rc)
 		goto out;
-	for (size_t k = 0; k < n; k++) {
-		png_image pi;
-		memset(&pi, 0, sizeof pi);
-		pi.version = PNG_IMAGE_VERSION;
-		if (!png_image_begin_read_from_memory(&pi, L[k].data, L[k].len)) {
-			rc = ERR_SET(e, ERR_PARSE, "verify: %s: %s", L[k].name, pi.message);
+	for (size_t k = 0; k < ls.n; k++) {
+		if ((rc = decode_layer(&ls.L[k], &img, e)) != 0)
+			goto out;
+		if (ref_path && k < rs.n && (rc = decode_layer(&rs.L[k], &rimg, e)) != 0) {
+			err_prefix(e, "reference");
 			goto out;
 		}
-		pi.format = PNG_FORMAT_GRAY;
-		if (pi.width < 1 || pi.height < 1 || pi.width > 65535 || pi.height > 65535) {
-			png_image_free(&pi);
-			rc = ERR_SET(e, ERR_LIMIT, "verify: %s is %ux%u pixels", L[k].name, pi.width,
-				     pi.height);
-			goto out;
-		}
-		if (!img || img->w != (int)pi.width || img->h != (int)pi.height) {
-			raster_free(img);
-			img = raster_new((int)pi.width, (int)pi.height);
-			if (!img) {
-				png_image_free(&pi);
-				rc = ERR_SET(e, ERR_NOMEM, "verify: out of memory");
-				goto out;
-			}
-		}
-		if (!png_image_finish_read(&pi, NULL, img->px, (png_int_32)img->stride, NULL)) {
-			rc = ERR_SET(e, ERR_PARSE, "verify: %s: %s", L[k].name, pi.message);
-			png_image_free(&pi);
-			goto out;
-		}
-		mem_free(L[k].data); /* decoded: drop the compressed copy early */
-		L[k].data = NULL;
-		rc = verify_layer(v, img, e);
+		if (ref_path && k == rs.n && rimg)
+			raster_clear(rimg); /* above the reference's top: empty */
+		rc = verify_layer_ref(v, img, ref_path ? rimg : NULL, e);
 		if (rc)
 			goto out;
 	}
@@ -258,11 +313,8 @@ int verify_archive(const char *path, const struct verify_params *p, struct verif
 out:
 	verify_free(v);
 	raster_free(img);
-	for (size_t k = 0; k < n; k++) {
-		mem_free(L[k].name);
-		mem_free(L[k].data);
-	}
-	mem_free(L);
-	archive_read_free(a);
+	raster_free(rimg);
+	layer_set_fini(&ls);
+	layer_set_fini(&rs);
 	return rc;
 }

@@ -54,6 +54,7 @@
 #include "engine/core/metrics.h"
 #include "engine/geom/edt.h"
 #include "engine/verify/between.h"
+#include "engine/verify/contact.h"
 #include "engine/verify/fins.h"
 
 #define VX_OUT 1u /* union-find id of the outside */
@@ -118,6 +119,7 @@ struct verify {
 	size_t fcnt_cap;
 	size_t scratch_cap;
 	struct edt_scratch es;
+	struct verify_contact ref; /* the reference stack's own islands (has_reference) */
 	struct verify_report r;
 	int failed, finished;
 };
@@ -153,6 +155,7 @@ void verify_free(struct verify *v)
 	mem_free(v->between.v);
 	mem_free(v->shelf.v);
 	verify_between_fini(&v->vb);
+	verify_contact_fini(&v->ref);
 	mem_free(v->wlab);
 	mem_free(v->fcnt);
 	mem_free(v->col);
@@ -208,6 +211,9 @@ int verify_new(const struct verify_params *p, struct verify **out, struct err *e
 	verify_fins_init(&v->vf);
 	v->r.worst_layer = -1;
 	v->r.first_island_layer = -1;
+	v->r.first_added_island_layer = -1;
+	v->r.first_solid_layer = -1;
+	verify_contact_init(&v->ref);
 	v->r.min_wall_mm = INFINITY;
 	v->r.min_wall_layer = -1;
 	v->r.min_wall_vertical_mm = INFINITY;
@@ -426,7 +432,7 @@ static int label_voids(struct verify *v, uint32_t *ncomp)
 static int islands(struct verify *v, int layer)
 {
 	struct crop *c = v->cur;
-	int w = c->w, h = c->h;
+	int w = c->w, h = c->h, tol = (int)ceil(v->p.tolerance_px);
 	uint8_t *seen;
 
 	if (layer == 0)
@@ -438,7 +444,7 @@ static int islands(struct verify *v, int layer)
 	for (int y = 0; y < h; y++)
 		for (int x = 0; x < w; x++) {
 			size_t i = (size_t)y * (size_t)w + (size_t)x, sp = 0, area = 0;
-			int supported = 0;
+			int supported = 0, own = 0; /* own: touches an island of the reference */
 			if (!c->solid[i] || seen[i])
 				continue;
 			seen[i] = 1;
@@ -450,6 +456,11 @@ static int islands(struct verify *v, int layer)
 				area++;
 				if (!supported && crop_solid(v->prev, qx + c->x0, qy + c->y0, &pi))
 					supported = 1;
+				/* checked only while unsupported: a supported component
+				 * (nearly all) stops paying for it at its first such pixel */
+				if (!supported && !own && v->r.has_reference &&
+				    verify_contact_near(&v->ref, qx + c->x0, qy + c->y0, tol))
+					own = 1;
 				for (int dy = -1; dy <= 1; dy++)
 					for (int dx = -1; dx <= 1; dx++) {
 						int nx = qx + dx, ny = qy + dy;
@@ -469,6 +480,13 @@ static int islands(struct verify *v, int layer)
 				v->r.island_mm2 += (double)area * v->p.pixel_x_mm * v->p.pixel_y_mm;
 				if (v->r.first_island_layer < 0)
 					v->r.first_island_layer = layer;
+				if (v->r.has_reference && !own) {
+					v->r.islands_added++;
+					v->r.island_added_mm2 +=
+						(double)area * v->p.pixel_x_mm * v->p.pixel_y_mm;
+					if (v->r.first_added_island_layer < 0)
+						v->r.first_added_island_layer = layer;
+				}
 			}
 		}
 	return 0;
@@ -533,6 +551,12 @@ static int walls_between(struct verify *v, int layer, struct err *e)
 
 int verify_layer(struct verify *v, const struct raster *r, struct err *e)
 {
+	return verify_layer_ref(v, r, NULL, e);
+}
+
+int verify_layer_ref(struct verify *v, const struct raster *r, const struct raster *ref,
+		     struct err *e)
+{
 	struct crop *c, *pc;
 	int x0 = INT32_MAX, y0 = INT32_MAX, x1 = -1, y1 = -1, layer = v->next;
 	uint32_t ncomp = 0;
@@ -555,6 +579,16 @@ int verify_layer(struct verify *v, const struct raster *r, struct err *e)
 	}
 	if (layer >= UINT16_MAX)
 		v->col_ok = 0;
+	if (layer == 0)
+		v->r.has_reference = ref != NULL;
+	if ((ref != NULL) != v->r.has_reference)
+		return ERR_FIELD(e, "reference", "verify: layer %d %s a reference layer, layer 0 %s",
+				 layer, ref ? "has" : "lacks", ref ? "did not" : "did");
+	if (ref && (ref->w != r->w || ref->h != r->h))
+		return ERR_FIELD(e, "reference", "verify: reference layer %d is %dx%d, the layers %dx%d",
+				 layer, ref->w, ref->h, r->w, r->h);
+	if (ref && verify_contact_layer(&v->ref, ref, v->p.threshold) != 0)
+		goto nomem; /* sizes are equal to r's, checked above */
 	/* swap: the current crop becomes the previous one */
 	pc = v->cur;
 	v->cur = v->prev;
@@ -587,6 +621,8 @@ int verify_layer(struct verify *v, const struct raster *r, struct err *e)
 	c->sy0 = y0;
 	c->sx1 = x1;
 	c->sy1 = y1;
+	if (x1 >= 0 && v->r.first_solid_layer < 0)
+		v->r.first_solid_layer = layer;
 	/* grow by the previous layer's solid (not its crop: crops would creep) */
 	if (pc->w && pc->sx1 >= 0) {
 		x0 = pc->sx0 < x0 ? pc->sx0 : x0;
@@ -928,6 +964,12 @@ int verify_report_metrics(const struct verify_report *r, const char *prefix, str
 	rc |= metrics_int(m, KEY("islands"), r->islands);
 	rc |= metrics_num(m, KEY("island_mm2"), r->island_mm2);
 	rc |= metrics_int(m, KEY("first_island_layer"), r->first_island_layer);
+	if (r->has_reference) {
+		rc |= metrics_int(m, KEY("islands_added"), r->islands_added);
+		rc |= metrics_num(m, KEY("island_added_mm2"), r->island_added_mm2);
+		rc |= metrics_int(m, KEY("first_added_island_layer"), r->first_added_island_layer);
+	}
+	rc |= metrics_int(m, KEY("first_solid_layer"), r->first_solid_layer);
 	rc |= metrics_num(m, KEY("min_wall_mm"), r->min_wall_mm);
 	rc |= metrics_int(m, KEY("min_wall_layer"), r->min_wall_layer);
 	rc |= metrics_num(m, KEY("min_wall_vertical_mm"), r->min_wall_vertical_mm);

@@ -65,6 +65,15 @@ struct verify_report {
 	long long islands;
 	double island_mm2;
 	int first_island_layer;       /* -1 when none */
+	/* islands the solid part does not have (only with a reference stack,
+	 * verify_layer_ref): islands none of whose pixels lies within
+	 * tolerance_px (Chebyshev) of a pixel of an island of the reference's
+	 * same layer (the part's own first contacts: an overhanging chin) */
+	int has_reference;
+	long long islands_added;
+	double island_added_mm2;
+	int first_added_island_layer; /* -1 when none */
+	int first_solid_layer;        /* lowest layer with a solid pixel, -1 if none */
 	/* walls between enclosed voids and the outside (definitions:
 	 * verify.c head comment, docs/verify.md); specks excluded */
 	double min_wall_mm;           /* in-layer (2D distance); INFINITY without enclosed voids */
@@ -110,6 +119,12 @@ void verify_free(struct verify *v);
 /* Feed the next layer (layers in print order).  All layers must have the
  * same size (ERR_PARAM otherwise).  r is borrowed for the call. */
 int verify_layer(struct verify *v, const struct raster *r, struct err *e);
+/* The same with ref, the same layer of a reference stack (the solid part
+ * sliced by the same printer, same image size; borrowed for the call),
+ * against which islands are told apart: the report's islands_added.  Give
+ * a reference on every layer or on none (ERR_FIELD "reference"). */
+int verify_layer_ref(struct verify *v, const struct raster *r, const struct raster *ref,
+		     struct err *e);
 
 /* Close the stack (the space above the last layer is outside) and fill
  * *out (replaced; caller frees with verify_report_fini).  The check can
@@ -129,5 +144,13 @@ int verify_report_metrics(const struct verify_report *r, const char *prefix, str
  * only when the archive does not list them in order. */
 int verify_archive(const char *path, const struct verify_params *p, struct verify_report *out,
 		   struct err *e);
+/* The same with ref_path (NULL: none), a reference archive with layers of
+ * the same size (the solid engine's output for the same part
+ * and printer), fed to verify_layer_ref(): the report's islands_added.
+ * Its layers above the reference's last are compared with empty layers;
+ * the reference's extra layers are not read.  Layer height and pixel
+ * pitch come from path's own ini files. */
+int verify_archive_ref(const char *path, const char *ref_path, const struct verify_params *p,
+		       struct verify_report *out, struct err *e);
 
 #endif

@@ -279,6 +279,33 @@ class CliTest(unittest.TestCase):
             if p.returncode == 1:
                 self.assert_one_line_error(p)
 
+    def test_too_small_part_warns(self):
+        """femur.off is 1 unit tall: as millimetres it prints 20 layers of a
+        speck; run and analyze warn on stderr and in the metrics' warnings,
+        naming height_mm and units (--quiet: in the metrics only); a 50 mm
+        part does not."""
+        femur = os.path.join(MESHES, "femur.off")
+        met = self.path("small.json")
+        p = run("run", femur, "-o", self.path("small.sl1"), "--metrics", met, check=True)
+        warn = [l for l in p.stderr.splitlines() if l.startswith("infilld: warning: ")]
+        self.assertEqual(len(warn), 1, p.stderr)
+        for needle in ("height_mm", "units", "5 mm"):
+            self.assertIn(needle, warn[0])
+        w = load(met)["warnings"]
+        self.assertEqual(len(w), 1)
+        self.assertIn("height_mm", w[0])
+        p = run("run", femur, "-o", self.path("small.sl1"), "--metrics", met, "--quiet",
+                check=True)
+        self.assertEqual(p.stderr, "")
+        self.assertEqual(len(load(met)["warnings"]), 1)
+        p = run("analyze", femur, check=True)
+        self.assertIn("height_mm", json.loads(p.stdout)["warnings"][0])
+        self.assertIn("infilld: warning: ", p.stderr)
+        p = run("run", femur, "-o", self.path("big.sl1"), "--metrics", met, "--quiet",
+                "--set", "height_mm=50", "--set", "layer_mm=0.5", check=True)
+        self.assertEqual(p.stderr, "")
+        self.assertNotIn("warnings", load(met))
+
     def test_quiet_is_silent(self):
         p = run("run", os.path.join(MESHES, "misc", "cube.bin.stl"), "-o", self.path("q.zip"),
                 "--set", "height_mm=1", "--quiet")

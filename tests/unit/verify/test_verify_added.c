@@ -1,0 +1,161 @@
+/* test_verify_added.c - islands a fill adds to the solid part
+ * (verify_layer_ref, the report's islands_added; docs/verify.md "Added
+ * islands").
+ *
+ * The solid reference, 0.1 mm layers and pixels: a pillar [2, 6]^2 x
+ * [0, 10] mm on the plate and a chin [10, 14] x [2, 6] x [5, 10] joined
+ * to it by a bridge at z >= 8: the chin's first layer (50) is the part's
+ * own island.  Checked stacks: the part itself (no added island); the part
+ * with the pillar hollowed and a 1 mm blob floating in the cavity at z 4
+ * (one added island of 1 mm2 on layer 40, besides the chin's); the chin a
+ * pixel narrower (still the part's own, within the 1-pixel tolerance);
+ * the chin starting 3 layers higher (added: the part starts lower there).
+ */
+#include "harness.h"
+
+#include "engine/core/err.h"
+#include "engine/geom/raster.h"
+#include "engine/verify/verify.h"
+
+#define PX 0.1
+#define LAYER 0.1
+#define N 160 /* 16 x 16 mm */
+#define LAYERS 100
+
+enum shape { REF, BLOB, NARROW_CHIN, HIGH_CHIN };
+
+static int solid_at(enum shape s, double x, double y, double z)
+{
+	double c0 = s == NARROW_CHIN ? 10.1 : 10, c1 = s == NARROW_CHIN ? 13.9 : 14;
+	double cz = s == HIGH_CHIN ? 5.3 : 5;
+	int in_y = y >= 2 && y <= 6;
+	int pillar = x >= 2 && x <= 6 && in_y && z <= 10;
+	int chin = x >= c0 && x <= c1 && in_y && z >= cz && z <= 10;
+	int bridge = x >= 6 && x <= 10 && in_y && z >= 8 && z <= 10;
+
+	if (s == BLOB) {
+		int cavity = x > 2.5 && x < 5.5 && y > 2.5 && y < 5.5 && z > 1 && z < 9;
+		int blob = x >= 3.5 && x <= 4.5 && y >= 3.5 && y <= 4.5 && z >= 4 && z <= 5;
+		if (cavity)
+			return blob;
+	}
+	return pillar || chin || bridge;
+}
+
+static void fill(struct raster *r, enum shape s, int k)
+{
+	double z = (k + 0.5) * LAYER;
+	for (int j = 0; j < N; j++)
+		for (int i = 0; i < N; i++)
+			r->px[(size_t)j * r->stride + (size_t)i] =
+				solid_at(s, (i + 0.5) * PX, (j + 0.5) * PX, z) ? 255 : 0;
+}
+
+static void run_pair(enum shape s, struct verify_report *rep)
+{
+	struct verify_params p = {LAYER, 45, PX, PX, 0, 0, 0};
+	struct verify *v = NULL;
+	struct raster *r = raster_new(N, N), *ref = raster_new(N, N);
+	struct err e;
+
+	err_clear(&e);
+	memset(rep, 0, sizeof *rep);
+	REQUIRE(r && ref);
+	REQUIRE_OK(verify_new(&p, &v, &e), &e);
+	for (int k = 0; k < LAYERS; k++) {
+		fill(r, s, k);
+		fill(ref, REF, k);
+		REQUIRE_OK(verify_layer_ref(v, r, ref, &e), &e);
+	}
+	REQUIRE_OK(verify_finish(v, rep, &e), &e);
+	verify_free(v);
+	raster_free(r);
+	raster_free(ref);
+}
+
+static void test_part_itself(void)
+{
+	struct verify_report rep;
+	run_pair(REF, &rep);
+	CHECK_EQ_INT(rep.has_reference, 1);
+	CHECK_EQ_INT(rep.islands, 1); /* the chin */
+	CHECK_EQ_INT(rep.first_island_layer, 50);
+	CHECK_EQ_INT(rep.islands_added, 0);
+	CHECK_EQ_INT(rep.first_added_island_layer, -1);
+	CHECK_EQ_INT(rep.first_solid_layer, 0);
+	verify_report_fini(&rep);
+}
+
+static void test_floating_blob(void)
+{
+	struct verify_report rep;
+	run_pair(BLOB, &rep);
+	CHECK_EQ_INT(rep.islands, 2);
+	CHECK_EQ_INT(rep.islands_added, 1);
+	CHECK_NEAR(rep.island_added_mm2, 1, 0.25);
+	CHECK_EQ_INT(rep.first_added_island_layer, 40);
+	verify_report_fini(&rep);
+}
+
+static void test_chin_moved(void)
+{
+	struct verify_report rep;
+	run_pair(NARROW_CHIN, &rep);
+	CHECK_EQ_INT(rep.islands, 1);
+	CHECK_EQ_INT(rep.islands_added, 0);
+	verify_report_fini(&rep);
+	run_pair(HIGH_CHIN, &rep);
+	CHECK_EQ_INT(rep.islands, 1);
+	CHECK_EQ_INT(rep.islands_added, 1);
+	CHECK_EQ_INT(rep.first_added_island_layer, 53);
+	verify_report_fini(&rep);
+}
+
+static void test_without_reference(void)
+{
+	struct verify_params p = {LAYER, 45, PX, PX, 0, 0, 0};
+	struct verify *v = NULL;
+	struct raster *r = raster_new(N, N), *small = raster_new(N / 2, N);
+	struct verify_report rep;
+	struct err e;
+
+	REQUIRE(r && small);
+	memset(&rep, 0, sizeof rep);
+	REQUIRE_OK(verify_new(&p, &v, &e), &e);
+	fill(r, BLOB, 0);
+	REQUIRE_OK(verify_layer(v, r, &e), &e);
+	/* a reference on some layers only, or of another size, is refused */
+	CHECK_EQ_INT(verify_layer_ref(v, r, r, &e), ERR_PARAM);
+	CHECK_STR(e.field, "reference");
+	verify_free(v);
+	REQUIRE_OK(verify_new(&p, &v, &e), &e);
+	CHECK_EQ_INT(verify_layer_ref(v, r, small, &e), ERR_PARAM);
+	CHECK_STR(e.field, "reference");
+	verify_free(v);
+	/* without one: no added-island figures, first_solid_layer still */
+	REQUIRE_OK(verify_new(&p, &v, &e), &e);
+	for (int k = 0; k < LAYERS; k++) {
+		raster_clear(r);
+		if (k >= 7)
+			fill(r, REF, k);
+		REQUIRE_OK(verify_layer(v, r, &e), &e);
+	}
+	REQUIRE_OK(verify_finish(v, &rep, &e), &e);
+	CHECK_EQ_INT(rep.has_reference, 0);
+	CHECK_EQ_INT(rep.islands_added, 0);
+	CHECK_EQ_INT(rep.first_solid_layer, 7);
+	CHECK_EQ_INT(rep.islands, 2); /* the pillar's foot in the air, the chin */
+	verify_report_fini(&rep);
+	verify_free(v);
+	raster_free(r);
+	raster_free(small);
+}
+
+int main(void)
+{
+	RUN(test_part_itself);
+	RUN(test_floating_blob);
+	RUN(test_chin_moved);
+	RUN(test_without_reference);
+	return harness_report();
+}
