@@ -525,6 +525,11 @@ static int lat_prepare(const struct engine_ctx *ctx, const void *params, void **
 						  : 0;
 	if (s->shell_mm > 0) {
 		const struct box3 *bb = &ctx->report->bbox;
+		/* With a skin the layer is (lattice AND part) OR skin: the print is
+		 * the part's own box, not the skeleton's, which can end below the
+		 * part's top (the camel's: 46.8 of 50 mm, and its skin with it). */
+		s->extent = *bb;
+		s->extent.lo.z = 0;
 		s->shell_pixel_mm = ctx->map ? sqrt(raster_map_pixel_area_mm2(ctx->map)) : 0.05;
 		if ((rc = lattice_skin_new(ctx->mesh, s->shell_mm, s->shell_pixel_mm, ctx->layer_mm,
 					   s->extent.hi.z, bb->lo.x, bb->lo.y, bb->hi.x, bb->hi.y,

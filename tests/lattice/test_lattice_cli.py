@@ -212,6 +212,28 @@ class LatticeCliTest(unittest.TestCase):
         sl1check.check_archive(out, expect_layers=m["sl1"]["layers"])
         self.assertLessEqual(m["sl1"]["layers"], m["layers"])
 
+    def test_skinned_lattice_prints_the_part_to_its_top(self):
+        # The camel's skeleton ends below its head (46.8 of 50 mm at 50 mm);
+        # with the default skin the print is the part's box: the G-code's last
+        # printed Z and its layer count equal the solid part's, measured in
+        # the G-code text here, not from the engine's metrics.
+        def last_z_and_count(engine):
+            with tempfile.TemporaryDirectory() as tmp:
+                out = os.path.join(tmp, "c.gcode")
+                p = run("run", os.path.join(MESHES, "camel.off"), "-o", out, "--engine", engine,
+                        "--set", "height_mm=50", "--set", "up=y", "--quiet")
+                self.assertEqual(p.returncode, 0, p.stderr)
+                text = open(out).read()
+            zs = [float(l[3:]) for l in text.splitlines() if l.startswith(";Z:")]
+            count = int(text.split(";LAYER_COUNT:", 1)[1].split()[0])
+            return max(zs), count, len(zs)
+        sz, scount, sn = last_z_and_count("solid")
+        lz, lcount, ln = last_z_and_count("lattice")
+        self.assertAlmostEqual(sz, 50.0, delta=0.2 + 1e-9)
+        self.assertAlmostEqual(lz, sz, delta=0.2 + 1e-9)  # within one 0.2 mm layer
+        self.assertEqual(lcount, ln)
+        self.assertEqual(scount, sn)
+
 
 if __name__ == "__main__":
     unittest.main()
