@@ -111,4 +111,11 @@ double printer_layer_mm(const struct printer *p);
 void printer_raster_geometry(const struct printer *p, struct raster_map *map, int *w_px,
 			     int *h_px);
 
+/* Resin display geometry, for the resin writers: checks a display (pixels,
+ * pitch, exposure; ERR_FIELD names the key) and its printable area along
+ * printer X and Y (mm). */
+int printer_resin_check(const struct resin_printer *r, struct err *e);
+double printer_resin_extent_x_mm(const struct resin_printer *r);
+double printer_resin_extent_y_mm(const struct resin_printer *r);
+
 #endif

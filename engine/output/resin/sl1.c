@@ -14,7 +14,6 @@
 #include "engine/core/pipeline.h"
 #include "engine/core/sink.h"
 #include "engine/output/image/png_encode.h"
-#include "engine/output/printer/printer_kinds.h"
 #include "engine/output/resin/sl1_ini.h"
 #include "engine/output/image/thumbnail.h"
 #include "engine/output/writer.h"

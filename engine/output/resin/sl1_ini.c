@@ -5,7 +5,6 @@
  * the firmware reads them with a TOML reader that accepts that form.
  */
 #include "engine/output/resin/sl1_ini.h"
-#include "engine/output/printer/printer_kinds.h"
 #include "engine/core/err.h"
 #include "engine/core/sink.h"
 #include "engine/engine.h" /* INFILLD_VERSION */
