@@ -14,10 +14,11 @@
 #include "engine/core/pipeline.h"
 #include "engine/core/sink.h"
 #include "engine/output/image/png_encode.h"
-#include "engine/output/resin/sl1_ini.h"
 #include "engine/output/image/thumbnail.h"
-#include "engine/output/writer.h"
+#include "engine/output/printer/printer.h"
+#include "engine/output/resin/sl1_ini.h"
 #include "engine/output/resin/zipstream.h"
+#include "engine/output/writer.h"
 #include "engine/slice/slice.h"
 
 #include <math.h>
