@@ -273,7 +273,7 @@ int engine_run(const struct job_spec *js, struct sink *out, const struct progres
 	void *state = NULL;
 	double t0 = progress_now_s(), t_read, t_prep, t_layers;
 	double layer_mm, share, part_volume = 0;
-	int threads, count = 0, img_w = 0, img_h = 0, rc;
+	int threads, count = 0, written = 0, img_w = 0, img_h = 0, rc;
 	const struct metric *mv;
 	double material = 0;
 
@@ -395,9 +395,22 @@ int engine_run(const struct job_spec *js, struct sink *out, const struct progres
 	/* Copy the value: recording more metrics may move the array. */
 	mv = metrics_get(m, "material_volume_mm3");
 	material = mv ? mv->num : 0;
+	/* The writer drops trailing empty layers: `layers` is what it wrote
+	 * (its "<format>.layers"), `layers_scheduled` the schedule. */
+	written = count;
+	if (!out_format_is_mesh(js->format)) {
+		char key[32];
+		const struct metric *lv;
+
+		snprintf(key, sizeof key, "%s.layers", out_format_name(js->format));
+		lv = metrics_get(m, key);
+		if (lv)
+			written = (int)lv->ival;
+	}
 	if (metrics_str(m, "engine", ops->name) ||
 	    metrics_str(m, "format", out_format_name(js->format)) ||
-	    metrics_str(m, "printer", js->printer.name) || metrics_int(m, "layers", count) ||
+	    metrics_str(m, "printer", js->printer.name) || metrics_int(m, "layers", written) ||
+	    metrics_int(m, "layers_scheduled", count) ||
 	    metrics_num(m, "layer_mm", layer_mm) || job_record_bbox(m, "bbox_mm", &extent) ||
 	    (mesh && metrics_num(m, "part_volume_mm3", part_volume)) ||
 	    (mesh && mv && part_volume > 0 &&

@@ -112,9 +112,10 @@ class LatticeCliTest(unittest.TestCase):
         # solid), the archive ends with the last lit layer: the top node's
         # solid, below the support (empty layers above it are not written)
         top = (N - 1) * SPACING + RADIUS
-        self.assertEqual(m["layers"], math.ceil((top + SUPPORT) / 0.05 - 1e-9))
+        self.assertEqual(m["layers_scheduled"], math.ceil((top + SUPPORT) / 0.05 - 1e-9))
         written = m["sl1"]["layers"]
-        self.assertLess(written, m["layers"])
+        self.assertEqual(m["layers"], written)
+        self.assertLess(written, m["layers_scheduled"])
         self.assertGreaterEqual(written, math.ceil(top / 0.05 - 1e-9))
         sl1check.check_archive(sl1, expect_layers=written)
         # z = 1.475 mm (layer 29): nodes at z = 0.4, 3.4, ...: farther than R
