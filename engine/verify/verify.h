@@ -153,4 +153,28 @@ int verify_archive(const char *path, const struct verify_params *p, struct verif
 int verify_archive_ref(const char *path, const char *ref_path, const struct verify_params *p,
 		       struct verify_report *out, struct err *e);
 
+/* A layer archive's stack as its writer described it. */
+struct verify_stack {
+	int layers;            /* layer images, print order (layer k spans z from
+				  k * layer_mm to (k + 1) * layer_mm above the plate) */
+	int width, height;     /* pixels of every layer */
+	double layer_mm;       /* config.ini layerHeight / manifest.json; 0 if unstated */
+	int has_map;           /* map is known */
+	struct raster_map map; /* printer mm -> pixel (raster.h) as the writer used it:
+				  from prusaslicer.ini's display (printer_raster_geometry)
+				  or a plain zip's manifest.json map_mm_to_px */
+};
+
+/* Called per layer in print order; img borrowed for the call; st filled
+ * except for later calls' knowledge.  Nonzero stops the read. */
+typedef int (*verify_layer_fn)(void *ctx, int index, const struct raster *img,
+			       const struct verify_stack *st, struct err *e);
+
+/* Decode every layer of an archive (as verify_archive reads it: the PNGs
+ * outside thumbnail/, in print order) and hand each to fn, one decoded
+ * image in memory at a time.  *st filled on success.  ERR_IO, ERR_PARSE,
+ * ERR_LIMIT, ERR_NOMEM, or fn's code. */
+int verify_archive_layers(const char *path, struct verify_stack *st, verify_layer_fn fn,
+			  void *ctx, struct err *e);
+
 #endif
