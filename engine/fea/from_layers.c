@@ -259,7 +259,22 @@ int fea_layers_new(const struct fea_layers_geom *geo, const struct box3 *part, d
 	return 0;
 }
 
-int fea_layers_add(struct fea_layers *L, int k, const struct raster *img, struct err *e)
+int fea_layers_slabs(const struct fea_layers *L)
+{
+	return L->nz;
+}
+
+void fea_layers_slab_range(const struct fea_layers *L, int iz, int *k0, int *k1)
+{
+	double z0 = L->lo_mm.z + iz * L->h_mm, z1 = z0 + L->h_mm;
+	int a = (int)floor(z0 / L->geo.layer_mm), b = (int)ceil(z1 / L->geo.layer_mm);
+
+	*k0 = a < 0 ? 0 : a;
+	*k1 = b < *k0 ? *k0 : b;
+}
+
+int fea_layers_add(struct fea_layers *L, int k, int iz, const struct raster *img,
+		   struct err *e)
 {
 	struct piece zp[64];
 	size_t nzp = 0, zcap = 0;
@@ -280,6 +295,14 @@ int fea_layers_add(struct fea_layers *L, int k, const struct raster *img, struct
 	if (nzp)
 		memcpy(zp, zps, nzp * sizeof *zp);
 	mem_free(zps);
+	if (iz >= 0) {
+		/* only slab iz: keep its piece */
+		size_t keep = 0;
+		for (size_t c = 0; c < nzp; c++)
+			if (zp[c].cell == iz)
+				zp[keep++] = zp[c];
+		nzp = keep;
+	}
 	for (int j = L->row.lo; nzp && j < L->row.hi; j++) {
 		const uint8_t *r = img->px + (size_t)j * img->stride;
 		const struct piece *rp = L->row.p + L->row.off[j];

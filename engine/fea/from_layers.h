@@ -8,7 +8,8 @@
  * of its layer's height that falls inside the voxel, so pixels and layers
  * straddling voxel faces are split exactly.  Two passes over the images:
  * fea_layers_box() (the part's extent from its lit pixels), then an
- * accumulator over a grid of that extent padded by one voxel.
+ * accumulator over a grid of that extent padded by one voxel, fed slab
+ * by slab so that slabs can be filled in parallel.
  */
 #ifndef INFILLD_FEA_FROM_LAYERS_H
 #define INFILLD_FEA_FROM_LAYERS_H
@@ -48,9 +49,16 @@ struct fea_layers;
  * ERR_NOMEM.  Caller frees with fea_layers_free(). */
 int fea_layers_new(const struct fea_layers_geom *geo, const struct box3 *part, double h_mm,
 		   size_t max_elements, struct fea_layers **out, struct err *e);
-/* Add layer k (any order, each once).  O(lit pixels in the grid's
- * footprint) after a scan of the footprint. */
-int fea_layers_add(struct fea_layers *acc, int k, const struct raster *img, struct err *e);
+/* Voxel layers (slabs along z) of the grid, and the layers [*k0, *k1)
+ * that reach slab iz. */
+int fea_layers_slabs(const struct fea_layers *acc);
+void fea_layers_slab_range(const struct fea_layers *acc, int iz, int *k0, int *k1);
+/* Add what layer k holds inside voxel slab iz (iz < 0: in every slab);
+ * each (layer, slab) once, in any order.  Calls for distinct slabs may
+ * run on several threads at once (each writes only its slab).
+ * O(lit pixels in the grid's footprint) after a scan of the footprint. */
+int fea_layers_add(struct fea_layers *acc, int k, int iz, const struct raster *img,
+		   struct err *e);
 /* The model: g's rho (allocated here, freed by fea_grid_fini), size,
  * lo_mm, h_mm, and part_lo/hi_mm = part.  The accumulator keeps nothing
  * of g.  ERR_NOMEM, or ERR_GEOMETRY when no voxel holds material. */

@@ -316,8 +316,9 @@ out:
 }
 
 /* Decode ent into *img (reallocated when its size differs; caller frees
- * with raster_free) and drop ent's compressed copy. */
-static int decode_layer(struct png_ent *ent, struct raster **img, struct err *e)
+ * with raster_free), keeping ent's compressed copy.  Reentrant: calls
+ * for distinct img may run at once. */
+static int decode_png(const struct png_ent *ent, struct raster **img, struct err *e)
 {
 	png_image pi;
 
@@ -344,9 +345,19 @@ static int decode_layer(struct png_ent *ent, struct raster **img, struct err *e)
 		png_image_free(&pi);
 		return rc;
 	}
-	mem_free(ent->data); /* decoded: drop the compressed copy early */
-	ent->data = NULL;
 	return 0;
+}
+
+/* decode_png, then drop ent's compressed copy early. */
+static int decode_layer(struct png_ent *ent, struct raster **img, struct err *e)
+{
+	int rc = decode_png(ent, img, e);
+
+	if (!rc) {
+		mem_free(ent->data);
+		ent->data = NULL;
+	}
+	return rc;
 }
 
 int verify_archive(const char *path, const struct verify_params *p, struct verify_report *out,
@@ -415,21 +426,27 @@ out:
 	return rc;
 }
 
-int verify_archive_layers(const char *path, struct verify_stack *st, verify_layer_fn fn,
-			  void *ctx, struct err *e)
-{
+/* An opened archive for verify_stack_*: its compressed layers. */
+struct verify_stack_reader {
 	struct layer_set ls;
-	struct verify_stack info;
-	struct raster *img = NULL;
+};
+
+int verify_stack_open(const char *path, struct verify_stack_reader **out, struct verify_stack *st,
+		      struct err *e)
+{
+	struct verify_stack_reader *r = mem_calloc(1, sizeof *r);
 	const struct ini_vals *iv;
+	struct verify_stack info;
+	png_image pi;
 	int rc;
 
-	memset(&ls, 0, sizeof ls);
+	if (!r)
+		return ERR_SET(e, ERR_NOMEM, "verify: out of memory");
 	memset(&info, 0, sizeof info);
-	if ((rc = load_layers(path, &ls, e)) != 0)
+	if ((rc = load_layers(path, &r->ls, e)) != 0)
 		goto out;
-	iv = &ls.iv;
-	info.layers = (int)ls.n;
+	iv = &r->ls.iv;
+	info.layers = (int)r->ls.n;
 	info.layer_mm = iv->layer_mm > 0 ? iv->layer_mm : 0;
 	if (iv->has_map) {
 		info.map = iv->map;
@@ -451,23 +468,38 @@ int verify_archive_layers(const char *path, struct verify_stack *st, verify_laye
 		printer_raster_geometry(&p, &info.map, &w, &h);
 		info.has_map = 1;
 	}
-	for (size_t k = 0; k < ls.n; k++) {
-		if ((rc = decode_layer(&ls.L[k], &img, e)) != 0)
-			goto out;
-		if (k == 0) {
-			info.width = img->w;
-			info.height = img->h;
-		} else if (img->w != info.width || img->h != info.height) {
-			rc = ERR_SET(e, ERR_PARSE, "verify: %s is %dx%d pixels, layer 0 %dx%d",
-				     ls.L[k].name, img->w, img->h, info.width, info.height);
-			goto out;
-		}
-		if ((rc = fn(ctx, (int)k, img, &info, e)) != 0)
-			goto out;
+	/* the image size from the first layer's header */
+	memset(&pi, 0, sizeof pi);
+	pi.version = PNG_IMAGE_VERSION;
+	if (!png_image_begin_read_from_memory(&pi, r->ls.L[0].data, r->ls.L[0].len)) {
+		rc = ERR_SET(e, ERR_PARSE, "verify: %s: %s", r->ls.L[0].name, pi.message);
+		goto out;
+	}
+	info.width = (int)pi.width;
+	info.height = (int)pi.height;
+	png_image_free(&pi);
+out:
+	if (rc) {
+		verify_stack_close(r);
+		return rc;
 	}
 	*st = info;
-out:
-	raster_free(img);
-	layer_set_fini(&ls);
-	return rc;
+	*out = r;
+	return 0;
+}
+
+int verify_stack_layer(const struct verify_stack_reader *r, int k, struct raster **img,
+		       struct err *e)
+{
+	if (k < 0 || (size_t)k >= r->ls.n)
+		return ERR_SET(e, ERR_INTERNAL, "verify: no layer %d of %zu", k, r->ls.n);
+	return decode_png(&r->ls.L[k], img, e);
+}
+
+void verify_stack_close(struct verify_stack_reader *r)
+{
+	if (!r)
+		return;
+	layer_set_fini(&r->ls);
+	mem_free(r);
 }

@@ -157,7 +157,7 @@ int verify_archive_ref(const char *path, const char *ref_path, const struct veri
 struct verify_stack {
 	int layers;            /* layer images, print order (layer k spans z from
 				  k * layer_mm to (k + 1) * layer_mm above the plate) */
-	int width, height;     /* pixels of every layer */
+	int width, height;     /* pixels of layer 0 (the others are checked as decoded) */
 	double layer_mm;       /* config.ini layerHeight / manifest.json; 0 if unstated */
 	int has_map;           /* map is known */
 	struct raster_map map; /* printer mm -> pixel (raster.h) as the writer used it:
@@ -165,16 +165,19 @@ struct verify_stack {
 				  or a plain zip's manifest.json map_mm_to_px */
 };
 
-/* Called per layer in print order; img borrowed for the call; st filled
- * except for later calls' knowledge.  Nonzero stops the read. */
-typedef int (*verify_layer_fn)(void *ctx, int index, const struct raster *img,
-			       const struct verify_stack *st, struct err *e);
+struct verify_stack_reader;
 
-/* Decode every layer of an archive (as verify_archive reads it: the PNGs
- * outside thumbnail/, in print order) and hand each to fn, one decoded
- * image in memory at a time.  *st filled on success.  ERR_IO, ERR_PARSE,
- * ERR_LIMIT, ERR_NOMEM, or fn's code. */
-int verify_archive_layers(const char *path, struct verify_stack *st, verify_layer_fn fn,
-			  void *ctx, struct err *e);
+/* Open a layer archive (as verify_archive reads it: the PNGs outside
+ * thumbnail/, in print order), holding its compressed layers in memory
+ * (a few KB each; at most 4 GB in all), and describe it in *st.  ERR_IO,
+ * ERR_PARSE, ERR_LIMIT, ERR_NOMEM.  Caller closes with verify_stack_close(). */
+int verify_stack_open(const char *path, struct verify_stack_reader **out, struct verify_stack *st,
+		      struct err *e);
+/* Decode layer k (0 = on the plate) into *img (allocated or reallocated to
+ * the layer's size; caller frees with raster_free).  Calls for distinct
+ * img may run on several threads at once.  ERR_PARSE, ERR_LIMIT, ERR_NOMEM. */
+int verify_stack_layer(const struct verify_stack_reader *r, int k, struct raster **img,
+		       struct err *e);
+void verify_stack_close(struct verify_stack_reader *r);
 
 #endif

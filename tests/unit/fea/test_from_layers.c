@@ -54,7 +54,16 @@ static void run_map(const struct raster_map *map, int u_is_x)
 	REQUIRE_OK(fea_layers_new(&geo, &box, h, 1000000, &acc, &e), &e);
 	for (int k = 0; k < layers; k++) {
 		fill(img, 20, 70, 40, 70, 255);
-		REQUIRE_OK(fea_layers_add(acc, k, img, &e), &e);
+		if (k % 2)
+			REQUIRE_OK(fea_layers_add(acc, k, -1, img, &e), &e);
+	}
+	/* even layers slab by slab, as engine_fea fills slabs in parallel */
+	for (int iz = 0; iz < fea_layers_slabs(acc); iz++) {
+		int k0, k1;
+		fea_layers_slab_range(acc, iz, &k0, &k1);
+		for (int k = k0; k < k1 && k < layers; k++)
+			if (k % 2 == 0)
+				REQUIRE_OK(fea_layers_add(acc, k, iz, img, &e), &e);
 	}
 	REQUIRE_OK(fea_layers_finish(acc, &g, &e), &e);
 	fea_layers_free(acc);
@@ -108,7 +117,7 @@ static void test_fraction_and_limits(void)
 	CHECK_EQ_INT(fea_layers_new(&geo, &box, 0.001, 1000, &acc, &e), ERR_LIMIT);
 	CHECK_STR(e.field, "fea_voxel_mm");
 	REQUIRE_OK(fea_layers_new(&geo, &box, 0.5, 1000000, &acc, &e), &e);
-	REQUIRE_OK(fea_layers_add(acc, 0, img, &e), &e);
+	REQUIRE_OK(fea_layers_add(acc, 0, -1, img, &e), &e);
 	REQUIRE_OK(fea_layers_finish(acc, &g, &e), &e);
 	fea_layers_free(acc);
 	for (size_t i = 0; i < (size_t)g.nx * g.ny * g.nz; i++)
