@@ -182,8 +182,7 @@ static int stack_geom(struct stack_read *sr, const struct verify_stack *st,
 {
 	sr->geo.width = st->width;
 	sr->geo.height = st->height;
-	/* layer_mm: only for an archive that does not state its own */
-	sr->geo.layer_mm = st->layer_mm > 0 ? st->layer_mm : js->common.layer_mm;
+	sr->geo.layer_mm = st->layer_mm; /* 0 when unstated: fea_layers_check says so */
 	if (st->has_map) {
 		sr->geo.map = st->map;
 	} else {
