@@ -24,8 +24,10 @@ json_t *api_engines_json(void);
 
 /* Apply a JSON object of parameters to js with strict types: numbers
  * for number/int keys, booleans for bool, strings for enum/string,
- * [x, y, z] for vec3.  allow_paths = 0 refuses file-path parameters
- * (the HTTP API).  0 or ERR_PARAM with e->field naming the key. */
+ * [x, y, z] for vec3; "loads" a load-case object (api_loads_text,
+ * checked before the key is looked up, errors naming its JSON path).
+ * allow_paths = 0 refuses file-path parameters (the HTTP API).  0 or
+ * ERR_PARAM with e->field naming the key. */
 int api_params_apply(struct job_spec *js, const json_t *params, int allow_paths,
 		     struct err *e);
 

@@ -112,6 +112,8 @@ static double voxel_for(const struct engine_fea_params *p, struct vec3 size)
 
 	if (p->voxel_mm > 0)
 		return p->voxel_mm;
+	if (!(big > 0) || !isfinite(big))
+		return 0; /* no extent: the voxelisers refuse it */
 	h = fmin(big / FEA_AUTO_DIVISIONS, FEA_AUTO_MAX_VOXEL_MM);
 	while (grid_cells(size, h) > ENGINE_FEA_MAX_ELEMENTS)
 		h *= 1.02;
