@@ -102,6 +102,28 @@ def read_vti(path):
     return img.attrib, arrays, root
 
 
+VTK_CHECK = r"""
+import sys, vtk
+r = vtk.vtkXMLImageDataReader()
+r.SetFileName(sys.argv[1])
+r.Update()
+img = r.GetOutput()
+print(r.GetErrorCode(), *img.GetDimensions(), img.GetNumberOfCells(),
+      img.GetCellData().GetArray("density").GetNumberOfTuples(),
+      img.GetPointData().GetArray("displacement").GetNumberOfComponents())
+"""
+
+
+def vtk_python():
+    """A Python with VTK's own reader (ParaView's), if one is installed
+    (Debian: python3-vtk9); None otherwise."""
+    for exe in (sys.executable, "/usr/bin/python3"):
+        if os.path.exists(exe) and subprocess.run([exe, "-c", "import vtk"],
+                                                  capture_output=True).returncode == 0:
+            return exe
+    return None
+
+
 class FeaCliTest(unittest.TestCase):
     @classmethod
     def setUpClass(cls):
@@ -193,6 +215,12 @@ class FeaCliTest(unittest.TestCase):
                    for i in range(0, len(u), 3))
         self.assertAlmostEqual(umax / d["max_displacement_mm"], 1.0, delta=1e-5)
         self.assertTrue(all(v >= 0 for v in arrays["von_mises_mpa"][1]))
+        exe = vtk_python()
+        if exe:  # VTK's reader, where one is installed
+            out = subprocess.run([exe, "-c", VTK_CHECK, vti], capture_output=True, text=True)
+            self.assertEqual(out.stdout.split(),
+                             [str(v) for v in (0, nx + 1, ny + 1, nz + 1, cells, cells, 3)],
+                             out.stderr)
         # the clamped end is the most stressed: sigma = F L c / I at the root
         self.assertGreater(max(arrays["von_mises_mpa"][1]), 0.5 * F * L * (H / 2) / (B * H ** 3 / 12))
 
