@@ -162,6 +162,7 @@ struct engine_fea_params {
 	int supersample; /* fea_supersample: mesh samples per voxel edge */
 	double tol;      /* tol: relative residual of the solve */
 	int max_iter;    /* fea_max_iter: CG iterations */
+	double penal;    /* fea_penal: stiffness exponent p of rho^p */
 	int levels;      /* fea_levels: multigrid levels, 0 = automatic */
 };
 
