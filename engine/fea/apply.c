@@ -54,19 +54,27 @@ static void applyc_layer(void *vctx, size_t kk, int tid)
 	for (int j = 0; j <= NY; j++)
 		for (int i = 0; i <= NX; i++) {
 			size_t n = fea_node(l, i, j, k);
-			const float *st = l->st + n * 27 * 9;
 			double acc[3] = {0, 0, 0};
 			unsigned mask = 0;
 
 			for (int dz = k > 0 ? -1 : 0; dz <= (k < NZ ? 1 : 0); dz++)
 				for (int dy = j > 0 ? -1 : 0; dy <= (j < NY ? 1 : 0); dy++)
 					for (int dx = i > 0 ? -1 : 0; dx <= (i < NX ? 1 : 0); dx++) {
-						const float *bl =
-							st + ((dz + 1) * 9 + (dy + 1) * 3 + dx + 1) * 9;
-						const double *xm = x + 3 * fea_node(l, i + dx, j + dy, k + dz);
-						for (int r = 0; r < 3; r++)
-							acc[r] += bl[3 * r] * xm[0] + bl[3 * r + 1] * xm[1] +
-								  bl[3 * r + 2] * xm[2];
+						int d = (dz + 1) * 9 + (dy + 1) * 3 + dx + 1;
+						size_t m = fea_node(l, i + dx, j + dy, k + dz);
+						const double *xm = x + 3 * m;
+						if (d >= 13) {
+							const float *bl = l->st + (n * FEA_ST + d - 13) * 9;
+							for (int r = 0; r < 3; r++)
+								acc[r] += bl[3 * r] * xm[0] +
+									  bl[3 * r + 1] * xm[1] +
+									  bl[3 * r + 2] * xm[2];
+						} else {
+							const float *bl = l->st + (m * FEA_ST + 13 - d) * 9;
+							for (int r = 0; r < 3; r++)
+								acc[r] += bl[r] * xm[0] + bl[3 + r] * xm[1] +
+									  bl[6 + r] * xm[2];
+						}
 					}
 			for (int a = 0; a < 3; a++)
 				if (!(l->invd[3 * n + a] > 0))

@@ -18,6 +18,7 @@
 #include "engine/fea/fea.h"
 
 #define FEA_MAX_LEVELS 12
+#define FEA_ST 14 /* stored 3 x 3 blocks per node, levels >= 1 */
 
 /* mask0 bits of a finest-level node: bits 0..2 the fixed axes
  * (FEA_AXIS_*); an absent node (touching no present element) or a held
@@ -29,9 +30,11 @@
 
 /* One multigrid level.  Level 0 is matrix-free (element weights w0 and
  * K0) in its own layout (below); levels >= 1 hold 27-point stencils of
- * 3 x 3 blocks, unknowns interleaved (3 n + axis):
- * st[(n * 27 + d) * 9 + 3 r + c], d = (dz + 1) * 9 + (dy + 1) * 3 + dx + 1,
- * the coupling of unknown (n, r) to (n + d, c).  Unknowns whose diagonal
+ * 3 x 3 blocks, unknowns interleaved (3 n + axis).  Block d of node n,
+ * d = (dz + 1) * 9 + (dy + 1) * 3 + dx + 1, couples unknown (n, r) to
+ * (n + d, c); the operator is symmetric, so only the self block and the
+ * 13 forward ones (d >= 13) are stored, st[(n * FEA_ST + d - 13) * 9 +
+ * 3 r + c], and block d < 13 of n is block 26 - d of n + d, transposed.  Unknowns whose diagonal
  * is 0 (no free fine unknown under them) have all-zero rows and columns;
  * they stay 0 in every vector (their Jacobi weight is 0) and get an
  * identity row in the coarsest factor. */
@@ -63,7 +66,7 @@ struct fea_k0 {
 	float kf[8][8][9];      /* K0 rows of the node (corner 7 - p) x columns of b */
 	double kd[8][8][9];
 	int snz[3];             /* the solid stencil (all 8 weights 1): nonzeros per row */
-	unsigned char sidx[3][81]; /* their 3 d + c */
+	ptrdiff_t soff[3][81];  /* their x offsets: axis * cs + xoff[d] */
 	float sf[3][81];
 	double sd[3][81];
 };
