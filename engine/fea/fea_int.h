@@ -69,6 +69,7 @@ struct fea_k0 {
 	ptrdiff_t soff[3][81];  /* their x offsets: axis * cs + xoff[d] */
 	float sf[3][81];
 	double sd[3][81];
+	double gsolid;          /* Gershgorin ratio sum_j |a_ij| / a_ii of a solid node */
 };
 
 /* Level 0 layout: structure of arrays, one array of cs entries per axis,
@@ -93,6 +94,7 @@ struct fea_solver {
 	double kdiag;            /* K0's diagonal entry (all 24 are equal) */
 	double mc[8][24 * 24];   /* P_c^T K0 P_c of the 8 children (mg.c) */
 	double pc[8][24 * 24];   /* P_c */
+	double msum[24 * 24];    /* sum of the 8 M_c: a solid unmasked parent */
 	struct fea_k0 k0;
 
 	/* levels; level 0 padded to a multiple of 2^(nlev - 1) elements */
@@ -147,7 +149,9 @@ int fea_select(struct fea_solver *s, const struct fea_grid *g, const struct fea_
  * masked unknowns (all vectors of the solver are), and so is y. */
 enum fea_op { FEA_OP_AX = 0, FEA_OP_RES, FEA_OP_JAC };
 
-/* kernel0.c: level 0.  fea_k0_init fills s->k0 from s->ke. */
+/* kernel0.c: level 0.  fea_k0_init fills s->k0 from s->ke.
+ * fea_have_avx2: the CPU runs the AVX2+FMA builds of the kernels. */
+int fea_have_avx2(void);
 void fea_k0_init(struct fea_solver *s);
 void fea_apply0f(struct fea_solver *s, enum fea_op op, const float *x, const float *b, float *y);
 void fea_apply0d(struct fea_solver *s, const double *x, double *y); /* y = A x */

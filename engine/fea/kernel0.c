@@ -48,6 +48,11 @@ void fea_k0_init(struct fea_solver *s)
 				}
 		}
 	}
+	K->gsolid = 0;
+	for (int d = 0; d < 27; d++)
+		for (int c = 0; c < 3; c++)
+			K->gsolid += fabs(st[d][c]);
+	K->gsolid /= st[13][0];
 	/* the solid stencil's nonzeros (zeros by the cube's symmetries) */
 	for (int r = 0; r < 3; r++)
 		for (int d = 0; d < 27; d++)
@@ -228,7 +233,7 @@ static void plane_d_base(void *ctx, size_t k, int tid)
 	plane_d(ctx, (int)k);
 }
 
-static int have_avx2(void)
+int fea_have_avx2(void)
 {
 	__builtin_cpu_init();
 	return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
@@ -238,14 +243,14 @@ void fea_apply0f(struct fea_solver *s, enum fea_op op, const float *x, const flo
 {
 	struct k0_ctx c = {s, op, x, b, s->invd0, y};
 
-	fea_par(s, (size_t)s->lv[0].nz + 1, 1, have_avx2() ? plane_f_avx2 : plane_f_base, &c);
+	fea_par(s, (size_t)s->lv[0].nz + 1, 1, fea_have_avx2() ? plane_f_avx2 : plane_f_base, &c);
 }
 
 void fea_apply0d(struct fea_solver *s, const double *x, double *y)
 {
 	struct k0_ctx c = {s, FEA_OP_AX, x, NULL, NULL, y};
 
-	fea_par(s, (size_t)s->lv[0].nz + 1, 1, have_avx2() ? plane_d_avx2 : plane_d_base, &c);
+	fea_par(s, (size_t)s->lv[0].nz + 1, 1, fea_have_avx2() ? plane_d_avx2 : plane_d_base, &c);
 }
 
 /* b0 = (float) r, x0 = invd0 b0, over one plane of all three axes. */

@@ -41,8 +41,26 @@ static void level1_layer(void *vctx, size_t kk, int tid)
 		return;
 	for (int J = 0; J < l->ny; J++)
 		for (int I = 0; I < l->nx; I++) {
-			int any = 0;
+			int any = 0, solid = 1;
+			float w8[8];
 
+			for (int ch = 0; ch < 8 && solid; ch++) {
+				int fi = 2 * I + (ch & 1), fj = 2 * J + ((ch >> 1) & 1),
+				    fk = 2 * K + ((ch >> 2) & 1);
+				w8[ch] = s->w0[fea_n0(s, fi, fj, fk)];
+				solid = w8[ch] > 0 && w8[ch] == w8[0];
+			}
+			for (int ln = 0; ln < 27 && solid; ln++)
+				solid = !(s->mask0[fea_n0(s, 2 * I + ln % 3, 2 * J + (ln / 3) % 3,
+							  2 * K + ln / 9)] &
+					  FEA_NODE_ALL);
+			if (solid) {
+				/* equal weights, nothing fixed: w (sum of the M_c) */
+				for (int x = 0; x < 24 * 24; x++)
+					a[x] = w8[0] * s->msum[x];
+				any = 1;
+				goto scatter;
+			}
 			memset(a, 0, sizeof a);
 			for (int ch = 0; ch < 8; ch++) {
 				int fi = 2 * I + (ch & 1), fj = 2 * J + ((ch >> 1) & 1),
@@ -88,6 +106,7 @@ static void level1_layer(void *vctx, size_t kk, int tid)
 			}
 			if (!any)
 				continue;
+		scatter:
 			for (int L = 0; L < 8; L++) {
 				int lx = L & 1, ly = (L >> 1) & 1, lz = (L >> 2) & 1;
 				float *st = l->st + fea_node(l, I + lx, J + ly, K + lz) * FEA_ST * 9;
@@ -223,6 +242,21 @@ static void diag_layer(void *vctx, size_t kk, int tid)
 				memset(blk, 0, sizeof blk);
 				for (int d = 0; d < 27; d++)
 					nmask[d] = s->mask0[n0 + s->k0.xoff[d]] & FEA_NODE_ALL;
+				int uniform = !mask;
+				double w0v = s->w0[n0 + s->k0.eoff[0]];
+				for (int d = 0; d < 27 && uniform; d++)
+					uniform = !nmask[d];
+				for (int p = 1; p < 8 && uniform; p++)
+					uniform = s->w0[n0 + s->k0.eoff[p]] == w0v;
+				if (uniform && w0v > 0) {
+					/* a solid (or void) interior node: known ratio */
+					double dg = 8 * w0v * s->kdiag, g = s->k0.gsolid;
+					float v = (float)((w * g < FEA_JACOBI_BOUND ? w : FEA_JACOBI_BOUND / g) /
+							  dg);
+					for (int a = 0; a < 3; a++)
+						s->invd0[a * s->cs + n0] = v;
+					continue;
+				}
 				if (mask != FEA_NODE_ALL)
 					for (int p = 0; p < 8; p++) {
 						double we = s->w0[n0 + s->k0.eoff[p]];
