@@ -42,32 +42,76 @@ static inline void put3(const struct apply_ctx *c, size_t n, unsigned mask, cons
 	}
 }
 
-/* Stencil level, one node layer k. */
-static void applyc_layer(void *vctx, size_t kk, int tid)
+/* y(3) += the 27 blocks of node n times x, n inside the grid (no
+ * neighbour outside): forward blocks read row-wise from n's storage,
+ * backward ones column-wise from the neighbour's. */
+static inline __attribute__((always_inline)) void stencil_inner(const struct fea_level *l, const ptrdiff_t off[27], size_t n,
+				 const double *x, double acc[3])
 {
-	const struct apply_ctx *c = vctx;
-	const struct fea_level *l = c->l;
-	const int NX = l->nx, NY = l->ny, NZ = l->nz, k = (int)kk;
-	const double *x = c->x;
+	const float *sf = l->st + n * FEA_ST * 9;
+	double a0 = 0, a1 = 0, a2 = 0, b0 = 0, b1 = 0, b2 = 0;
 
-	(void)tid;
+	for (int f = 0; f < 14; f++) {
+		const float *bl = sf + 9 * f;
+		const double *xm = x + 3 * ((ptrdiff_t)n + off[13 + f]);
+		a0 += bl[0] * xm[0] + bl[1] * xm[1] + bl[2] * xm[2];
+		a1 += bl[3] * xm[0] + bl[4] * xm[1] + bl[5] * xm[2];
+		a2 += bl[6] * xm[0] + bl[7] * xm[1] + bl[8] * xm[2];
+	}
+	for (int f = 1; f < 14; f++) {
+		ptrdiff_t m = (ptrdiff_t)n - off[13 + f];
+		const float *bl = l->st + ((size_t)m * FEA_ST + (size_t)f) * 9;
+		const double *xm = x + 3 * m;
+		b0 += bl[0] * xm[0] + bl[3] * xm[1] + bl[6] * xm[2];
+		b1 += bl[1] * xm[0] + bl[4] * xm[1] + bl[7] * xm[2];
+		b2 += bl[2] * xm[0] + bl[5] * xm[1] + bl[8] * xm[2];
+	}
+	acc[0] = a0 + b0;
+	acc[1] = a1 + b1;
+	acc[2] = a2 + b2;
+}
+
+/* Stencil level, one node layer k. */
+static inline __attribute__((always_inline)) void applyc_body(const struct apply_ctx *c, int k)
+{
+	const struct fea_level *l = c->l;
+	const int NX = l->nx, NY = l->ny, NZ = l->nz;
+	const double *x = c->x;
+	ptrdiff_t off[27];
+
+	for (int d = 0; d < 27; d++)
+		off[d] = (d % 3 - 1) + ((d / 3) % 3 - 1) * (ptrdiff_t)(NX + 1) +
+			 (d / 9 - 1) * (ptrdiff_t)(NX + 1) * (NY + 1);
 	for (int j = 0; j <= NY; j++)
 		for (int i = 0; i <= NX; i++) {
 			size_t n = fea_node(l, i, j, k);
-			const float *st = l->st + n * 27 * 9;
 			double acc[3] = {0, 0, 0};
 			unsigned mask = 0;
 
+			if (i > 0 && j > 0 && k > 0 && i < NX && j < NY && k < NZ) {
+				stencil_inner(l, off, n, x, acc);
+				goto put;
+			}
 			for (int dz = k > 0 ? -1 : 0; dz <= (k < NZ ? 1 : 0); dz++)
 				for (int dy = j > 0 ? -1 : 0; dy <= (j < NY ? 1 : 0); dy++)
 					for (int dx = i > 0 ? -1 : 0; dx <= (i < NX ? 1 : 0); dx++) {
-						const float *bl =
-							st + ((dz + 1) * 9 + (dy + 1) * 3 + dx + 1) * 9;
-						const double *xm = x + 3 * fea_node(l, i + dx, j + dy, k + dz);
-						for (int r = 0; r < 3; r++)
-							acc[r] += bl[3 * r] * xm[0] + bl[3 * r + 1] * xm[1] +
-								  bl[3 * r + 2] * xm[2];
+						int d = (dz + 1) * 9 + (dy + 1) * 3 + dx + 1;
+						size_t m = fea_node(l, i + dx, j + dy, k + dz);
+						const double *xm = x + 3 * m;
+						if (d >= 13) {
+							const float *bl = l->st + (n * FEA_ST + d - 13) * 9;
+							for (int r = 0; r < 3; r++)
+								acc[r] += bl[3 * r] * xm[0] +
+									  bl[3 * r + 1] * xm[1] +
+									  bl[3 * r + 2] * xm[2];
+						} else {
+							const float *bl = l->st + (m * FEA_ST + 13 - d) * 9;
+							for (int r = 0; r < 3; r++)
+								acc[r] += bl[r] * xm[0] + bl[3 + r] * xm[1] +
+									  bl[6 + r] * xm[2];
+						}
 					}
+		put:
 			for (int a = 0; a < 3; a++)
 				if (!(l->invd[3 * n + a] > 0))
 					mask |= 1u << a; /* zero-diagonal unknown: stays 0 */
@@ -75,12 +119,25 @@ static void applyc_layer(void *vctx, size_t kk, int tid)
 		}
 }
 
+__attribute__((target("avx2,fma"), optimize("fp-contract=fast"))) static void
+applyc_layer_avx2(void *vctx, size_t k, int tid)
+{
+	(void)tid;
+	applyc_body(vctx, (int)k);
+}
+
+static void applyc_layer(void *vctx, size_t k, int tid)
+{
+	(void)tid;
+	applyc_body(vctx, (int)k);
+}
+
 void fea_apply(struct fea_solver *s, int level, enum fea_op op, const double *x,
 	       const double *b, double *y)
 {
 	struct apply_ctx c = {s, &s->lv[level], op, x, b, y};
 
-	fea_par(s, (size_t)c.l->nz + 1, 1, applyc_layer, &c);
+	fea_par(s, (size_t)c.l->nz + 1, 1, fea_have_avx2() ? applyc_layer_avx2 : applyc_layer, &c);
 }
 
 struct grid_ctx {

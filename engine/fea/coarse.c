@@ -124,18 +124,22 @@ int fea_coarse_factor(struct fea_solver *s, struct err *e)
 		for (int k = 0; k <= l->nz; k++)
 			for (int j = 0; j <= l->ny; j++)
 				for (int i = 0; i <= l->nx; i++) {
-					const float *st = l->st + fea_node(l, i, j, k) * 27 * 9;
+					const float *st = l->st + fea_node(l, i, j, k) * FEA_ST * 9;
 					int row = 3 * band_node(c, l, i, j, k);
-					for (int d = 0; d < 27; d++) {
+					for (int d = 13; d < 27; d++) {
 						int ii = i + d % 3 - 1, jj = j + (d / 3) % 3 - 1,
 						    kk = k + d / 9 - 1;
-						if (ii < 0 || jj < 0 || kk < 0 || ii > l->nx || jj > l->ny ||
-						    kk > l->nz)
+						if (ii < 0 || jj < 0 || ii > l->nx || jj > l->ny || kk > l->nz)
 							continue;
 						int col = 3 * band_node(c, l, ii, jj, kk);
+						const float *bl = st + (d - 13) * 9;
 						for (int r = 0; r < 3; r++)
-							for (int cc = 0; cc < 3; cc++)
-								band_add(c, row + r, col + cc, st[d * 9 + 3 * r + cc]);
+							for (int cc = 0; cc < 3; cc++) {
+								band_add(c, row + r, col + cc, bl[3 * r + cc]);
+								if (d != 13)
+									band_add(c, col + cc, row + r,
+										 bl[3 * r + cc]);
+							}
 					}
 				}
 	}

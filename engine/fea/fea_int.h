@@ -18,6 +18,7 @@
 #include "engine/fea/fea.h"
 
 #define FEA_MAX_LEVELS 12
+#define FEA_ST 14 /* stored 3 x 3 blocks per node, levels >= 1 */
 
 /* mask0 bits of a finest-level node: bits 0..2 the fixed axes
  * (FEA_AXIS_*); an absent node (touching no present element) or a held
@@ -29,9 +30,11 @@
 
 /* One multigrid level.  Level 0 is matrix-free (element weights w0 and
  * K0) in its own layout (below); levels >= 1 hold 27-point stencils of
- * 3 x 3 blocks, unknowns interleaved (3 n + axis):
- * st[(n * 27 + d) * 9 + 3 r + c], d = (dz + 1) * 9 + (dy + 1) * 3 + dx + 1,
- * the coupling of unknown (n, r) to (n + d, c).  Unknowns whose diagonal
+ * 3 x 3 blocks, unknowns interleaved (3 n + axis).  Block d of node n,
+ * d = (dz + 1) * 9 + (dy + 1) * 3 + dx + 1, couples unknown (n, r) to
+ * (n + d, c); the operator is symmetric, so only the self block and the
+ * 13 forward ones (d >= 13) are stored, st[(n * FEA_ST + d - 13) * 9 +
+ * 3 r + c], and block d < 13 of n is block 26 - d of n + d, transposed.  Unknowns whose diagonal
  * is 0 (no free fine unknown under them) have all-zero rows and columns;
  * they stay 0 in every vector (their Jacobi weight is 0) and get an
  * identity row in the coarsest factor. */
@@ -63,9 +66,10 @@ struct fea_k0 {
 	float kf[8][8][9];      /* K0 rows of the node (corner 7 - p) x columns of b */
 	double kd[8][8][9];
 	int snz[3];             /* the solid stencil (all 8 weights 1): nonzeros per row */
-	unsigned char sidx[3][81]; /* their 3 d + c */
+	ptrdiff_t soff[3][81];  /* their x offsets: axis * cs + xoff[d] */
 	float sf[3][81];
 	double sd[3][81];
+	double gsolid;          /* Gershgorin ratio sum_j |a_ij| / a_ii of a solid node */
 };
 
 /* Level 0 layout: structure of arrays, one array of cs entries per axis,
@@ -90,6 +94,7 @@ struct fea_solver {
 	double kdiag;            /* K0's diagonal entry (all 24 are equal) */
 	double mc[8][24 * 24];   /* P_c^T K0 P_c of the 8 children (mg.c) */
 	double pc[8][24 * 24];   /* P_c */
+	double msum[24 * 24];    /* sum of the 8 M_c: a solid unmasked parent */
 	struct fea_k0 k0;
 
 	/* levels; level 0 padded to a multiple of 2^(nlev - 1) elements */
@@ -144,7 +149,9 @@ int fea_select(struct fea_solver *s, const struct fea_grid *g, const struct fea_
  * masked unknowns (all vectors of the solver are), and so is y. */
 enum fea_op { FEA_OP_AX = 0, FEA_OP_RES, FEA_OP_JAC };
 
-/* kernel0.c: level 0.  fea_k0_init fills s->k0 from s->ke. */
+/* kernel0.c: level 0.  fea_k0_init fills s->k0 from s->ke.
+ * fea_have_avx2: the CPU runs the AVX2+FMA builds of the kernels. */
+int fea_have_avx2(void);
 void fea_k0_init(struct fea_solver *s);
 void fea_apply0f(struct fea_solver *s, enum fea_op op, const float *x, const float *b, float *y);
 void fea_apply0d(struct fea_solver *s, const double *x, double *y); /* y = A x */

@@ -41,8 +41,26 @@ static void level1_layer(void *vctx, size_t kk, int tid)
 		return;
 	for (int J = 0; J < l->ny; J++)
 		for (int I = 0; I < l->nx; I++) {
-			int any = 0;
+			int any = 0, solid = 1;
+			float w8[8];
 
+			for (int ch = 0; ch < 8 && solid; ch++) {
+				int fi = 2 * I + (ch & 1), fj = 2 * J + ((ch >> 1) & 1),
+				    fk = 2 * K + ((ch >> 2) & 1);
+				w8[ch] = s->w0[fea_n0(s, fi, fj, fk)];
+				solid = w8[ch] > 0 && w8[ch] == w8[0];
+			}
+			for (int ln = 0; ln < 27 && solid; ln++)
+				solid = !(s->mask0[fea_n0(s, 2 * I + ln % 3, 2 * J + (ln / 3) % 3,
+							  2 * K + ln / 9)] &
+					  FEA_NODE_ALL);
+			if (solid) {
+				/* equal weights, nothing fixed: w (sum of the M_c) */
+				for (int x = 0; x < 24 * 24; x++)
+					a[x] = w8[0] * s->msum[x];
+				any = 1;
+				goto scatter;
+			}
 			memset(a, 0, sizeof a);
 			for (int ch = 0; ch < 8; ch++) {
 				int fi = 2 * I + (ch & 1), fj = 2 * J + ((ch >> 1) & 1),
@@ -88,13 +106,16 @@ static void level1_layer(void *vctx, size_t kk, int tid)
 			}
 			if (!any)
 				continue;
+		scatter:
 			for (int L = 0; L < 8; L++) {
 				int lx = L & 1, ly = (L >> 1) & 1, lz = (L >> 2) & 1;
-				float *st = l->st + fea_node(l, I + lx, J + ly, K + lz) * 27 * 9;
+				float *st = l->st + fea_node(l, I + lx, J + ly, K + lz) * FEA_ST * 9;
 				for (int M = 0; M < 8; M++) {
 					int d = ((M >> 2) - lz + 1) * 9 + (((M >> 1) & 1) - ly + 1) * 3 +
 						((M & 1) - lx + 1);
-					float *bl = st + d * 9;
+					if (d < 13)
+						continue; /* the neighbour's forward block */
+					float *bl = st + (d - 13) * 9;
 					for (int r = 0; r < 3; r++)
 						for (int cc = 0; cc < 3; cc++)
 							bl[3 * r + cc] +=
@@ -128,14 +149,14 @@ static void galerkin_layer(void *vctx, size_t kk, int tid)
 						    fk > f->nz)
 							continue;
 						double pw = (ox ? 0.5 : 1) * (oy ? 0.5 : 1) * (oz ? 0.5 : 1);
-						const float *st = f->st + fea_node(f, fi, fj, fk) * 27 * 9;
+						size_t fn = fea_node(f, fi, fj, fk);
 						for (int d = 0; d < 27; d++) {
 							int dx = d % 3 - 1, dy = (d / 3) % 3 - 1, dz = d / 9 - 1;
 							int j3[3] = {fi + dx, fj + dy, fk + dz};
 							const int lim[3] = {f->nx, f->ny, f->nz};
 							int Jc[3][2], nj[3];
 							double qw[3];
-							const float *bl = st + d * 9;
+							float bl[9];
 							int outside = 0;
 							for (int ax = 0; ax < 3; ax++) {
 								if (j3[ax] < 0 || j3[ax] > lim[ax])
@@ -153,6 +174,19 @@ static void galerkin_layer(void *vctx, size_t kk, int tid)
 							}
 							if (outside)
 								continue;
+							if (d >= 13) {
+								memcpy(bl, f->st + (fn * FEA_ST + d - 13) * 9,
+								       sizeof bl);
+							} else {
+								const float *tb =
+									f->st + (fea_node(f, j3[0], j3[1], j3[2]) *
+										 FEA_ST +
+									 13 - d) *
+										9;
+								for (int r = 0; r < 3; r++)
+									for (int cc = 0; cc < 3; cc++)
+										bl[3 * r + cc] = tb[3 * cc + r];
+							}
 							double wq = pw * qw[0] * qw[1] * qw[2];
 							for (int cz = 0; cz < nj[2]; cz++)
 								for (int cy = 0; cy < nj[1]; cy++)
@@ -160,15 +194,17 @@ static void galerkin_layer(void *vctx, size_t kk, int tid)
 										int D = (Jc[2][cz] - K + 1) * 9 +
 											(Jc[1][cy] - J + 1) * 3 +
 											(Jc[0][cx] - I + 1);
+										if (D < 13)
+											continue;
 										double *ad = acc + D * 9;
 										for (int x = 0; x < 9; x++)
 											ad[x] += wq * bl[x];
 									}
 						}
 					}
-			float *out = c->st + fea_node(c, I, J, K) * 27 * 9;
-			for (int x = 0; x < 27 * 9; x++)
-				out[x] = (float)acc[x];
+			float *out = c->st + fea_node(c, I, J, K) * FEA_ST * 9;
+			for (int x = 0; x < FEA_ST * 9; x++)
+				out[x] = (float)acc[13 * 9 + x];
 		}
 }
 
@@ -206,6 +242,21 @@ static void diag_layer(void *vctx, size_t kk, int tid)
 				memset(blk, 0, sizeof blk);
 				for (int d = 0; d < 27; d++)
 					nmask[d] = s->mask0[n0 + s->k0.xoff[d]] & FEA_NODE_ALL;
+				int uniform = !mask;
+				double w0v = s->w0[n0 + s->k0.eoff[0]];
+				for (int d = 0; d < 27 && uniform; d++)
+					uniform = !nmask[d];
+				for (int p = 1; p < 8 && uniform; p++)
+					uniform = s->w0[n0 + s->k0.eoff[p]] == w0v;
+				if (uniform && w0v > 0) {
+					/* a solid (or void) interior node: known ratio */
+					double dg = 8 * w0v * s->kdiag, g = s->k0.gsolid;
+					float v = (float)((w * g < FEA_JACOBI_BOUND ? w : FEA_JACOBI_BOUND / g) /
+							  dg);
+					for (int a = 0; a < 3; a++)
+						s->invd0[a * s->cs + n0] = v;
+					continue;
+				}
 				if (mask != FEA_NODE_ALL)
 					for (int p = 0; p < 8; p++) {
 						double we = s->w0[n0 + s->k0.eoff[p]];
@@ -220,11 +271,25 @@ static void diag_layer(void *vctx, size_t kk, int tid)
 					}
 			} else {
 				n = fea_node(l, i, j, k);
-				const float *st = l->st + n * 27 * 9;
-				for (int x = 0; x < 27 * 9; x++)
-					blk[x] = st[x];
-				for (int d = 0; d < 27; d++)
+				memset(blk, 0, sizeof blk);
+				for (int d = 0; d < 27; d++) {
+					int ii = i + d % 3 - 1, jj = j + (d / 3) % 3 - 1, kq = k + d / 9 - 1;
 					nmask[d] = 0;
+					if (ii < 0 || jj < 0 || kq < 0 || ii > l->nx || jj > l->ny ||
+					    kq > l->nz)
+						continue;
+					if (d >= 13) {
+						const float *st = l->st + (n * FEA_ST + d - 13) * 9;
+						for (int x = 0; x < 9; x++)
+							blk[d * 9 + x] = st[x];
+					} else {
+						const float *st =
+							l->st + (fea_node(l, ii, jj, kq) * FEA_ST + 13 - d) * 9;
+						for (int r = 0; r < 3; r++)
+							for (int cc = 0; cc < 3; cc++)
+								blk[d * 9 + 3 * r + cc] = st[3 * cc + r];
+					}
+				}
 			}
 			for (int a = 0; a < 3; a++) {
 				double dg = blk[13 * 9 + 4 * a], g = 0, v = 0;
@@ -249,7 +314,7 @@ int fea_mg_build(struct fea_solver *s, struct err *e)
 	for (int lev = 0; lev < s->nlev; lev++) {
 		struct fea_level *l = &s->lv[lev];
 		if (lev == 1) {
-			memset(l->st, 0, l->nn * 27 * 9 * sizeof *l->st);
+			memset(l->st, 0, l->nn * FEA_ST * 9 * sizeof *l->st);
 			for (int parity = 0; parity < 2; parity++) {
 				struct l1_ctx c = {s, parity};
 				fea_par(s, (size_t)(l->nz + 1) / 2, 1, level1_layer, &c);

@@ -278,7 +278,7 @@ int fea_solver_new(const struct fea_grid *g, const struct fea_loads *l, const st
 		lv->x = alloc_count(s, v, sizeof(double));
 		lv->t = alloc_count(s, v, sizeof(double));
 		lv->b = alloc_count(s, v, sizeof(double));
-		lv->st = alloc_count(s, lv->nn * 27 * 9, sizeof(float));
+		lv->st = alloc_count(s, lv->nn * FEA_ST * 9, sizeof(float));
 		if (!lv->invd || !lv->x || !lv->t || !lv->b || !lv->st)
 			goto nomem;
 	}
@@ -328,6 +328,7 @@ int fea_solver_new(const struct fea_grid *g, const struct fea_loads *l, const st
 				for (int x = 0; x < 24; x++)
 					sum += s->pc[c][x * 24 + r] * t[x * 24 + cc];
 				s->mc[c][r * 24 + cc] = sum;
+				s->msum[r * 24 + cc] += sum;
 			}
 	}
 	if ((rc = fill_weights(s, g->rho, 0, e)))
