@@ -528,10 +528,11 @@ int engine_fea(const struct job_spec *js, const struct engine_fea_params *p,
 		if (rc)
 			goto out;
 	}
-	if (record(m, &r, &g, &loads, vm, se) || metrics_str(m, "input", archive ? "archive" : "mesh") ||
+	if (record(m, &r, &g, &loads, vm, se) ||
+	    metrics_str(m, "input", archive ? "archive" : "mesh") ||
 	    (archive && metrics_int(m, "archive_layers", layers)) ||
 	    (!archive && metrics_int(m, "supersample", p->supersample)) ||
-	    metrics_str(m, "force_spread", spread) ||
+	    metrics_str(m, "force_spread", spread) || metrics_num(m, "penal", p->penal) ||
 	    metrics_str(m, "printer", js->printer.name) || metrics_num(m, "tol", p->tol) ||
 	    metrics_int(m, "threads", threads) ||
 	    metrics_num(m, "seconds.model", t_model - t0) ||
