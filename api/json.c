@@ -269,8 +269,24 @@ int api_params_apply(struct job_spec *js, const json_t *params, int allow_paths,
 		return ERR_FIELD(e, "params", "params must be a JSON object");
 	json_object_foreach((json_t *)params, key, v) {
 		const struct param_desc *d = job_spec_param(js, key);
+		if (!strcmp(key, "loads") && json_is_object(v)) {
+			/* the load case: checked (errors name its JSON path) before
+			 * the key is looked up, so a malformed one is reported as
+			 * such for every engine */
+			char *loads = NULL;
+			rc = api_loads_text(v, &loads, e);
+			if (!rc)
+				rc = d ? job_spec_set(js, key, loads, e) : job_spec_set(js, key, "", e);
+			mem_free(loads);
+			if (rc)
+				return rc;
+			continue;
+		}
 		if (!d)
 			return job_spec_set(js, key, "", e); /* the unknown-key message */
+		if (!strcmp(key, "loads")) /* one format: the object (docs/fea_cli.md) */
+			return ERR_FIELD(e, "loads", "expected a load-case object {\"material\", "
+					 "\"fixed\", \"forces\"} (docs/fea_cli.md)");
 		if ((d->flags & PARAM_F_PATH) && !allow_paths)
 			return ERR_FIELD(e, key, "%s names a local file and is only accepted by "
 					 "the command line", key);

@@ -155,4 +155,44 @@ int engine_analyze(const struct job_spec *js, struct metrics *m, struct err *e);
  * uniform scale, so the extent decides the fit exactly. */
 int engine_check_fit_size(const struct job_spec *js, struct vec3 size, struct err *e);
 
+/* `infilld fea` (docs/fea_cli.md): the stiffness of a part under a load
+ * case.  The keys beyond the job's placement (engine_fea_param_table). */
+struct engine_fea_params {
+	double voxel_mm; /* fea_voxel_mm: voxel edge, 0 = automatic */
+	int supersample; /* fea_supersample: mesh samples per voxel edge */
+	double tol;      /* tol: relative residual of the solve */
+	int max_iter;    /* fea_max_iter: CG iterations */
+	double penal;    /* fea_penal: stiffness exponent p of rho^p */
+	int levels;      /* fea_levels: multigrid levels, 0 = automatic */
+};
+
+/* Voxels (grid cells, present or not) an FEA model may have. */
+#define ENGINE_FEA_MAX_ELEMENTS 2000000
+
+const struct param_table *engine_fea_param_table(void);
+void engine_fea_defaults(struct engine_fea_params *p);
+/* KEY=VALUE for `infilld fea`: the placement keys units, scale,
+ * height_mm, up (into js->common), printer (a profile name: its kind
+ * chooses the default material, resin or PLA) and the fea table's keys.
+ * ERR_PARAM naming the key, listing the accepted ones when unknown. */
+int engine_fea_set(struct job_spec *js, struct engine_fea_params *p, const char *key,
+		   const char *value, struct err *e);
+
+/* Analyse js->input_path: a layer archive infilld wrote (SL1, SL1S, zip
+ * stack; recognised by its zip signature), voxel density = the mean
+ * material of its pixels and layers, or a mesh read, repaired and placed
+ * as engine_run() places it, then voxelised.  Solves the load case
+ * loads_text (the FEA engine's text form, api_loads_text() makes it from
+ * JSON; NULL or "" = the default case) with the material of the load case,
+ * else resin for a resin printer or an archive and PLA for an FDM
+ * printer.  Records the results into m (compliance_nmm, ...: the list is
+ * in docs/fea_cli.md) and, when vtk_path is not NULL, writes the model and
+ * solution there (VTK ImageData).  Errors: one line; ERR_PARAM field
+ * "loads" (a box without material, a force on a fixed node, no
+ * constraint), ERR_GEOMETRY (not held against rigid motion), ERR_LIMIT
+ * field fea_voxel_mm (over ENGINE_FEA_MAX_ELEMENTS voxels), the reader's
+ * codes for unreadable input. */
+int engine_fea(const struct job_spec *js, const struct engine_fea_params *p,
+	       const char *loads_text, const char *vtk_path, struct metrics *m, struct err *e);
+
 #endif

@@ -14,6 +14,7 @@
 #include <unistd.h>
 
 #include "api/api_json.h"
+#include "engine/core/mem.h"
 #include "engine/engine.h"
 #include "service/commands.h"
 
@@ -21,6 +22,7 @@
 
 struct cli_opts {
 	const char *input, *output, *engine, *format, *printer, *params_file, *metrics_file;
+	const char *loads_file; /* --loads: JSON load case -> the engine key "loads" */
 	const char *sets[CLI_MAX_SETS];
 	int nsets, quiet, threads;
 };
@@ -76,6 +78,7 @@ static int parse_opts(const char *cmd, int argc, char **argv, struct cli_opts *o
 		else if (!strcmp(a, "--printer")) slot = &o->printer;
 		else if (!strcmp(a, "--params")) slot = &o->params_file;
 		else if (!strcmp(a, "--metrics")) slot = &o->metrics_file;
+		else if (!strcmp(a, "--loads")) slot = &o->loads_file;
 		else if (!strcmp(a, "--quiet") || !strcmp(a, "-q")) {
 			o->quiet = 1;
 			continue;
@@ -115,7 +118,8 @@ static int parse_opts(const char *cmd, int argc, char **argv, struct cli_opts *o
 	return 0;
 }
 
-/* --params FILE.json, then every --set in order (later wins). */
+/* --params FILE.json, --loads FILE.json, then every --set in order (later
+ * wins). */
 static int apply_params(struct job_spec *js, const struct cli_opts *o, struct err *e)
 {
 	int rc;
@@ -132,6 +136,15 @@ static int apply_params(struct job_spec *js, const struct cli_opts *o, struct er
 			err_prefix(e, "%s", o->params_file);
 			return rc;
 		}
+	}
+	if (o->loads_file) {
+		char *text = NULL;
+		rc = cmd_loads_read(o->loads_file, &text, e);
+		if (!rc)
+			rc = job_spec_set(js, "loads", text, e);
+		mem_free(text);
+		if (rc)
+			return rc;
 	}
 	for (int i = 0; i < o->nsets; i++) {
 		char key[128];
@@ -317,7 +330,7 @@ int cmd_analyze(int argc, char **argv)
 
 	if (parse_opts("analyze", argc, argv, &o))
 		return 2;
-	if (o.output || o.metrics_file || o.engine || o.format)
+	if (o.output || o.metrics_file || o.engine || o.format || o.loads_file)
 		return usage_error("analyze", "%s", "takes only MESH, --printer, --set and --params");
 	err_clear(&e);
 	metrics_init(&m);

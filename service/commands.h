@@ -8,11 +8,19 @@ int cmd_run(int argc, char **argv);     /* cli_run.c */
 int cmd_analyze(int argc, char **argv); /* cli_run.c */
 int cmd_engines(int argc, char **argv); /* cli_run.c */
 int cmd_verify(int argc, char **argv);  /* cli_verify.c */
+int cmd_fea(int argc, char **argv);     /* cli_fea.c */
 int cmd_serve(int argc, char **argv);     /* serve.c */
 int cmd_worker(int argc, char **argv);    /* worker.c (started by serve) */
 int cmd_sandbox(int argc, char **argv);   /* sandbox.c (started by serve) */
 int cmd_tenant(int argc, char **argv);    /* tenant_cmd.c */
 int cmd_admin_key(int argc, char **argv); /* tenant_cmd.c */
 int cmd_fsck(int argc, char **argv);      /* fsck_cmd.c */
+
+struct err;
+/* Read a JSON load-case file (docs/fea_cli.md) into the FEA engine's text
+ * form (api_loads_text); *text: caller frees with mem_free().  0, ERR_PARSE
+ * (bad JSON, with its line) or ERR_PARAM naming the JSON path, the file
+ * name in the message.  cli_fea.c; `infilld fea` and `infilld run`. */
+int cmd_loads_read(const char *path, char **text, struct err *e);
 
 #endif

@@ -17,12 +17,16 @@ static const struct command commands[] = {
 	{"run", cmd_run,
 	 "run MESH -o OUT [--engine NAME] [--format sl1|sl1s|zip|gcode|stl|obj]\n"
 	 "              [--printer NAME] [--set KEY=VALUE]... [--params FILE.json]\n"
-	 "              [--metrics FILE.json] [--threads N] [--quiet]"},
+	 "              [--loads FILE.json] [--metrics FILE.json] [--threads N] [--quiet]"},
 	{"analyze", cmd_analyze, "analyze MESH [--set KEY=VALUE]...   (JSON report on stdout)"},
 	{"engines", cmd_engines, "engines                              (JSON: engines and parameters)"},
 	{"verify", cmd_verify,
 	 "verify ARCHIVE [--alpha-deg A] [--layer-mm H] [--pixel-mm P] [--solid SOLID] [--strict]\n"
 	 "              (JSON: interior overhangs, floating islands, walls of an SL1/zip stack)"},
+	{"fea", cmd_fea,
+	 "fea INPUT [--loads FILE.json] [--printer NAME] [--set KEY=VALUE]... [--out-vtk FILE.vti]\n"
+	 "              [--threads N] [--quiet]   (JSON: stiffness of a mesh or a layer archive\n"
+	 "              under a load case; docs/fea_cli.md)"},
 	{"serve", cmd_serve, NULL}, /* usage from config_usage() */
 	{"tenant", cmd_tenant,
 	 "tenant add NAME [--max-jobs N] [--max-upload-mb N] [--quota-gb N] [--data DIR]\n"

@@ -20,6 +20,7 @@
 
 #include "engine/core/err.h"
 #include "engine/core/mem.h"
+#include "engine/output/printer/printer.h"
 
 #define VA_MAX_ENTRY (64u << 20)  /* largest entry read (bytes) */
 #define VA_MAX_TOTAL (4ull << 30) /* all layer PNGs together */
@@ -37,10 +38,46 @@ struct ini_vals {
 	double disp_w, disp_h;
 	double pix_x, pix_y;
 	int portrait;
+	int mirror_x, mirror_y;
+	int has_map;           /* manifest.json (plain zip) gave map */
+	struct raster_map map; /* its map_mm_to_px */
 };
 
+/* Print order of layer names: digit runs compare as numbers, so the zip
+ * writer's unpadded "2.png" comes before "10.png"; SL1's zero-padded
+ * names keep their plain order. */
 static int cmp_ent(const void *a, const void *b)
 {
+	const char *p = ((const struct png_ent *)a)->name, *q = ((const struct png_ent *)b)->name;
+
+	while (*p && *q) {
+		if (*p >= '0' && *p <= '9' && *q >= '0' && *q <= '9') {
+			const char *p0 = p, *q0 = q;
+			size_t lp, lq;
+			int c;
+			while (*p0 == '0' && p0[1] >= '0' && p0[1] <= '9')
+				p0++;
+			while (*q0 == '0' && q0[1] >= '0' && q0[1] <= '9')
+				q0++;
+			for (p = p0; *p >= '0' && *p <= '9'; p++)
+				;
+			for (q = q0; *q >= '0' && *q <= '9'; q++)
+				;
+			lp = (size_t)(p - p0);
+			lq = (size_t)(q - q0);
+			if (lp != lq)
+				return lp < lq ? -1 : 1;
+			if ((c = memcmp(p0, q0, lp)) != 0)
+				return c;
+			continue;
+		}
+		if (*p != *q)
+			return (unsigned char)*p < (unsigned char)*q ? -1 : 1;
+		p++;
+		q++;
+	}
+	if (*p || *q)
+		return *p ? 1 : -1;
 	return strcmp(((const struct png_ent *)a)->name, ((const struct png_ent *)b)->name);
 }
 
@@ -89,6 +126,61 @@ static void parse_ini(const char *text, struct ini_vals *iv)
 		iv->pix_y = atof(b);
 	if (ini_get(text, "display_orientation", b, sizeof b))
 		iv->portrait = strcmp(b, "portrait") == 0;
+	if (ini_get(text, "display_mirror_x", b, sizeof b))
+		iv->mirror_x = atoi(b) != 0;
+	if (ini_get(text, "display_mirror_y", b, sizeof b))
+		iv->mirror_y = atoi(b) != 0;
+}
+
+/* The numbers of `"key": [n, n, n]` (count of them) in our own
+ * manifest.json; 0 or -1 when absent or malformed. */
+static int manifest_numbers(const char *text, const char *key, double *out, int count)
+{
+	const char *p = strstr(text, key);
+	char *end;
+
+	if (!p)
+		return -1;
+	p += strlen(key);
+	while (*p == ' ' || *p == ':' || *p == '\t' || *p == '\n')
+		p++;
+	if (count > 1 && *p++ != '[')
+		return -1;
+	for (int i = 0; i < count; i++) {
+		while (*p == ' ' || *p == ',' || *p == '\n')
+			p++;
+		out[i] = strtod(p, &end);
+		if (end == p || !isfinite(out[i]))
+			return -1;
+		p = end;
+	}
+	return 0;
+}
+
+/* manifest.json of a plain zip stack (sl1_manifest_json): layer height
+ * and the printer-mm -> pixel map, which a zip carries in no ini. */
+static void parse_manifest(const char *text, struct ini_vals *iv)
+{
+	double lh, u[3], v[3];
+	const char *map;
+
+	/* keys with their colon: a string value (the job name) escapes its
+	 * quotes, so it cannot hold one */
+	if (!strstr(text, "\"infilld-png-stack\""))
+		return;
+	if (manifest_numbers(text, "\"layer_height_mm\":", &lh, 1) == 0 && lh > 0)
+		iv->layer_mm = lh;
+	map = strstr(text, "\"map_mm_to_px\":");
+	if (map && manifest_numbers(map, "\"u\":", u, 3) == 0 &&
+	    manifest_numbers(map, "\"v\":", v, 3) == 0) {
+		iv->map.a[0][0] = u[0];
+		iv->map.a[0][1] = u[1];
+		iv->map.b[0] = u[2];
+		iv->map.a[1][0] = v[0];
+		iv->map.a[1][1] = v[1];
+		iv->map.b[1] = v[2];
+		iv->has_map = fabs(u[0] * v[1] - u[1] * v[0]) > 0;
+	}
 }
 
 static int read_entry(struct archive *a, size_t size, unsigned char **out, const char *name,
@@ -163,13 +255,17 @@ static int load_layers(const char *path, struct layer_set *ls, struct err *e)
 		unsigned char *data = NULL;
 		if (!name || archive_entry_filetype(ent) != AE_IFREG)
 			continue;
-		if (strcmp(name, "config.ini") == 0 || strcmp(name, "prusaslicer.ini") == 0) {
+		if (strcmp(name, "config.ini") == 0 || strcmp(name, "prusaslicer.ini") == 0 ||
+		    strcmp(name, "manifest.json") == 0) {
 			if (sz < 0 || (unsigned long long)sz > VA_MAX_INI)
 				continue;
 			rc = read_entry(a, (size_t)sz, &data, name, e);
 			if (rc)
 				goto out;
-			parse_ini((const char *)data, &ls->iv);
+			if (name[0] == 'm')
+				parse_manifest((const char *)data, &ls->iv);
+			else
+				parse_ini((const char *)data, &ls->iv);
 			mem_free(data);
 			continue;
 		}
@@ -220,8 +316,9 @@ out:
 }
 
 /* Decode ent into *img (reallocated when its size differs; caller frees
- * with raster_free) and drop ent's compressed copy. */
-static int decode_layer(struct png_ent *ent, struct raster **img, struct err *e)
+ * with raster_free), keeping ent's compressed copy.  Reentrant: calls
+ * for distinct img may run at once. */
+static int decode_png(const struct png_ent *ent, struct raster **img, struct err *e)
 {
 	png_image pi;
 
@@ -248,9 +345,19 @@ static int decode_layer(struct png_ent *ent, struct raster **img, struct err *e)
 		png_image_free(&pi);
 		return rc;
 	}
-	mem_free(ent->data); /* decoded: drop the compressed copy early */
-	ent->data = NULL;
 	return 0;
+}
+
+/* decode_png, then drop ent's compressed copy early. */
+static int decode_layer(struct png_ent *ent, struct raster **img, struct err *e)
+{
+	int rc = decode_png(ent, img, e);
+
+	if (!rc) {
+		mem_free(ent->data);
+		ent->data = NULL;
+	}
+	return rc;
 }
 
 int verify_archive(const char *path, const struct verify_params *p, struct verify_report *out,
@@ -317,4 +424,82 @@ out:
 	layer_set_fini(&ls);
 	layer_set_fini(&rs);
 	return rc;
+}
+
+/* An opened archive for verify_stack_*: its compressed layers. */
+struct verify_stack_reader {
+	struct layer_set ls;
+};
+
+int verify_stack_open(const char *path, struct verify_stack_reader **out, struct verify_stack *st,
+		      struct err *e)
+{
+	struct verify_stack_reader *r = mem_calloc(1, sizeof *r);
+	const struct ini_vals *iv;
+	struct verify_stack info;
+	png_image pi;
+	int rc;
+
+	if (!r)
+		return ERR_SET(e, ERR_NOMEM, "verify: out of memory");
+	memset(&info, 0, sizeof info);
+	if ((rc = load_layers(path, &r->ls, e)) != 0)
+		goto out;
+	iv = &r->ls.iv;
+	info.layers = (int)r->ls.n;
+	info.layer_mm = iv->layer_mm > 0 ? iv->layer_mm : 0;
+	if (iv->has_map) {
+		info.map = iv->map;
+		info.has_map = 1;
+	} else if (iv->disp_w > 0 && iv->disp_h > 0 && iv->pix_x >= 1 && iv->pix_y >= 1 &&
+		   iv->pix_x <= 65535 && iv->pix_y <= 65535) {
+		/* the SL1 writer's own map from the display it states */
+		struct printer p;
+		int w, h;
+		memset(&p, 0, sizeof p);
+		p.kind = PRINTER_RESIN;
+		p.resin.pixels_x = (int)iv->pix_x;
+		p.resin.pixels_y = (int)iv->pix_y;
+		p.resin.display_w_mm = iv->disp_w;
+		p.resin.display_h_mm = iv->disp_h;
+		p.resin.portrait = iv->portrait;
+		p.resin.mirror_x = iv->mirror_x;
+		p.resin.mirror_y = iv->mirror_y;
+		printer_raster_geometry(&p, &info.map, &w, &h);
+		info.has_map = 1;
+	}
+	/* the image size from the first layer's header */
+	memset(&pi, 0, sizeof pi);
+	pi.version = PNG_IMAGE_VERSION;
+	if (!png_image_begin_read_from_memory(&pi, r->ls.L[0].data, r->ls.L[0].len)) {
+		rc = ERR_SET(e, ERR_PARSE, "verify: %s: %s", r->ls.L[0].name, pi.message);
+		goto out;
+	}
+	info.width = (int)pi.width;
+	info.height = (int)pi.height;
+	png_image_free(&pi);
+out:
+	if (rc) {
+		verify_stack_close(r);
+		return rc;
+	}
+	*st = info;
+	*out = r;
+	return 0;
+}
+
+int verify_stack_layer(const struct verify_stack_reader *r, int k, struct raster **img,
+		       struct err *e)
+{
+	if (k < 0 || (size_t)k >= r->ls.n)
+		return ERR_SET(e, ERR_INTERNAL, "verify: no layer %d of %zu", k, r->ls.n);
+	return decode_png(&r->ls.L[k], img, e);
+}
+
+void verify_stack_close(struct verify_stack_reader *r)
+{
+	if (!r)
+		return;
+	layer_set_fini(&r->ls);
+	mem_free(r);
 }

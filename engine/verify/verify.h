@@ -153,4 +153,31 @@ int verify_archive(const char *path, const struct verify_params *p, struct verif
 int verify_archive_ref(const char *path, const char *ref_path, const struct verify_params *p,
 		       struct verify_report *out, struct err *e);
 
+/* A layer archive's stack as its writer described it. */
+struct verify_stack {
+	int layers;            /* layer images, print order (layer k spans z from
+				  k * layer_mm to (k + 1) * layer_mm above the plate) */
+	int width, height;     /* pixels of layer 0 (the others are checked as decoded) */
+	double layer_mm;       /* config.ini layerHeight / manifest.json; 0 if unstated */
+	int has_map;           /* map is known */
+	struct raster_map map; /* printer mm -> pixel (raster.h) as the writer used it:
+				  from prusaslicer.ini's display (printer_raster_geometry)
+				  or a plain zip's manifest.json map_mm_to_px */
+};
+
+struct verify_stack_reader;
+
+/* Open a layer archive (as verify_archive reads it: the PNGs outside
+ * thumbnail/, in print order), holding its compressed layers in memory
+ * (a few KB each; at most 4 GB in all), and describe it in *st.  ERR_IO,
+ * ERR_PARSE, ERR_LIMIT, ERR_NOMEM.  Caller closes with verify_stack_close(). */
+int verify_stack_open(const char *path, struct verify_stack_reader **out, struct verify_stack *st,
+		      struct err *e);
+/* Decode layer k (0 = on the plate) into *img (allocated or reallocated to
+ * the layer's size; caller frees with raster_free).  Calls for distinct
+ * img may run on several threads at once.  ERR_PARSE, ERR_LIMIT, ERR_NOMEM. */
+int verify_stack_layer(const struct verify_stack_reader *r, int k, struct raster **img,
+		       struct err *e);
+void verify_stack_close(struct verify_stack_reader *r);
+
 #endif

@@ -1,0 +1,191 @@
+/* fea_int.h - what the files of engine/fea/ share: the solver's state,
+ * the multigrid levels and the kernels between them.  Not for other
+ * modules (they use fea.h).  Design: docs/fea.md.
+ *
+ * Padded grid: the finest level's grid is the caller's grid padded at
+ * the high end of each axis with absent elements to a multiple of
+ * 2^(levels-1), so level l has exactly nx0 / 2^l elements per axis.
+ * Internal vectors use the padded node numbering (x fastest); the
+ * caller's numbering (fea.h) is used only by f_user and u_user.
+ */
+#ifndef INFILLD_FEA_INT_H
+#define INFILLD_FEA_INT_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "engine/core/parfor.h"
+#include "engine/fea/fea.h"
+
+#define FEA_MAX_LEVELS 12
+#define FEA_ST 14 /* stored 3 x 3 blocks per node, levels >= 1 */
+
+/* mask0 bits of a finest-level node: bits 0..2 the fixed axes
+ * (FEA_AXIS_*); an absent node (touching no present element) or a held
+ * one has all three set. */
+#define FEA_NODE_ABSENT 8u
+#define FEA_NODE_HELD 16u
+#define FEA_NODE_FORCE 32u /* carries load (selection bookkeeping) */
+#define FEA_NODE_ALL 7u
+
+/* One multigrid level.  Level 0 is matrix-free (element weights w0 and
+ * K0) in its own layout (below); levels >= 1 hold 27-point stencils of
+ * 3 x 3 blocks, unknowns interleaved (3 n + axis).  Block d of node n,
+ * d = (dz + 1) * 9 + (dy + 1) * 3 + dx + 1, couples unknown (n, r) to
+ * (n + d, c); the operator is symmetric, so only the self block and the
+ * 13 forward ones (d >= 13) are stored, st[(n * FEA_ST + d - 13) * 9 +
+ * 3 r + c], and block d < 13 of n is block 26 - d of n + d, transposed.  Unknowns whose diagonal
+ * is 0 (no free fine unknown under them) have all-zero rows and columns;
+ * they stay 0 in every vector (their Jacobi weight is 0) and get an
+ * identity row in the coarsest factor. */
+struct fea_level {
+	int nx, ny, nz; /* elements per axis */
+	size_t nn;      /* nodes */
+	float *st;      /* levels >= 1, owned */
+	double *invd;   /* levels >= 1: 3 nn, Jacobi weight / diagonal, 0 on masked */
+	double *b;      /* levels >= 1: 3 nn right-hand side */
+	double *x;      /* levels >= 1: 3 nn solution (swapped with t by smoothing) */
+	double *t;      /* levels >= 1: 3 nn scratch */
+};
+
+/* The band Cholesky factor of the coarsest level (coarse.c). */
+struct fea_coarse {
+	int n, kd;       /* unknowns, half bandwidth */
+	int perm[3];     /* axes from fastest to slowest in the band order */
+	double *ab;      /* (kd + 1) * n, LAPACK lower band storage, owned */
+	double *rhs;     /* n, owned */
+};
+
+/* Tables of the finest level's kernels (kernel0.c), offsets in the
+ * level-0 layout. */
+struct fea_k0 {
+	ptrdiff_t xoff[27];     /* the 27 neighbour nodes (d as in fea_level) */
+	ptrdiff_t eoff[8];      /* the 8 elements around a node, octant p = ex + 2 ey + 4 ez:
+				   element (i - 1 + ex, j - 1 + ey, k - 1 + ez) */
+	unsigned char pd[8][8]; /* neighbour d of local node b of octant p's element */
+	float kf[8][8][9];      /* K0 rows of the node (corner 7 - p) x columns of b */
+	double kd[8][8][9];
+	int snz[3];             /* the solid stencil (all 8 weights 1): nonzeros per row */
+	ptrdiff_t soff[3][81];  /* their x offsets: axis * cs + xoff[d] */
+	float sf[3][81];
+	double sd[3][81];
+	double gsolid;          /* Gershgorin ratio sum_j |a_ij| / a_ii of a solid node */
+};
+
+/* Level 0 layout: structure of arrays, one array of cs entries per axis,
+ * node (i, j, k) at ((k + 1) sy + j + 1) sx + i + 1 with a zero halo
+ * around the grid (i = -1, j = -1, k = -1 and k = nz + 1; the next row's
+ * and plane's halo close the other sides), rows padded to a multiple of
+ * 8 (sx).  Element (i, j, k) lives at the index of its low corner node
+ * (w0: weight 0 outside the grid), so kernels need no bounds checks.
+ * Every level-0 array has 16 spare entries before and after (fea_n0). */
+
+struct fea_solver {
+	/* the caller's grid */
+	int ux, uy, uz;
+	size_t un_nodes, un_elems;
+	double h_mm;
+	struct fea_material mat;
+	struct fea_opts opt;
+	int threads;
+
+	/* element data */
+	double ke[24 * 24];      /* K0 */
+	double kdiag;            /* K0's diagonal entry (all 24 are equal) */
+	double mc[8][24 * 24];   /* P_c^T K0 P_c of the 8 children (mg.c) */
+	double pc[8][24 * 24];   /* P_c */
+	double msum[24 * 24];    /* sum of the 8 M_c: a solid unmasked parent */
+	struct fea_k0 k0;
+
+	/* levels; level 0 padded to a multiple of 2^(nlev - 1) elements */
+	int nlev;
+	struct fea_level lv[FEA_MAX_LEVELS];
+
+	/* level 0 arrays (layout above) */
+	ptrdiff_t sx, sy, sz, cs;
+	float *w0;          /* element weights rho^p, 0 = absent */
+	uint8_t *mask0;     /* FEA_NODE_* bits, halo: all masked */
+	float *invd0;       /* 3 cs: Jacobi weight / diagonal, 0 on masked */
+	float *b0, *x0, *t0; /* 3 cs: V-cycle rhs, solution, scratch (float) */
+	double *u, *r, *p, *q; /* 3 cs: CG vectors */
+	double *dot_part;   /* partial sums of fea_dot, one per FEA_DOT_BLOCK */
+
+	double *f_user;   /* load, caller's numbering (fea_solver_force) */
+	double *u_user;   /* displacement, caller's numbering */
+
+	struct fea_coarse co;
+
+	size_t elements, dofs, held_nodes, mem_bytes;
+	double setup_s;   /* coarse set-up time not yet reported by a solve */
+	int solved;
+};
+
+static inline ptrdiff_t fea_n0(const struct fea_solver *s, int i, int j, int k)
+{
+	return ((ptrdiff_t)(k + 1) * s->sy + (j + 1)) * s->sx + (i + 1);
+}
+
+static inline size_t fea_node(const struct fea_level *l, int i, int j, int k)
+{
+	return ((size_t)k * (size_t)(l->ny + 1) + (size_t)j) * (size_t)(l->nx + 1) + (size_t)i;
+}
+
+/* element.c */
+void fea_dmatrix(struct fea_material mat, double d[36]);
+void fea_bcentre(double h_mm, double b[6 * 24]);
+void fea_child_prolong(int c, double p[24 * 24]);
+
+/* select.c: fill mask0 and f_user from the load case, hold parts with
+ * no path to a constraint, check rigid motion.  0 or ERR_PARAM /
+ * ERR_GEOMETRY / ERR_NOMEM. */
+int fea_select(struct fea_solver *s, const struct fea_grid *g, const struct fea_loads *l,
+	       struct err *e);
+
+/* Kernels.  op selects what is written to y:
+ *   FEA_OP_AX   y = A x
+ *   FEA_OP_RES  y = b - A x
+ *   FEA_OP_JAC  y = x + invd (b - A x)   (one damped Jacobi sweep)
+ * A is the masked operator (identity on masked unknowns); x must be 0 on
+ * masked unknowns (all vectors of the solver are), and so is y. */
+enum fea_op { FEA_OP_AX = 0, FEA_OP_RES, FEA_OP_JAC };
+
+/* kernel0.c: level 0.  fea_k0_init fills s->k0 from s->ke.
+ * fea_have_avx2: the CPU runs the AVX2+FMA builds of the kernels. */
+int fea_have_avx2(void);
+void fea_k0_init(struct fea_solver *s);
+void fea_apply0f(struct fea_solver *s, enum fea_op op, const float *x, const float *b, float *y);
+void fea_apply0d(struct fea_solver *s, const double *x, double *y); /* y = A x */
+/* b0 = (float) r, x0 = invd0 b0: the first Jacobi sweep from 0 */
+void fea_first_sweep0(struct fea_solver *s, const double *r);
+void fea_restrict0(struct fea_solver *s, const float *r0, double *b1);
+void fea_prolong0(struct fea_solver *s, const double *x1, float *x0); /* masked */
+
+/* apply.c: levels >= 1 (interleaved unknowns, double vectors). */
+void fea_apply(struct fea_solver *s, int level, enum fea_op op, const double *x,
+	       const double *b, double *y);
+/* b_{l+1} = P^T r_l, x_l += P x_{l+1}, level >= 1 */
+void fea_restrict(struct fea_solver *s, int level, const double *r, double *bc);
+void fea_prolong_add(struct fea_solver *s, int level, const double *xc, double *x);
+/* Parallel dot products of 3 cs level-0 doubles (and floats), summed in
+ * a fixed order (results do not depend on the thread count). */
+#define FEA_DOT_BLOCK 16384
+double fea_dot(struct fea_solver *s, const double *a, const double *b, size_t n);
+double fea_dot_df(struct fea_solver *s, const double *a, const float *b, size_t n);
+/* parfor_run with the solver's threads, serial for small n. */
+void fea_par(const struct fea_solver *s, size_t n, size_t chunk, parfor_fn fn, void *ctx);
+
+/* mg.c: operators of levels 1.. and the Jacobi weights of every level
+ * (after w0 or mask0 change), then the coarsest factor. */
+int fea_mg_build(struct fea_solver *s, struct err *e);
+/* One V-cycle: s->x0 = M r (float). */
+void fea_vcycle(struct fea_solver *s, const double *r);
+
+/* coarse.c */
+int fea_coarse_factor(struct fea_solver *s, struct err *e);
+/* x = A^-1 b on the coarsest level (levels >= 1: interleaved doubles;
+ * a one-level solver: b0 -> x0, level-0 layout floats). */
+void fea_coarse_solve(struct fea_solver *s, const double *b, double *x);
+void fea_coarse_solve0(struct fea_solver *s, const float *b, float *x);
+void fea_coarse_fini(struct fea_coarse *c);
+
+#endif

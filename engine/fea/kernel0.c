@@ -1,0 +1,366 @@
+/* kernel0.c - the finest level's matrix-free operator y = sum_e w_e K0 x_e
+ * and the level-0 transfers.  Gathered per node (each node sums the three
+ * K0 rows it owns in its up to 8 elements: no races, no colouring),
+ * vectorised across 8 (float, V-cycle) or 4 (double, CG) consecutive
+ * nodes of a row in the structure-of-arrays level-0 layout (fea_int.h),
+ * whose zero halo removes every bounds check.  A group whose 8 element
+ * weights are equal in every lane (inside a solid or a void) uses the
+ * assembled solid stencil (153 nonzeros instead of 8 x 72 products).
+ * Compiled twice: AVX2+FMA when the CPU has it, plain otherwise.
+ * docs/fea.md, "Solver".
+ */
+#include "engine/fea/fea_int.h"
+
+#include <math.h>
+#include <string.h>
+
+typedef float vf8 __attribute__((vector_size(32)));
+typedef int vi8 __attribute__((vector_size(32)));
+typedef float vf4 __attribute__((vector_size(16)));
+typedef double vd4 __attribute__((vector_size(32)));
+typedef long long vl4 __attribute__((vector_size(32)));
+/* unaligned views for loads and stores */
+typedef float vf8u __attribute__((vector_size(32), aligned(4), may_alias));
+typedef float vf4u __attribute__((vector_size(16), aligned(4), may_alias));
+typedef double vd4u __attribute__((vector_size(32), aligned(8), may_alias));
+
+void fea_k0_init(struct fea_solver *s)
+{
+	struct fea_k0 *K = &s->k0;
+	double st[27][9];
+
+	memset(K, 0, sizeof *K);
+	memset(st, 0, sizeof st);
+	for (int d = 0; d < 27; d++)
+		K->xoff[d] = (d % 3 - 1) + ((d / 3) % 3 - 1) * s->sx + (d / 9 - 1) * s->sx * s->sy;
+	for (int p = 0; p < 8; p++) {
+		int ex = p & 1, ey = (p >> 1) & 1, ez = (p >> 2) & 1;
+		K->eoff[p] = (ex - 1) + (ey - 1) * s->sx + (ez - 1) * s->sx * s->sy;
+		for (int b = 0; b < 8; b++) {
+			int d = (ez + ((b >> 2) & 1)) * 9 + (ey + ((b >> 1) & 1)) * 3 + ex + (b & 1);
+			K->pd[p][b] = (unsigned char)d;
+			for (int r = 0; r < 3; r++)
+				for (int c = 0; c < 3; c++) {
+					double v = s->ke[(3 * (7 - p) + r) * 24 + 3 * b + c];
+					K->kd[p][b][3 * r + c] = v;
+					K->kf[p][b][3 * r + c] = (float)v;
+					st[d][3 * r + c] += v;
+				}
+		}
+	}
+	K->gsolid = 0;
+	for (int d = 0; d < 27; d++)
+		for (int c = 0; c < 3; c++)
+			K->gsolid += fabs(st[d][c]);
+	K->gsolid /= st[13][0];
+	/* the solid stencil's nonzeros (zeros by the cube's symmetries) */
+	for (int r = 0; r < 3; r++)
+		for (int d = 0; d < 27; d++)
+			for (int c = 0; c < 3; c++)
+				if (fabs(st[d][3 * r + c]) > 1e-12 * s->kdiag) {
+					int q = K->snz[r]++;
+					K->soff[r][q] = c * s->cs + K->xoff[d];
+					K->sd[r][q] = st[d][3 * r + c];
+					K->sf[r][q] = (float)st[d][3 * r + c];
+				}
+}
+
+struct k0_ctx {
+	struct fea_solver *s;
+	enum fea_op op;
+	const void *x, *b, *invd;
+	void *y;
+};
+
+#define INLINE static inline __attribute__((always_inline))
+
+/* All lanes of a comparison true. */
+#define ALL4(v)                                                                    \
+	__extension__({                                                            \
+		long long e4_[4];                                                  \
+		memcpy(e4_, &(v), sizeof e4_);                                     \
+		(e4_[0] & e4_[1] & e4_[2] & e4_[3]) == -1;                         \
+	})
+
+/* One plane (k) of y = op(A x), L nodes per step; T scalar, V vector,
+ * VU its unaligned view, VI the comparison type, KB/SB the coefficient
+ * tables, LOADW the weights as V. */
+#define PLANE_BODY(T, V, VU, VI, L, KB, SB, LOADW)                                   \
+	const struct fea_solver *s = c->s;                                           \
+	const struct fea_k0 *K = &s->k0;                                             \
+	const ptrdiff_t cs = s->cs;                                                  \
+	const T *x = c->x, *b = c->b, *iv = c->invd;                                 \
+	T *y = c->y;                                                                 \
+                                                                                     \
+	for (int j = 0; j <= s->lv[0].ny; j++) {                                     \
+		const ptrdiff_t row = fea_n0(s, -1, j, k);                           \
+		for (ptrdiff_t c0 = 0; c0 < s->sx; c0 += L) {                        \
+			const ptrdiff_t n = row + c0;                                \
+			const T *xn = x + n;                                         \
+			V w[8], a0 = {0}, a1 = {0}, a2 = {0}, sum = {0};             \
+			VI eq;                                                       \
+                                                                                     \
+			for (int p = 0; p < 8; p++) {                                \
+				w[p] = LOADW(s->w0 + n + K->eoff[p]);                \
+				sum += w[p];                                         \
+			}                                                            \
+			eq = sum == 0;                                               \
+			if (ALL4(eq))                                                \
+				goto out_##T;                                        \
+			eq = w[1] == w[0];                                           \
+			for (int p = 2; p < 8; p++)                                  \
+				eq &= w[p] == w[0];                                  \
+			if (ALL4(eq)) {                                              \
+				/* solid stencil, 3 partial sums per row */          \
+				for (int r = 0; r < 3; r++) {                        \
+					V u0 = {0}, u1 = {0}, u2 = {0};              \
+					const ptrdiff_t *so = K->soff[r];            \
+					const T *sc = K->SB[r];                      \
+					int q = 0, nz = K->snz[r];                   \
+					for (; q + 3 <= nz; q += 3) {                \
+						u0 += sc[q] * *(const VU *)(xn + so[q]); \
+						u1 += sc[q + 1] * *(const VU *)(xn + so[q + 1]); \
+						u2 += sc[q + 2] * *(const VU *)(xn + so[q + 2]); \
+					}                                            \
+					for (; q < nz; q++)                          \
+						u0 += sc[q] * *(const VU *)(xn + so[q]); \
+					u0 = (u0 + u1 + u2) * w[0];                  \
+					if (r == 0)                                  \
+						a0 = u0;                             \
+					else if (r == 1)                             \
+						a1 = u0;                             \
+					else                                         \
+						a2 = u0;                             \
+				}                                                    \
+			} else {                                                     \
+				for (int p = 0; p < 8; p++) {                        \
+					V t0 = {0}, t1 = {0}, t2 = {0}, v0 = {0}, v1 = {0}, v2 = {0}; \
+					VI z = w[p] == 0;                            \
+					if (ALL4(z))                                 \
+						continue;                            \
+					for (int bn = 0; bn < 8; bn += 2) {          \
+						const T *kb = K->KB[p][bn];          \
+						const T *xb = xn + K->xoff[K->pd[p][bn]]; \
+						V x0 = *(const VU *)xb, x1 = *(const VU *)(xb + cs), \
+						  x2 = *(const VU *)(xb + 2 * cs);   \
+						t0 += kb[0] * x0;                    \
+						t1 += kb[3] * x0;                    \
+						t2 += kb[6] * x0;                    \
+						t0 += kb[1] * x1;                    \
+						t1 += kb[4] * x1;                    \
+						t2 += kb[7] * x1;                    \
+						t0 += kb[2] * x2;                    \
+						t1 += kb[5] * x2;                    \
+						t2 += kb[8] * x2;                    \
+						kb = K->KB[p][bn + 1];               \
+						xb = xn + K->xoff[K->pd[p][bn + 1]]; \
+						x0 = *(const VU *)xb;                \
+						x1 = *(const VU *)(xb + cs);         \
+						x2 = *(const VU *)(xb + 2 * cs);     \
+						v0 += kb[0] * x0;                    \
+						v1 += kb[3] * x0;                    \
+						v2 += kb[6] * x0;                    \
+						v0 += kb[1] * x1;                    \
+						v1 += kb[4] * x1;                    \
+						v2 += kb[7] * x1;                    \
+						v0 += kb[2] * x2;                    \
+						v1 += kb[5] * x2;                    \
+						v2 += kb[8] * x2;                    \
+					}                                            \
+					a0 += w[p] * (t0 + v0);                      \
+					a1 += w[p] * (t1 + v1);                      \
+					a2 += w[p] * (t2 + v2);                      \
+				}                                                    \
+			}                                                            \
+		out_##T:;                                                            \
+			VI m = {0};                                                  \
+			for (int l = 0; l < L; l++)                                  \
+				m[l] = s->mask0[n + l];                              \
+			for (int q = 0; q < 3; q++) {                                \
+				V acc = q == 0 ? a0 : q == 1 ? a1 : a2, v;           \
+				VI fr = (m & (1 << q)) == 0;                         \
+				const ptrdiff_t at = q * cs + n;                     \
+				if (c->op == FEA_OP_AX)                              \
+					v = acc;                                     \
+				else if (c->op == FEA_OP_RES)                        \
+					v = *(const VU *)(b + at) - acc;             \
+				else                                                 \
+					v = *(const VU *)(x + at) +                  \
+					    *(const VU *)(iv + at) *                 \
+						    (*(const VU *)(b + at) - acc);   \
+				v = (V)((VI)v & fr);                                 \
+				*(VU *)(y + at) = v;                                 \
+			}                                                            \
+		}                                                                    \
+	}
+
+#define LOADW_F(p) (*(const vf8u *)(p))
+#define LOADW_D(p) __builtin_convertvector(*(const vf4u *)(p), vd4)
+
+INLINE void plane_f(const struct k0_ctx *c, int k)
+{
+	PLANE_BODY(float, vf8, vf8u, vi8, 8, kf, sf, LOADW_F)
+}
+
+INLINE void plane_d(const struct k0_ctx *c, int k)
+{
+	PLANE_BODY(double, vd4, vd4u, vl4, 4, kd, sd, LOADW_D)
+}
+
+#define FAST __attribute__((target("avx2,fma"), optimize("fp-contract=fast")))
+
+FAST static void plane_f_avx2(void *ctx, size_t k, int tid)
+{
+	(void)tid;
+	plane_f(ctx, (int)k);
+}
+
+static void plane_f_base(void *ctx, size_t k, int tid)
+{
+	(void)tid;
+	plane_f(ctx, (int)k);
+}
+
+FAST static void plane_d_avx2(void *ctx, size_t k, int tid)
+{
+	(void)tid;
+	plane_d(ctx, (int)k);
+}
+
+static void plane_d_base(void *ctx, size_t k, int tid)
+{
+	(void)tid;
+	plane_d(ctx, (int)k);
+}
+
+int fea_have_avx2(void)
+{
+	__builtin_cpu_init();
+	return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
+}
+
+void fea_apply0f(struct fea_solver *s, enum fea_op op, const float *x, const float *b, float *y)
+{
+	struct k0_ctx c = {s, op, x, b, s->invd0, y};
+
+	fea_par(s, (size_t)s->lv[0].nz + 1, 1, fea_have_avx2() ? plane_f_avx2 : plane_f_base, &c);
+}
+
+void fea_apply0d(struct fea_solver *s, const double *x, double *y)
+{
+	struct k0_ctx c = {s, FEA_OP_AX, x, NULL, NULL, y};
+
+	fea_par(s, (size_t)s->lv[0].nz + 1, 1, fea_have_avx2() ? plane_d_avx2 : plane_d_base, &c);
+}
+
+/* b0 = (float) r, x0 = invd0 b0, over one plane of all three axes. */
+static void first_plane(void *vctx, size_t k, int tid)
+{
+	const struct k0_ctx *c = vctx;
+	const struct fea_solver *s = c->s;
+	const double *r = c->x;
+	ptrdiff_t lo = fea_n0(s, -1, -1, (int)k), hi = lo + s->sx * s->sy;
+
+	(void)tid;
+	for (int q = 0; q < 3; q++)
+		for (ptrdiff_t n = lo + q * s->cs; n < hi + q * s->cs; n++) {
+			float bf = (float)r[n];
+			s->b0[n] = bf;
+			s->x0[n] = s->invd0[n] * bf;
+		}
+}
+
+void fea_first_sweep0(struct fea_solver *s, const double *r)
+{
+	struct k0_ctx c = {s, FEA_OP_AX, r, NULL, NULL, NULL};
+
+	fea_par(s, (size_t)s->lv[0].nz + 1, 1, first_plane, &c);
+}
+
+struct tr_ctx {
+	struct fea_solver *s;
+	const float *f;
+	const double *d;
+	float *fo;
+	double *dout;
+};
+
+/* b1[I] = sum over fine nodes 2I + o (o in {-1, 0, 1}^3) of w(o) r0 */
+static void restrict0_plane(void *vctx, size_t kk, int tid)
+{
+	const struct tr_ctx *c = vctx;
+	const struct fea_solver *s = c->s;
+	const struct fea_level *l1 = &s->lv[1];
+	const int K = (int)kk;
+	static const float wt[3] = {0.5f, 1, 0.5f};
+
+	(void)tid;
+	for (int J = 0; J <= l1->ny; J++)
+		for (int I = 0; I <= l1->nx; I++) {
+			double acc[3] = {0, 0, 0};
+			ptrdiff_t n = fea_n0(s, 2 * I, 2 * J, 2 * K);
+			for (int oz = 0; oz < 3; oz++)
+				for (int oy = 0; oy < 3; oy++) {
+					float wyz = wt[oy] * wt[oz];
+					ptrdiff_t m = n + (oy - 1) * s->sx + (oz - 1) * s->sx * s->sy;
+					for (int q = 0; q < 3; q++) {
+						const float *r = c->f + q * s->cs + m;
+						acc[q] += wyz * (0.5f * r[-1] + r[0] + 0.5f * r[1]);
+					}
+				}
+			double *o = c->dout + 3 * fea_node(l1, I, J, K);
+			o[0] = acc[0];
+			o[1] = acc[1];
+			o[2] = acc[2];
+		}
+}
+
+void fea_restrict0(struct fea_solver *s, const float *r0, double *b1)
+{
+	struct tr_ctx c = {s, r0, NULL, NULL, b1};
+
+	fea_par(s, (size_t)s->lv[1].nz + 1, 1, restrict0_plane, &c);
+}
+
+/* x0 += P x1 on fine plane k, masked */
+static void prolong0_plane(void *vctx, size_t kk, int tid)
+{
+	const struct tr_ctx *c = vctx;
+	const struct fea_solver *s = c->s;
+	const struct fea_level *f = &s->lv[0], *l1 = &s->lv[1];
+	const int k = (int)kk;
+	const int K[2] = {k >> 1, (k + 1) >> 1}, nk = (k & 1) ? 2 : 1;
+
+	(void)tid;
+	for (int j = 0; j <= f->ny; j++) {
+		int Jv[2] = {j >> 1, (j + 1) >> 1}, nj = (j & 1) ? 2 : 1;
+		for (int i = 0; i <= f->nx; i++) {
+			int Iv[2] = {i >> 1, (i + 1) >> 1}, ni = (i & 1) ? 2 : 1;
+			ptrdiff_t n = fea_n0(s, i, j, k);
+			unsigned mask = s->mask0[n] & FEA_NODE_ALL;
+			double acc[3] = {0, 0, 0};
+			double w = (ni == 2 ? 0.5 : 1) * (nj == 2 ? 0.5 : 1) * (nk == 2 ? 0.5 : 1);
+
+			if (mask == FEA_NODE_ALL)
+				continue;
+			for (int c3 = 0; c3 < nk; c3++)
+				for (int c2 = 0; c2 < nj; c2++)
+					for (int c1 = 0; c1 < ni; c1++) {
+						const double *xc = c->d + 3 * fea_node(l1, Iv[c1], Jv[c2], K[c3]);
+						acc[0] += xc[0];
+						acc[1] += xc[1];
+						acc[2] += xc[2];
+					}
+			for (int q = 0; q < 3; q++)
+				if (!(mask & (1u << q)))
+					c->fo[q * s->cs + n] += (float)(w * acc[q]);
+		}
+	}
+}
+
+void fea_prolong0(struct fea_solver *s, const double *x1, float *x0)
+{
+	struct tr_ctx c = {s, NULL, x1, x0, NULL};
+
+	fea_par(s, (size_t)s->lv[0].nz + 1, 1, prolong0_plane, &c);
+}
