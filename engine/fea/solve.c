@@ -288,7 +288,8 @@ int fea_solver_new(const struct fea_grid *g, const struct fea_loads *l, const st
 		s->sx = (L0->nx + 2 + 7) / 8 * 8;
 		s->sy = L0->ny + 2;
 		s->sz = L0->nz + 3;
-		s->cs = (s->sx * s->sy * s->sz + 15) / 16 * 16;
+		/* + one row: the last plane's last row reads the next row */
+		s->cs = (s->sx * s->sy * s->sz + s->sx + 15) / 16 * 16;
 		cs = (size_t)s->cs;
 		v = 3 * cs;
 		s->w0 = alloc0(s, cs, sizeof(float));
