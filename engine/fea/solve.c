@@ -455,7 +455,7 @@ static void sub_block(void *vctx, size_t blk, int tid)
 int fea_solve(struct fea_solver *s, struct fea_result *res, struct err *e)
 {
 	const size_t nv = 3 * (size_t)s->cs, nb = (nv + VBLOCK - 1) / VBLOCK;
-	double t0 = now_s(), fnorm, rr, rz, rel = 0;
+	double t0 = now_s(), fnorm, rr, rz, rel = 0, true_rel = 0;
 	int it = 0, converged = 0;
 	struct fea_result R;
 
@@ -467,7 +467,7 @@ int fea_solve(struct fea_solver *s, struct fea_result *res, struct err *e)
 		memset(s->u, 0, nv * sizeof *s->u);
 		converged = 1;
 	}
-	for (int restart = 0; !converged && restart < 50; restart++) {
+	for (int restart = 0, stalls = 0; !converged && stalls < 3; restart++) {
 		/* (re)start from the true residual r = f - A u */
 		struct axpy_ctx sc = {0, s->q, s->r, NULL, NULL, nv, s->dot_part, NULL};
 		int it0 = it;
@@ -481,6 +481,11 @@ int fea_solve(struct fea_solver *s, struct fea_result *res, struct err *e)
 			converged = 1;
 			break;
 		}
+		/* a restart that gains less than a factor 2: the tolerance is
+		 * below what rounding in A u allows (about 1e-16 times the
+		 * stiffness contrast) */
+		stalls = restart > 0 && rel > 0.5 * true_rel ? stalls + 1 : 0;
+		true_rel = rel;
 		if (it >= s->opt.max_iter)
 			break;
 		fea_vcycle(s, s->r);
@@ -488,7 +493,7 @@ int fea_solve(struct fea_solver *s, struct fea_result *res, struct err *e)
 			s->p[i] = s->x0[i];
 		rz = fea_dot_df(s, s->r, s->x0, nv);
 		while (it < s->opt.max_iter && rz > 0) {
-			double pq, alpha, beta, rz_new;
+			double pq, alpha, beta, rz_new, rz_old;
 			struct axpy_ctx uc;
 
 			fea_apply0d(s, s->p, s->q);
@@ -505,9 +510,12 @@ int fea_solve(struct fea_solver *s, struct fea_result *res, struct err *e)
 			rel = sqrt(rr) / fnorm;
 			if (rel <= s->opt.tol)
 				break; /* confirmed on the true residual at the restart */
+			/* flexible (Polak-Ribiere) beta: the float V-cycle is not
+			 * exactly linear, so keep r_new . z_old out of beta */
+			rz_old = fea_dot_df(s, s->r, s->x0, nv);
 			fea_vcycle(s, s->r);
 			rz_new = fea_dot_df(s, s->r, s->x0, nv);
-			beta = rz_new / rz;
+			beta = (rz_new - rz_old) / rz;
 			rz = rz_new;
 			uc = (struct axpy_ctx){beta, NULL, s->p, NULL, NULL, nv, NULL, s->x0};
 			fea_par(s, nb, 1, pupdate_block, &uc);
@@ -519,7 +527,7 @@ int fea_solve(struct fea_solver *s, struct fea_result *res, struct err *e)
 		return ERR_SET(e, ERR_GEOMETRY,
 			       "the solver did not converge: relative residual %.3g after %d CG "
 			       "iterations (tolerance %g)",
-			       rel, it, s->opt.tol);
+			       true_rel > 0 ? true_rel : rel, it, s->opt.tol);
 	padded_to_user(s, s->u, s->u_user);
 	{
 		double c = 0, mx = 0;

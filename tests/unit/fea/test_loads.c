@@ -274,6 +274,35 @@ static void test_solver_checks(void)
 	fea_grid_fini(&g);
 }
 
+/* Two 2 x 2 x 2 blocks joined only along an edge (the line x = 2, z = 2):
+ * a hinge.  The rigid-motion check passes (the fixed nodes hold the
+ * part), the stiffness is singular: the coarsest factor says so. */
+static void test_hinge(void)
+{
+	struct fea_grid g;
+	struct fea_solver *s = NULL;
+	struct err e;
+
+	memset(&g, 0, sizeof g);
+	g.nx = 4;
+	g.ny = 2;
+	g.nz = 4;
+	g.h_mm = 1;
+	g.part_hi_mm = (struct vec3){4, 2, 4};
+	g.rho = mem_calloc(32, sizeof *g.rho);
+	for (int k = 0; k < 4; k++)
+		for (int j = 0; j < 2; j++)
+			for (int i = 0; i < 4; i++)
+				if ((i < 2 && k < 2) || (i >= 2 && k >= 2))
+					g.rho[(k * 2 + j) * 4 + i] = 1;
+	CHECK_EQ_INT(new_solver(&g, "fixed plate; force box=2,0,4,4,2,4 n=1,0,-1", &s, &e),
+		     ERR_GEOMETRY);
+	CHECK_CONTAINS(e.msg, "the stiffness is singular");
+	CHECK_CONTAINS(e.msg, "joined only along an edge or at a corner");
+	fea_solver_free(s);
+	fea_grid_fini(&g);
+}
+
 int main(void)
 {
 	RUN(test_default);
@@ -281,5 +310,6 @@ int main(void)
 	RUN(test_errors);
 	RUN(test_round_trip);
 	RUN(test_solver_checks);
+	RUN(test_hinge);
 	return harness_report();
 }
