@@ -234,14 +234,21 @@ int fea_solver_new(const struct fea_grid *g, const struct fea_loads *l, const st
 	n[2] = g->nz;
 	nlev = pick_levels(n, o->levels);
 
-	/* memory estimate before allocating (ERR_LIMIT beyond physical memory) */
+	/* memory estimate before allocating (ERR_LIMIT beyond physical memory):
+	 * level 0 per node (halo included): 4 double and 4 float vectors of
+	 * 3, weights, mask; the caller's f and u; level 1 and below (1/7 of
+	 * it) per node: half stencils and 4 double vectors */
 	{
 		int m = 1 << (nlev - 1);
-		double nn0 = 1;
-		for (int a = 0; a < 3; a++)
-			nn0 *= ceil_div(n[a], m) * m + 1;
-		est = nn0 * (8 * 3 * 7 + 1 + 4) + 2 * 24.0 * (g->nx + 1.0) * (g->ny + 1.0) * (g->nz + 1.0);
-		est += nn0 / 8 * (27 * 9 * 4 + 4 * 24) * 8 / 7;
+		double nn0 = 1, nn1 = 1;
+		for (int a = 0; a < 3; a++) {
+			nn0 *= ceil_div(n[a], m) * m + 3;
+			nn1 *= ceil_div(n[a], m) * m / 2 + 1;
+		}
+		est = nn0 * (4 * 24 + 4 * 12 + 5) +
+		      48.0 * (g->nx + 1.0) * (g->ny + 1.0) * (g->nz + 1.0);
+		if (nlev > 1)
+			est += nn1 * (FEA_ST * 9 * 4 + 4 * 24) * 8 / 7;
 		phys = (double)sysconf(_SC_PHYS_PAGES) * (double)sysconf(_SC_PAGE_SIZE);
 		if (phys > 0 && est > phys)
 			return ERR_SET(e, ERR_LIMIT,
