@@ -109,16 +109,15 @@ static void level1_layer(void *vctx, size_t kk, int tid)
 		scatter:
 			for (int L = 0; L < 8; L++) {
 				int lx = L & 1, ly = (L >> 1) & 1, lz = (L >> 2) & 1;
-				float *st = l->st + fea_node(l, I + lx, J + ly, K + lz) * FEA_ST * 9;
+				ptrdiff_t nl = fea_nl(l, I + lx, J + ly, K + lz);
 				for (int M = 0; M < 8; M++) {
 					int d = ((M >> 2) - lz + 1) * 9 + (((M >> 1) & 1) - ly + 1) * 3 +
 						((M & 1) - lx + 1);
 					if (d < 13)
 						continue; /* the neighbour's forward block */
-					float *bl = st + (d - 13) * 9;
 					for (int r = 0; r < 3; r++)
 						for (int cc = 0; cc < 3; cc++)
-							bl[3 * r + cc] +=
+							*fea_st(l, nl, d - 13, 3 * r + cc) +=
 								(float)a[(3 * L + r) * 24 + 3 * M + cc];
 				}
 			}
@@ -129,7 +128,8 @@ struct gal_ctx {
 	const struct fea_level *f, *c;
 };
 
-/* Coarse node layer K of P^T A P (fine level f with stencils). */
+/* Coarse node layer K of P^T A P (fine level f with stencils), forward
+ * blocks only. */
 static void galerkin_layer(void *vctx, size_t kk, int tid)
 {
 	const struct gal_ctx *g = vctx;
@@ -149,10 +149,10 @@ static void galerkin_layer(void *vctx, size_t kk, int tid)
 						    fk > f->nz)
 							continue;
 						double pw = (ox ? 0.5 : 1) * (oy ? 0.5 : 1) * (oz ? 0.5 : 1);
-						size_t fn = fea_node(f, fi, fj, fk);
+						ptrdiff_t fn = fea_nl(f, fi, fj, fk);
 						for (int d = 0; d < 27; d++) {
-							int dx = d % 3 - 1, dy = (d / 3) % 3 - 1, dz = d / 9 - 1;
-							int j3[3] = {fi + dx, fj + dy, fk + dz};
+							int j3[3] = {fi + d % 3 - 1, fj + d / 3 % 3 - 1,
+								     fk + d / 9 - 1};
 							const int lim[3] = {f->nx, f->ny, f->nz};
 							int Jc[3][2], nj[3];
 							double qw[3];
@@ -174,19 +174,7 @@ static void galerkin_layer(void *vctx, size_t kk, int tid)
 							}
 							if (outside)
 								continue;
-							if (d >= 13) {
-								memcpy(bl, f->st + (fn * FEA_ST + d - 13) * 9,
-								       sizeof bl);
-							} else {
-								const float *tb =
-									f->st + (fea_node(f, j3[0], j3[1], j3[2]) *
-										 FEA_ST +
-									 13 - d) *
-										9;
-								for (int r = 0; r < 3; r++)
-									for (int cc = 0; cc < 3; cc++)
-										bl[3 * r + cc] = tb[3 * cc + r];
-							}
+							fea_block(f, fn, d, bl);
 							double wq = pw * qw[0] * qw[1] * qw[2];
 							for (int cz = 0; cz < nj[2]; cz++)
 								for (int cy = 0; cy < nj[1]; cy++)
@@ -202,9 +190,10 @@ static void galerkin_layer(void *vctx, size_t kk, int tid)
 									}
 						}
 					}
-			float *out = c->st + fea_node(c, I, J, K) * FEA_ST * 9;
-			for (int x = 0; x < FEA_ST * 9; x++)
-				out[x] = (float)acc[13 * 9 + x];
+			ptrdiff_t cn = fea_nl(c, I, J, K);
+			for (int fb = 0; fb < FEA_ST; fb++)
+				for (int x = 0; x < 9; x++)
+					*fea_st(c, cn, fb, x) = (float)acc[(13 + fb) * 9 + x];
 		}
 }
 
@@ -233,7 +222,6 @@ static void diag_layer(void *vctx, size_t kk, int tid)
 	for (int j = 0; j <= l->ny; j++)
 		for (int i = 0; i <= l->nx; i++) {
 			unsigned mask = 0, nmask[27];
-			size_t n = 0;
 			ptrdiff_t n0 = 0;
 
 			if (c->level == 0) {
@@ -270,25 +258,18 @@ static void diag_layer(void *vctx, size_t kk, int tid)
 						}
 					}
 			} else {
-				n = fea_node(l, i, j, k);
+				n0 = fea_nl(l, i, j, k);
 				memset(blk, 0, sizeof blk);
 				for (int d = 0; d < 27; d++) {
 					int ii = i + d % 3 - 1, jj = j + (d / 3) % 3 - 1, kq = k + d / 9 - 1;
+					float bl[9];
 					nmask[d] = 0;
 					if (ii < 0 || jj < 0 || kq < 0 || ii > l->nx || jj > l->ny ||
 					    kq > l->nz)
 						continue;
-					if (d >= 13) {
-						const float *st = l->st + (n * FEA_ST + d - 13) * 9;
-						for (int x = 0; x < 9; x++)
-							blk[d * 9 + x] = st[x];
-					} else {
-						const float *st =
-							l->st + (fea_node(l, ii, jj, kq) * FEA_ST + 13 - d) * 9;
-						for (int r = 0; r < 3; r++)
-							for (int cc = 0; cc < 3; cc++)
-								blk[d * 9 + 3 * r + cc] = st[3 * cc + r];
-					}
+					fea_block(l, n0, d, bl);
+					for (int x = 0; x < 9; x++)
+						blk[d * 9 + x] = bl[x];
 				}
 			}
 			for (int a = 0; a < 3; a++) {
@@ -304,7 +285,7 @@ static void diag_layer(void *vctx, size_t kk, int tid)
 				if (c->level == 0)
 					s->invd0[a * s->cs + n0] = (float)v;
 				else
-					l->invd[3 * n + a] = v;
+					l->invd[a * l->cs + n0] = (float)v;
 			}
 		}
 }
@@ -314,7 +295,7 @@ int fea_mg_build(struct fea_solver *s, struct err *e)
 	for (int lev = 0; lev < s->nlev; lev++) {
 		struct fea_level *l = &s->lv[lev];
 		if (lev == 1) {
-			memset(l->st, 0, l->nn * FEA_ST * 9 * sizeof *l->st);
+			memset(l->st, 0, (size_t)l->cs * FEA_ST * 9 * sizeof *l->st);
 			for (int parity = 0; parity < 2; parity++) {
 				struct l1_ctx c = {s, parity};
 				fea_par(s, (size_t)(l->nz + 1) / 2, 1, level1_layer, &c);
@@ -330,8 +311,8 @@ int fea_mg_build(struct fea_solver *s, struct err *e)
 }
 
 struct scale_ctx {
-	const double *a, *b;
-	double *y;
+	const float *a, *b;
+	float *y;
 	size_t n;
 };
 
@@ -347,39 +328,38 @@ static void mul_block(void *vctx, size_t blk, int tid)
 		c->y[i] = c->a[i] * c->b[i];
 }
 
-static void swap_xt(struct fea_level *l)
+static void swap(float **a, float **b)
 {
-	double *t = l->x;
+	float *t = *a;
 
-	l->x = l->t;
-	l->t = t;
+	*a = *b;
+	*b = t;
 }
 
 void fea_vcycle(struct fea_solver *s, const double *r)
 {
 	const int L = s->nlev - 1, nu = s->opt.smooth;
-	float *tf;
 
 	/* level 0: b0 = r, x0 = invd0 b0 (the first sweep from 0) */
 	fea_first_sweep0(s, r);
 	if (L == 0) {
-		fea_coarse_solve0(s, s->b0, s->x0);
+		fea_coarse_solve(s, s->b0, s->x0);
 		return;
 	}
 	for (int it = 1; it < nu; it++) {
 		fea_apply0f(s, FEA_OP_JAC, s->x0, s->b0, s->t0);
-		tf = s->x0, s->x0 = s->t0, s->t0 = tf;
+		swap(&s->x0, &s->t0);
 	}
 	fea_apply0f(s, FEA_OP_RES, s->x0, s->b0, s->t0);
-	fea_restrict0(s, s->t0, s->lv[1].b);
+	fea_restrict(s, 0, s->t0, s->lv[1].b);
 	for (int lev = 1; lev < L; lev++) {
 		struct fea_level *l = &s->lv[lev];
-		struct scale_ctx c = {l->invd, l->b, l->x, 3 * l->nn};
+		struct scale_ctx c = {l->invd, l->b, l->x, 3 * (size_t)l->cs};
 
 		fea_par(s, (c.n + SCALE_BLOCK - 1) / SCALE_BLOCK, 1, mul_block, &c);
 		for (int it = 1; it < nu; it++) {
 			fea_apply(s, lev, FEA_OP_JAC, l->x, l->b, l->t);
-			swap_xt(l);
+			swap(&l->x, &l->t);
 		}
 		fea_apply(s, lev, FEA_OP_RES, l->x, l->b, l->t);
 		fea_restrict(s, lev, l->t, s->lv[lev + 1].b);
@@ -390,12 +370,12 @@ void fea_vcycle(struct fea_solver *s, const double *r)
 		fea_prolong_add(s, lev, s->lv[lev + 1].x, l->x);
 		for (int it = 0; it < nu; it++) {
 			fea_apply(s, lev, FEA_OP_JAC, l->x, l->b, l->t);
-			swap_xt(l);
+			swap(&l->x, &l->t);
 		}
 	}
-	fea_prolong0(s, s->lv[1].x, s->x0);
+	fea_prolong_add(s, 0, s->lv[1].x, s->x0);
 	for (int it = 0; it < nu; it++) {
 		fea_apply0f(s, FEA_OP_JAC, s->x0, s->b0, s->t0);
-		tf = s->x0, s->x0 = s->t0, s->t0 = tf;
+		swap(&s->x0, &s->t0);
 	}
 }

@@ -107,11 +107,11 @@ void fea_solver_free(struct fea_solver *s)
 	if (!s)
 		return;
 	for (int l = 0; l < FEA_MAX_LEVELS; l++) {
-		mem_free(s->lv[l].st);
-		mem_free(s->lv[l].invd);
-		mem_free(s->lv[l].b);
-		mem_free(s->lv[l].x);
-		mem_free(s->lv[l].t);
+		free0(s->lv[l].st);
+		free0(s->lv[l].invd);
+		free0(s->lv[l].b);
+		free0(s->lv[l].x);
+		free0(s->lv[l].t);
 	}
 	free0(s->w0);
 	free0(s->mask0);
@@ -274,29 +274,34 @@ int fea_solver_new(const struct fea_grid *g, const struct fea_loads *l, const st
 	for (int lev = 0; lev < nlev; lev++) {
 		struct fea_level *lv = &s->lv[lev];
 		int m = 1 << (nlev - 1);
+		size_t cs;
 		lv->nx = ceil_div(g->nx, m) * m >> lev;
 		lv->ny = ceil_div(g->ny, m) * m >> lev;
 		lv->nz = ceil_div(g->nz, m) * m >> lev;
-		lv->nn = (size_t)(lv->nx + 1) * (size_t)(lv->ny + 1) * (size_t)(lv->nz + 1);
-		size_t v = 3 * lv->nn;
+		/* the layout of fea_int.h; + one row: the last plane's last row
+		 * reads the next row */
+		lv->sx = (lv->nx + 2 + 7) / 8 * 8;
+		lv->sy = lv->ny + 2;
+		lv->sz = lv->nz + 3;
+		lv->cs = (lv->sx * lv->sy * lv->sz + lv->sx + 15) / 16 * 16;
+		cs = (size_t)lv->cs;
 		if (lev == 0)
 			continue;
-		lv->invd = alloc_count(s, v, sizeof(double));
-		lv->x = alloc_count(s, v, sizeof(double));
-		lv->t = alloc_count(s, v, sizeof(double));
-		lv->b = alloc_count(s, v, sizeof(double));
-		lv->st = alloc_count(s, lv->nn * FEA_ST * 9, sizeof(float));
+		lv->invd = alloc0(s, 3 * cs, sizeof(float));
+		lv->x = alloc0(s, 3 * cs, sizeof(float));
+		lv->t = alloc0(s, 3 * cs, sizeof(float));
+		lv->b = alloc0(s, 3 * cs, sizeof(float));
+		lv->st = alloc0(s, cs * FEA_ST * 9, sizeof(float));
 		if (!lv->invd || !lv->x || !lv->t || !lv->b || !lv->st)
 			goto nomem;
 	}
 	{
 		const struct fea_level *L0 = &s->lv[0];
 		size_t cs, v;
-		s->sx = (L0->nx + 2 + 7) / 8 * 8;
-		s->sy = L0->ny + 2;
-		s->sz = L0->nz + 3;
-		/* + one row: the last plane's last row reads the next row */
-		s->cs = (s->sx * s->sy * s->sz + s->sx + 15) / 16 * 16;
+		s->sx = L0->sx;
+		s->sy = L0->sy;
+		s->sz = L0->sz;
+		s->cs = L0->cs;
 		cs = (size_t)s->cs;
 		v = 3 * cs;
 		s->w0 = alloc0(s, cs, sizeof(float));
