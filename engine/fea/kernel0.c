@@ -82,6 +82,46 @@ struct k0_ctx {
 		(e4_[0] & e4_[1] & e4_[2] & e4_[3]) == -1;                         \
 	})
 
+/* a += wt (the three K0 rows of this node's corner in octant p's
+ * element) x, inside PLANE_BODY (uses its K, xn, cs, a0..a2). */
+#define OCTANT(T, V, VU, KB, p, wt)                                                              \
+	do {                                                                         \
+		V t0 = {0}, t1 = {0}, t2 = {0}, v0 = {0}, v1 = {0}, v2 = {0};        \
+		for (int bn = 0; bn < 8; bn += 2) {                                  \
+			const T *kb = K->KB[p][bn];                                  \
+			const T *xb = xn + K->xoff[K->pd[p][bn]];                    \
+			V x0 = *(const VU *)xb, x1 = *(const VU *)(xb + cs),         \
+			  x2 = *(const VU *)(xb + 2 * cs);                           \
+			t0 += kb[0] * x0;                                            \
+			t1 += kb[3] * x0;                                            \
+			t2 += kb[6] * x0;                                            \
+			t0 += kb[1] * x1;                                            \
+			t1 += kb[4] * x1;                                            \
+			t2 += kb[7] * x1;                                            \
+			t0 += kb[2] * x2;                                            \
+			t1 += kb[5] * x2;                                            \
+			t2 += kb[8] * x2;                                            \
+			kb = K->KB[p][bn + 1];                                       \
+			xb = xn + K->xoff[K->pd[p][bn + 1]];                         \
+			x0 = *(const VU *)xb;                                        \
+			x1 = *(const VU *)(xb + cs);                                 \
+			x2 = *(const VU *)(xb + 2 * cs);                             \
+			v0 += kb[0] * x0;                                            \
+			v1 += kb[3] * x0;                                            \
+			v2 += kb[6] * x0;                                            \
+			v0 += kb[1] * x1;                                            \
+			v1 += kb[4] * x1;                                            \
+			v2 += kb[7] * x1;                                            \
+			v0 += kb[2] * x2;                                            \
+			v1 += kb[5] * x2;                                            \
+			v2 += kb[8] * x2;                                            \
+		}                                                                    \
+		const V wv_ = (wt);                                                  \
+		a0 += wv_ * (t0 + v0);                                               \
+		a1 += wv_ * (t1 + v1);                                               \
+		a2 += wv_ * (t2 + v2);                                               \
+	} while (0)
+
 /* One plane (k) of y = op(A x), L nodes per step; T scalar, V vector,
  * VU its unaligned view, VI the comparison type, KB/SB the coefficient
  * tables, LOADW the weights as V. */
@@ -107,10 +147,14 @@ struct k0_ctx {
 			eq = sum == 0;                                               \
 			if (ALL4(eq))                                                \
 				goto out_##T;                                        \
-			eq = w[1] == w[0];                                           \
-			for (int p = 2; p < 8; p++)                                  \
-				eq &= w[p] == w[0];                                  \
-			if (ALL4(eq)) {                                              \
+			unsigned dm = 0;                                             \
+			int nd = 0;                                                  \
+			for (int p = 1; p < 8; p++) {                                \
+				VI e1 = w[p] == w[0];                                \
+				if (!ALL4(e1))                                       \
+					dm |= 1u << p, nd++;                         \
+			}                                                            \
+			if (nd <= 5) {                                               \
 				/* solid stencil, 3 partial sums per row */          \
 				for (int r = 0; r < 3; r++) {                        \
 					V u0 = {0}, u1 = {0}, u2 = {0};              \
@@ -132,44 +176,15 @@ struct k0_ctx {
 					else                                         \
 						a2 = u0;                             \
 				}                                                    \
+				/* w = w[0] everywhere + (w[p] - w[0]) on octant p */ \
+				for (int p = 1; p < 8; p++)                          \
+					if (dm & (1u << p))                          \
+						OCTANT(T, V, VU, KB, p, w[p] - w[0]); \
 			} else {                                                     \
 				for (int p = 0; p < 8; p++) {                        \
-					V t0 = {0}, t1 = {0}, t2 = {0}, v0 = {0}, v1 = {0}, v2 = {0}; \
 					VI z = w[p] == 0;                            \
-					if (ALL4(z))                                 \
-						continue;                            \
-					for (int bn = 0; bn < 8; bn += 2) {          \
-						const T *kb = K->KB[p][bn];          \
-						const T *xb = xn + K->xoff[K->pd[p][bn]]; \
-						V x0 = *(const VU *)xb, x1 = *(const VU *)(xb + cs), \
-						  x2 = *(const VU *)(xb + 2 * cs);   \
-						t0 += kb[0] * x0;                    \
-						t1 += kb[3] * x0;                    \
-						t2 += kb[6] * x0;                    \
-						t0 += kb[1] * x1;                    \
-						t1 += kb[4] * x1;                    \
-						t2 += kb[7] * x1;                    \
-						t0 += kb[2] * x2;                    \
-						t1 += kb[5] * x2;                    \
-						t2 += kb[8] * x2;                    \
-						kb = K->KB[p][bn + 1];               \
-						xb = xn + K->xoff[K->pd[p][bn + 1]]; \
-						x0 = *(const VU *)xb;                \
-						x1 = *(const VU *)(xb + cs);         \
-						x2 = *(const VU *)(xb + 2 * cs);     \
-						v0 += kb[0] * x0;                    \
-						v1 += kb[3] * x0;                    \
-						v2 += kb[6] * x0;                    \
-						v0 += kb[1] * x1;                    \
-						v1 += kb[4] * x1;                    \
-						v2 += kb[7] * x1;                    \
-						v0 += kb[2] * x2;                    \
-						v1 += kb[5] * x2;                    \
-						v2 += kb[8] * x2;                    \
-					}                                            \
-					a0 += w[p] * (t0 + v0);                      \
-					a1 += w[p] * (t1 + v1);                      \
-					a2 += w[p] * (t2 + v2);                      \
+					if (!ALL4(z))                                \
+						OCTANT(T, V, VU, KB, p, w[p]);      \
 				}                                                    \
 			}                                                            \
 		out_##T:;                                                            \
