@@ -157,37 +157,51 @@ void fea_restrict(struct fea_solver *s, int level, const float *r, float *bc)
 	fea_par(s, (size_t)g.c->nz + 1, 1, restrict_plane, &g);
 }
 
-/* x[i] += sum over the coarse nodes around i of w x_c (fine plane k). */
+/* Coarse nodes per chunk of a row in prolong_plane. */
+#define PROLONG_CHUNK 256
+
+/* x[i] += sum over the coarse nodes around i of w x_c (fine plane k):
+ * per fine row, the (up to 4) coarse rows around it are blended in y and
+ * z first, then interpolated along x. */
 static void prolong_plane(void *vctx, size_t kk, int tid)
 {
 	const struct grid_ctx *g = vctx;
 	const struct fea_level *f = g->f, *c = g->c;
 	const int k = (int)kk;
 	const int K[2] = {k >> 1, (k + 1) >> 1}, nk = (k & 1) ? 2 : 1;
+	float tmp[3][PROLONG_CHUNK + 1];
 
 	(void)tid;
 	for (int j = 0; j <= f->ny; j++) {
-		int Jv[2] = {j >> 1, (j + 1) >> 1}, nj = (j & 1) ? 2 : 1;
-		for (int i = 0; i <= f->nx; i++) {
-			int Iv[2] = {i >> 1, (i + 1) >> 1}, ni = (i & 1) ? 2 : 1;
-			ptrdiff_t n = fea_nl(f, i, j, k);
-			unsigned mask = g->masked ? g->s->mask0[n] & FEA_NODE_ALL : 0;
-			float acc[3] = {0, 0, 0};
-			float w = (ni == 2 ? 0.5f : 1) * (nj == 2 ? 0.5f : 1) * (nk == 2 ? 0.5f : 1);
-
-			if (mask == FEA_NODE_ALL)
-				continue;
-			for (int c3 = 0; c3 < nk; c3++)
-				for (int c2 = 0; c2 < nj; c2++)
-					for (int c1 = 0; c1 < ni; c1++) {
-						ptrdiff_t m = fea_nl(c, Iv[c1], Jv[c2], K[c3]);
-						acc[0] += g->in[m];
-						acc[1] += g->in[c->cs + m];
-						acc[2] += g->in[2 * c->cs + m];
-					}
-			for (int q = 0; q < 3; q++)
-				if (!(mask & (1u << q)))
-					g->out[q * f->cs + n] += w * acc[q];
+		const int Jv[2] = {j >> 1, (j + 1) >> 1}, nj = (j & 1) ? 2 : 1;
+		const float wyz = (nj == 2 ? 0.5f : 1) * (nk == 2 ? 0.5f : 1);
+		for (int I0 = 0; I0 < c->nx; I0 += PROLONG_CHUNK) {
+			int I1 = I0 + PROLONG_CHUNK < c->nx ? I0 + PROLONG_CHUNK : c->nx;
+			for (int q = 0; q < 3; q++) {
+				const float *rw[4];
+				int nr = 0;
+				for (int c3 = 0; c3 < nk; c3++)
+					for (int c2 = 0; c2 < nj; c2++)
+						rw[nr++] = g->in + q * c->cs + fea_nl(c, 0, Jv[c2], K[c3]);
+				for (int I = I0; I <= I1; I++) {
+					float acc = rw[0][I];
+					for (int r = 1; r < nr; r++)
+						acc += rw[r][I];
+					tmp[q][I - I0] = wyz * acc;
+				}
+			}
+			const ptrdiff_t n0 = fea_nl(f, 0, j, k);
+			const int iend = I1 < c->nx ? 2 * I1 - 1 : 2 * I1;
+			for (int i = 2 * I0; i <= iend; i++) {
+				const ptrdiff_t n = n0 + i;
+				const unsigned mask = g->masked ? g->s->mask0[n] & FEA_NODE_ALL : 0;
+				const int h = (i >> 1) - I0;
+				for (int q = 0; q < 3; q++) {
+					float v = (i & 1) ? 0.5f * (tmp[q][h] + tmp[q][h + 1]) : tmp[q][h];
+					if (!(mask & (1u << q)))
+						g->out[q * f->cs + n] += v;
+				}
+			}
 		}
 	}
 }

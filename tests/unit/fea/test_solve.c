@@ -490,6 +490,38 @@ static void test_threads(void)
 	fea_grid_fini(&g);
 }
 
+/* A long bar (rows of more than 256 coarse nodes: several chunks of the
+ * prolongation) solved with 1, 2 and 3 levels: the same answer. */
+static void test_long_bar(void)
+{
+	struct fea_grid g;
+	struct fea_opts o;
+	struct fea_solver *s = NULL;
+	struct fea_result r;
+	struct err e;
+	double c[3];
+
+	err_clear(&e);
+	grid_box(&g, 1100, 2, 4, 0.25);
+	fea_opts_default(&o);
+	o.tol = 1e-9;
+	o.threads = 2;
+	for (int lev = 1; lev <= 3; lev++) {
+		o.levels = lev;
+		REQUIRE_OK(solve_text(&g, "fixed box=0,0,0,0,1,1; force box=275,0,0,275,1,1 n=1,0,0",
+				      &o, &s, &r, &e),
+			   &e);
+		c[lev - 1] = r.compliance_nmm;
+		CHECK_EQ_INT(r.levels, lev);
+		fea_solver_free(s);
+	}
+	/* axial: F^2 L / (E A) = 275 / (1000 * 0.5) */
+	CHECK_REL(c[0], 275 / (1000 * 0.5), 0.01);
+	CHECK_REL(c[1], c[0], 1e-7);
+	CHECK_REL(c[2], c[0], 1e-7);
+	fea_grid_fini(&g);
+}
+
 int main(void)
 {
 	RUN(test_dense_direct);
@@ -499,5 +531,6 @@ int main(void)
 	RUN(test_lattice);
 	RUN(test_set_rho);
 	RUN(test_threads);
+	RUN(test_long_bar);
 	return harness_report();
 }
