@@ -94,7 +94,6 @@ struct fea_k0 {
 	ptrdiff_t soff[3][81];  /* their x offsets: axis * cs + xoff[d] */
 	float sf[3][81];
 	double sd[3][81];
-	double gsolid;          /* Gershgorin ratio sum_j |a_ij| / a_ii of a solid node */
 };
 
 /* The level layout: structure of arrays, one array of cs entries per
@@ -176,6 +175,8 @@ int fea_have_avx2(void);
 void fea_k0_init(struct fea_solver *s);
 void fea_apply0f(struct fea_solver *s, enum fea_op op, const float *x, const float *b, float *y);
 void fea_apply0d(struct fea_solver *s, const double *x, double *y); /* y = A x */
+/* invd0 from w0 and mask0 (weights capped at bound / Gershgorin ratio) */
+void fea_jacobi0(struct fea_solver *s, double bound);
 /* b0 = (float) r, x0 = invd0 b0: the first Jacobi sweep from 0 */
 void fea_first_sweep0(struct fea_solver *s, const double *r);
 

@@ -48,11 +48,6 @@ void fea_k0_init(struct fea_solver *s)
 				}
 		}
 	}
-	K->gsolid = 0;
-	for (int d = 0; d < 27; d++)
-		for (int c = 0; c < 3; c++)
-			K->gsolid += fabs(st[d][c]);
-	K->gsolid /= st[13][0];
 	/* the solid stencil's nonzeros (zeros by the cube's symmetries) */
 	for (int r = 0; r < 3; r++)
 		for (int d = 0; d < 27; d++)
@@ -290,4 +285,87 @@ void fea_first_sweep0(struct fea_solver *s, const double *r)
 	struct k0_ctx c = {s, FEA_OP_AX, r, NULL, NULL, NULL};
 
 	fea_par(s, (size_t)s->lv[0].nz + 1, 1, first_plane, &c);
+}
+
+/* Jacobi weights of level 0, one plane, 8 nodes per step: the 27 blocks
+ * of each node's row assembled from its elements (as the operator), then
+ * invd = min(jacobi_w, bound / g) / a_ii with g the row's Gershgorin
+ * ratio over the unmasked columns (mg.c explains the bound). */
+INLINE void jacobi0_body(const struct k0_ctx *c, int k)
+{
+	const struct fea_solver *s = c->s;
+	const struct fea_k0 *K = &s->k0;
+	const float w = (float)s->opt.jacobi_w, bound = (float)*(const double *)c->b;
+
+	for (int j = 0; j <= s->lv[0].ny; j++) {
+		const ptrdiff_t row = fea_n0(s, -1, j, k);
+		for (ptrdiff_t c0 = 0; c0 < s->sx; c0 += 8) {
+			const ptrdiff_t n = row + c0;
+			vf8 wv[8], blk[27 * 9], sum = {0};
+			vi8 z;
+
+			for (int p = 0; p < 8; p++) {
+				wv[p] = LOADW_F(s->w0 + n + K->eoff[p]);
+				sum += wv[p];
+			}
+			z = sum == 0;
+			if (ALL4(z)) {
+				vf8 zero = {0};
+				for (int q = 0; q < 3; q++)
+					*(vf8u *)(s->invd0 + q * s->cs + n) = zero;
+				continue;
+			}
+			memset(blk, 0, sizeof blk);
+			for (int p = 0; p < 8; p++)
+				for (int bn = 0; bn < 8; bn++) {
+					const float *kb = K->kf[p][bn];
+					vf8 *bl = blk + 9 * K->pd[p][bn];
+					for (int x = 0; x < 9; x++)
+						bl[x] += kb[x] * wv[p];
+				}
+			vi8 own = {0}, nm[27];
+			for (int d = 0; d < 27; d++)
+				for (int l = 0; l < 8; l++)
+					nm[d][l] = s->mask0[n + K->xoff[d] + l];
+			own = nm[13];
+			for (int a = 0; a < 3; a++) {
+				vf8 g = {0}, dg = blk[13 * 9 + 4 * a], v;
+				for (int d = 0; d < 27; d++)
+					for (int cc = 0; cc < 3; cc++) {
+						vf8 e = blk[d * 9 + 3 * a + cc];
+						vi8 fr = (nm[d] & (1 << cc)) == 0;
+						e = (vf8)((vi8)e & (vi8){0x7fffffff, 0x7fffffff, 0x7fffffff,
+									  0x7fffffff, 0x7fffffff, 0x7fffffff,
+									  0x7fffffff, 0x7fffffff}); /* |e| */
+						g += (vf8)((vi8)e & fr);
+					}
+				for (int l = 0; l < 8; l++) {
+					float gl = dg[l] > 0 ? g[l] / dg[l] : 0;
+					v[l] = dg[l] > 0 && !(own[l] & (1 << a))
+						       ? (w * gl < bound ? w : bound / gl) / dg[l]
+						       : 0;
+				}
+				*(vf8u *)(s->invd0 + a * s->cs + n) = v;
+			}
+		}
+	}
+}
+
+FAST static void jacobi0_avx2(void *ctx, size_t k, int tid)
+{
+	(void)tid;
+	jacobi0_body(ctx, (int)k);
+}
+
+static void jacobi0_base(void *ctx, size_t k, int tid)
+{
+	(void)tid;
+	jacobi0_body(ctx, (int)k);
+}
+
+void fea_jacobi0(struct fea_solver *s, double bound)
+{
+	struct k0_ctx c = {s, FEA_OP_AX, NULL, &bound, NULL, NULL};
+
+	fea_par(s, (size_t)s->lv[0].nz + 1, 1, fea_have_avx2() ? jacobi0_avx2 : jacobi0_base, &c);
 }

@@ -202,7 +202,8 @@ struct diag_ctx {
 	int level;
 };
 
-/* Jacobi weights of one node layer: invd = w_i / a_ii with
+/* Jacobi weights of one node layer of a level >= 1 (level 0:
+ * fea_jacobi0, the same rule): invd = w_i / a_ii with
  * w_i = min(jacobi_w, FEA_JACOBI_BOUND / g_i), g_i = sum_j |a_ij| / a_ii
  * the row's Gershgorin ratio (masked columns excluded).  Then every
  * eigenvalue of W D^-1 A is <= FEA_JACOBI_BOUND < 2, so each sweep
@@ -221,71 +222,27 @@ static void diag_layer(void *vctx, size_t kk, int tid)
 	(void)tid;
 	for (int j = 0; j <= l->ny; j++)
 		for (int i = 0; i <= l->nx; i++) {
-			unsigned mask = 0, nmask[27];
-			ptrdiff_t n0 = 0;
+			const ptrdiff_t n0 = fea_nl(l, i, j, k);
 
-			if (c->level == 0) {
-				n0 = fea_n0(s, i, j, k);
-				mask = s->mask0[n0] & FEA_NODE_ALL;
-				memset(blk, 0, sizeof blk);
-				for (int d = 0; d < 27; d++)
-					nmask[d] = s->mask0[n0 + s->k0.xoff[d]] & FEA_NODE_ALL;
-				int uniform = !mask;
-				double w0v = s->w0[n0 + s->k0.eoff[0]];
-				for (int d = 0; d < 27 && uniform; d++)
-					uniform = !nmask[d];
-				for (int p = 1; p < 8 && uniform; p++)
-					uniform = s->w0[n0 + s->k0.eoff[p]] == w0v;
-				if (uniform && w0v > 0) {
-					/* a solid (or void) interior node: known ratio */
-					double dg = 8 * w0v * s->kdiag, g = s->k0.gsolid;
-					float v = (float)((w * g < FEA_JACOBI_BOUND ? w : FEA_JACOBI_BOUND / g) /
-							  dg);
-					for (int a = 0; a < 3; a++)
-						s->invd0[a * s->cs + n0] = v;
+			memset(blk, 0, sizeof blk);
+			for (int d = 0; d < 27; d++) {
+				int ii = i + d % 3 - 1, jj = j + (d / 3) % 3 - 1, kq = k + d / 9 - 1;
+				float bl[9];
+				if (ii < 0 || jj < 0 || kq < 0 || ii > l->nx || jj > l->ny || kq > l->nz)
 					continue;
-				}
-				if (mask != FEA_NODE_ALL)
-					for (int p = 0; p < 8; p++) {
-						double we = s->w0[n0 + s->k0.eoff[p]];
-						if (!(we > 0))
-							continue;
-						for (int b = 0; b < 8; b++) {
-							const double *kb = s->k0.kd[p][b];
-							double *bl = blk + 9 * s->k0.pd[p][b];
-							for (int x = 0; x < 9; x++)
-								bl[x] += we * kb[x];
-						}
-					}
-			} else {
-				n0 = fea_nl(l, i, j, k);
-				memset(blk, 0, sizeof blk);
-				for (int d = 0; d < 27; d++) {
-					int ii = i + d % 3 - 1, jj = j + (d / 3) % 3 - 1, kq = k + d / 9 - 1;
-					float bl[9];
-					nmask[d] = 0;
-					if (ii < 0 || jj < 0 || kq < 0 || ii > l->nx || jj > l->ny ||
-					    kq > l->nz)
-						continue;
-					fea_block(l, n0, d, bl);
-					for (int x = 0; x < 9; x++)
-						blk[d * 9 + x] = bl[x];
-				}
+				fea_block(l, n0, d, bl);
+				for (int x = 0; x < 9; x++)
+					blk[d * 9 + x] = bl[x];
 			}
 			for (int a = 0; a < 3; a++) {
 				double dg = blk[13 * 9 + 4 * a], g = 0, v = 0;
-				if (!(mask & (1u << a)) && dg > 0) {
-					for (int d = 0; d < 27; d++)
-						for (int cc = 0; cc < 3; cc++)
-							if (!(nmask[d] & (1u << cc)))
-								g += fabs(blk[d * 9 + 3 * a + cc]);
+				if (dg > 0) {
+					for (int x = 0; x < 27 * 3; x++)
+						g += fabs(blk[x / 3 * 9 + 3 * a + x % 3]);
 					g /= dg;
 					v = (w * g < FEA_JACOBI_BOUND ? w : FEA_JACOBI_BOUND / g) / dg;
 				}
-				if (c->level == 0)
-					s->invd0[a * s->cs + n0] = (float)v;
-				else
-					l->invd[a * l->cs + n0] = (float)v;
+				l->invd[a * l->cs + n0] = (float)v;
 			}
 		}
 }
@@ -305,7 +262,10 @@ int fea_mg_build(struct fea_solver *s, struct err *e)
 			fea_par(s, (size_t)l->nz + 1, 1, galerkin_layer, &g);
 		}
 		struct diag_ctx dc = {s, lev};
-		fea_par(s, (size_t)l->nz + 1, 1, diag_layer, &dc);
+		if (lev == 0)
+			fea_jacobi0(s, FEA_JACOBI_BOUND);
+		else
+			fea_par(s, (size_t)l->nz + 1, 1, diag_layer, &dc);
 	}
 	return fea_coarse_factor(s, e);
 }
