@@ -48,11 +48,6 @@ void fea_k0_init(struct fea_solver *s)
 				}
 		}
 	}
-	K->gsolid = 0;
-	for (int d = 0; d < 27; d++)
-		for (int c = 0; c < 3; c++)
-			K->gsolid += fabs(st[d][c]);
-	K->gsolid /= st[13][0];
 	/* the solid stencil's nonzeros (zeros by the cube's symmetries) */
 	for (int r = 0; r < 3; r++)
 		for (int d = 0; d < 27; d++)
@@ -82,6 +77,46 @@ struct k0_ctx {
 		(e4_[0] & e4_[1] & e4_[2] & e4_[3]) == -1;                         \
 	})
 
+/* a += wt (the three K0 rows of this node's corner in octant p's
+ * element) x, inside PLANE_BODY (uses its K, xn, cs, a0..a2). */
+#define OCTANT(T, V, VU, KB, p, wt)                                                              \
+	do {                                                                         \
+		V t0 = {0}, t1 = {0}, t2 = {0}, v0 = {0}, v1 = {0}, v2 = {0};        \
+		for (int bn = 0; bn < 8; bn += 2) {                                  \
+			const T *kb = K->KB[p][bn];                                  \
+			const T *xb = xn + K->xoff[K->pd[p][bn]];                    \
+			V x0 = *(const VU *)xb, x1 = *(const VU *)(xb + cs),         \
+			  x2 = *(const VU *)(xb + 2 * cs);                           \
+			t0 += kb[0] * x0;                                            \
+			t1 += kb[3] * x0;                                            \
+			t2 += kb[6] * x0;                                            \
+			t0 += kb[1] * x1;                                            \
+			t1 += kb[4] * x1;                                            \
+			t2 += kb[7] * x1;                                            \
+			t0 += kb[2] * x2;                                            \
+			t1 += kb[5] * x2;                                            \
+			t2 += kb[8] * x2;                                            \
+			kb = K->KB[p][bn + 1];                                       \
+			xb = xn + K->xoff[K->pd[p][bn + 1]];                         \
+			x0 = *(const VU *)xb;                                        \
+			x1 = *(const VU *)(xb + cs);                                 \
+			x2 = *(const VU *)(xb + 2 * cs);                             \
+			v0 += kb[0] * x0;                                            \
+			v1 += kb[3] * x0;                                            \
+			v2 += kb[6] * x0;                                            \
+			v0 += kb[1] * x1;                                            \
+			v1 += kb[4] * x1;                                            \
+			v2 += kb[7] * x1;                                            \
+			v0 += kb[2] * x2;                                            \
+			v1 += kb[5] * x2;                                            \
+			v2 += kb[8] * x2;                                            \
+		}                                                                    \
+		const V wv_ = (wt);                                                  \
+		a0 += wv_ * (t0 + v0);                                               \
+		a1 += wv_ * (t1 + v1);                                               \
+		a2 += wv_ * (t2 + v2);                                               \
+	} while (0)
+
 /* One plane (k) of y = op(A x), L nodes per step; T scalar, V vector,
  * VU its unaligned view, VI the comparison type, KB/SB the coefficient
  * tables, LOADW the weights as V. */
@@ -107,10 +142,14 @@ struct k0_ctx {
 			eq = sum == 0;                                               \
 			if (ALL4(eq))                                                \
 				goto out_##T;                                        \
-			eq = w[1] == w[0];                                           \
-			for (int p = 2; p < 8; p++)                                  \
-				eq &= w[p] == w[0];                                  \
-			if (ALL4(eq)) {                                              \
+			unsigned dm = 0;                                             \
+			int nd = 0;                                                  \
+			for (int p = 1; p < 8; p++) {                                \
+				VI e1 = w[p] == w[0];                                \
+				if (!ALL4(e1))                                       \
+					dm |= 1u << p, nd++;                         \
+			}                                                            \
+			if (nd <= 5) {                                               \
 				/* solid stencil, 3 partial sums per row */          \
 				for (int r = 0; r < 3; r++) {                        \
 					V u0 = {0}, u1 = {0}, u2 = {0};              \
@@ -132,44 +171,15 @@ struct k0_ctx {
 					else                                         \
 						a2 = u0;                             \
 				}                                                    \
+				/* w = w[0] everywhere + (w[p] - w[0]) on octant p */ \
+				for (int p = 1; p < 8; p++)                          \
+					if (dm & (1u << p))                          \
+						OCTANT(T, V, VU, KB, p, w[p] - w[0]); \
 			} else {                                                     \
 				for (int p = 0; p < 8; p++) {                        \
-					V t0 = {0}, t1 = {0}, t2 = {0}, v0 = {0}, v1 = {0}, v2 = {0}; \
 					VI z = w[p] == 0;                            \
-					if (ALL4(z))                                 \
-						continue;                            \
-					for (int bn = 0; bn < 8; bn += 2) {          \
-						const T *kb = K->KB[p][bn];          \
-						const T *xb = xn + K->xoff[K->pd[p][bn]]; \
-						V x0 = *(const VU *)xb, x1 = *(const VU *)(xb + cs), \
-						  x2 = *(const VU *)(xb + 2 * cs);   \
-						t0 += kb[0] * x0;                    \
-						t1 += kb[3] * x0;                    \
-						t2 += kb[6] * x0;                    \
-						t0 += kb[1] * x1;                    \
-						t1 += kb[4] * x1;                    \
-						t2 += kb[7] * x1;                    \
-						t0 += kb[2] * x2;                    \
-						t1 += kb[5] * x2;                    \
-						t2 += kb[8] * x2;                    \
-						kb = K->KB[p][bn + 1];               \
-						xb = xn + K->xoff[K->pd[p][bn + 1]]; \
-						x0 = *(const VU *)xb;                \
-						x1 = *(const VU *)(xb + cs);         \
-						x2 = *(const VU *)(xb + 2 * cs);     \
-						v0 += kb[0] * x0;                    \
-						v1 += kb[3] * x0;                    \
-						v2 += kb[6] * x0;                    \
-						v0 += kb[1] * x1;                    \
-						v1 += kb[4] * x1;                    \
-						v2 += kb[7] * x1;                    \
-						v0 += kb[2] * x2;                    \
-						v1 += kb[5] * x2;                    \
-						v2 += kb[8] * x2;                    \
-					}                                            \
-					a0 += w[p] * (t0 + v0);                      \
-					a1 += w[p] * (t1 + v1);                      \
-					a2 += w[p] * (t2 + v2);                      \
+					if (!ALL4(z))                                \
+						OCTANT(T, V, VU, KB, p, w[p]);      \
 				}                                                    \
 			}                                                            \
 		out_##T:;                                                            \
@@ -277,90 +287,85 @@ void fea_first_sweep0(struct fea_solver *s, const double *r)
 	fea_par(s, (size_t)s->lv[0].nz + 1, 1, first_plane, &c);
 }
 
-struct tr_ctx {
-	struct fea_solver *s;
-	const float *f;
-	const double *d;
-	float *fo;
-	double *dout;
-};
-
-/* b1[I] = sum over fine nodes 2I + o (o in {-1, 0, 1}^3) of w(o) r0 */
-static void restrict0_plane(void *vctx, size_t kk, int tid)
+/* Jacobi weights of level 0, one plane, 8 nodes per step: the 27 blocks
+ * of each node's row assembled from its elements (as the operator), then
+ * invd = min(jacobi_w, bound / g) / a_ii with g the row's Gershgorin
+ * ratio over the unmasked columns (mg.c explains the bound). */
+INLINE void jacobi0_body(const struct k0_ctx *c, int k)
 {
-	const struct tr_ctx *c = vctx;
 	const struct fea_solver *s = c->s;
-	const struct fea_level *l1 = &s->lv[1];
-	const int K = (int)kk;
-	static const float wt[3] = {0.5f, 1, 0.5f};
+	const struct fea_k0 *K = &s->k0;
+	const float w = (float)s->opt.jacobi_w, bound = (float)*(const double *)c->b;
 
-	(void)tid;
-	for (int J = 0; J <= l1->ny; J++)
-		for (int I = 0; I <= l1->nx; I++) {
-			double acc[3] = {0, 0, 0};
-			ptrdiff_t n = fea_n0(s, 2 * I, 2 * J, 2 * K);
-			for (int oz = 0; oz < 3; oz++)
-				for (int oy = 0; oy < 3; oy++) {
-					float wyz = wt[oy] * wt[oz];
-					ptrdiff_t m = n + (oy - 1) * s->sx + (oz - 1) * s->sx * s->sy;
-					for (int q = 0; q < 3; q++) {
-						const float *r = c->f + q * s->cs + m;
-						acc[q] += wyz * (0.5f * r[-1] + r[0] + 0.5f * r[1]);
-					}
-				}
-			double *o = c->dout + 3 * fea_node(l1, I, J, K);
-			o[0] = acc[0];
-			o[1] = acc[1];
-			o[2] = acc[2];
-		}
-}
+	for (int j = 0; j <= s->lv[0].ny; j++) {
+		const ptrdiff_t row = fea_n0(s, -1, j, k);
+		for (ptrdiff_t c0 = 0; c0 < s->sx; c0 += 8) {
+			const ptrdiff_t n = row + c0;
+			vf8 wv[8], blk[27 * 9], sum = {0};
+			vi8 z;
 
-void fea_restrict0(struct fea_solver *s, const float *r0, double *b1)
-{
-	struct tr_ctx c = {s, r0, NULL, NULL, b1};
-
-	fea_par(s, (size_t)s->lv[1].nz + 1, 1, restrict0_plane, &c);
-}
-
-/* x0 += P x1 on fine plane k, masked */
-static void prolong0_plane(void *vctx, size_t kk, int tid)
-{
-	const struct tr_ctx *c = vctx;
-	const struct fea_solver *s = c->s;
-	const struct fea_level *f = &s->lv[0], *l1 = &s->lv[1];
-	const int k = (int)kk;
-	const int K[2] = {k >> 1, (k + 1) >> 1}, nk = (k & 1) ? 2 : 1;
-
-	(void)tid;
-	for (int j = 0; j <= f->ny; j++) {
-		int Jv[2] = {j >> 1, (j + 1) >> 1}, nj = (j & 1) ? 2 : 1;
-		for (int i = 0; i <= f->nx; i++) {
-			int Iv[2] = {i >> 1, (i + 1) >> 1}, ni = (i & 1) ? 2 : 1;
-			ptrdiff_t n = fea_n0(s, i, j, k);
-			unsigned mask = s->mask0[n] & FEA_NODE_ALL;
-			double acc[3] = {0, 0, 0};
-			double w = (ni == 2 ? 0.5 : 1) * (nj == 2 ? 0.5 : 1) * (nk == 2 ? 0.5 : 1);
-
-			if (mask == FEA_NODE_ALL)
+			for (int p = 0; p < 8; p++) {
+				wv[p] = LOADW_F(s->w0 + n + K->eoff[p]);
+				sum += wv[p];
+			}
+			z = sum == 0;
+			if (ALL4(z)) {
+				vf8 zero = {0};
+				for (int q = 0; q < 3; q++)
+					*(vf8u *)(s->invd0 + q * s->cs + n) = zero;
 				continue;
-			for (int c3 = 0; c3 < nk; c3++)
-				for (int c2 = 0; c2 < nj; c2++)
-					for (int c1 = 0; c1 < ni; c1++) {
-						const double *xc = c->d + 3 * fea_node(l1, Iv[c1], Jv[c2], K[c3]);
-						acc[0] += xc[0];
-						acc[1] += xc[1];
-						acc[2] += xc[2];
+			}
+			memset(blk, 0, sizeof blk);
+			for (int p = 0; p < 8; p++)
+				for (int bn = 0; bn < 8; bn++) {
+					const float *kb = K->kf[p][bn];
+					vf8 *bl = blk + 9 * K->pd[p][bn];
+					for (int x = 0; x < 9; x++)
+						bl[x] += kb[x] * wv[p];
+				}
+			vi8 own = {0}, nm[27];
+			for (int d = 0; d < 27; d++)
+				for (int l = 0; l < 8; l++)
+					nm[d][l] = s->mask0[n + K->xoff[d] + l];
+			own = nm[13];
+			for (int a = 0; a < 3; a++) {
+				vf8 g = {0}, dg = blk[13 * 9 + 4 * a], v;
+				for (int d = 0; d < 27; d++)
+					for (int cc = 0; cc < 3; cc++) {
+						vf8 e = blk[d * 9 + 3 * a + cc];
+						vi8 fr = (nm[d] & (1 << cc)) == 0;
+						e = (vf8)((vi8)e & (vi8){0x7fffffff, 0x7fffffff, 0x7fffffff,
+									  0x7fffffff, 0x7fffffff, 0x7fffffff,
+									  0x7fffffff, 0x7fffffff}); /* |e| */
+						g += (vf8)((vi8)e & fr);
 					}
-			for (int q = 0; q < 3; q++)
-				if (!(mask & (1u << q)))
-					c->fo[q * s->cs + n] += (float)(w * acc[q]);
+				for (int l = 0; l < 8; l++) {
+					float gl = dg[l] > 0 ? g[l] / dg[l] : 0;
+					v[l] = dg[l] > 0 && !(own[l] & (1 << a))
+						       ? (w * gl < bound ? w : bound / gl) / dg[l]
+						       : 0;
+				}
+				*(vf8u *)(s->invd0 + a * s->cs + n) = v;
+			}
 		}
 	}
 }
 
-void fea_prolong0(struct fea_solver *s, const double *x1, float *x0)
+FAST static void jacobi0_avx2(void *ctx, size_t k, int tid)
 {
-	struct tr_ctx c = {s, NULL, x1, x0, NULL};
+	(void)tid;
+	jacobi0_body(ctx, (int)k);
+}
 
-	fea_par(s, (size_t)s->lv[0].nz + 1, 1, prolong0_plane, &c);
+static void jacobi0_base(void *ctx, size_t k, int tid)
+{
+	(void)tid;
+	jacobi0_body(ctx, (int)k);
+}
+
+void fea_jacobi0(struct fea_solver *s, double bound)
+{
+	struct k0_ctx c = {s, FEA_OP_AX, NULL, &bound, NULL, NULL};
+
+	fea_par(s, (size_t)s->lv[0].nz + 1, 1, fea_have_avx2() ? jacobi0_avx2 : jacobi0_base, &c);
 }

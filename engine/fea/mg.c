@@ -109,16 +109,15 @@ static void level1_layer(void *vctx, size_t kk, int tid)
 		scatter:
 			for (int L = 0; L < 8; L++) {
 				int lx = L & 1, ly = (L >> 1) & 1, lz = (L >> 2) & 1;
-				float *st = l->st + fea_node(l, I + lx, J + ly, K + lz) * FEA_ST * 9;
+				ptrdiff_t nl = fea_nl(l, I + lx, J + ly, K + lz);
 				for (int M = 0; M < 8; M++) {
 					int d = ((M >> 2) - lz + 1) * 9 + (((M >> 1) & 1) - ly + 1) * 3 +
 						((M & 1) - lx + 1);
 					if (d < 13)
 						continue; /* the neighbour's forward block */
-					float *bl = st + (d - 13) * 9;
 					for (int r = 0; r < 3; r++)
 						for (int cc = 0; cc < 3; cc++)
-							bl[3 * r + cc] +=
+							*fea_st(l, nl, d - 13, 3 * r + cc) +=
 								(float)a[(3 * L + r) * 24 + 3 * M + cc];
 				}
 			}
@@ -129,7 +128,8 @@ struct gal_ctx {
 	const struct fea_level *f, *c;
 };
 
-/* Coarse node layer K of P^T A P (fine level f with stencils). */
+/* Coarse node layer K of P^T A P (fine level f with stencils), forward
+ * blocks only. */
 static void galerkin_layer(void *vctx, size_t kk, int tid)
 {
 	const struct gal_ctx *g = vctx;
@@ -149,10 +149,10 @@ static void galerkin_layer(void *vctx, size_t kk, int tid)
 						    fk > f->nz)
 							continue;
 						double pw = (ox ? 0.5 : 1) * (oy ? 0.5 : 1) * (oz ? 0.5 : 1);
-						size_t fn = fea_node(f, fi, fj, fk);
+						ptrdiff_t fn = fea_nl(f, fi, fj, fk);
 						for (int d = 0; d < 27; d++) {
-							int dx = d % 3 - 1, dy = (d / 3) % 3 - 1, dz = d / 9 - 1;
-							int j3[3] = {fi + dx, fj + dy, fk + dz};
+							int j3[3] = {fi + d % 3 - 1, fj + d / 3 % 3 - 1,
+								     fk + d / 9 - 1};
 							const int lim[3] = {f->nx, f->ny, f->nz};
 							int Jc[3][2], nj[3];
 							double qw[3];
@@ -174,19 +174,7 @@ static void galerkin_layer(void *vctx, size_t kk, int tid)
 							}
 							if (outside)
 								continue;
-							if (d >= 13) {
-								memcpy(bl, f->st + (fn * FEA_ST + d - 13) * 9,
-								       sizeof bl);
-							} else {
-								const float *tb =
-									f->st + (fea_node(f, j3[0], j3[1], j3[2]) *
-										 FEA_ST +
-									 13 - d) *
-										9;
-								for (int r = 0; r < 3; r++)
-									for (int cc = 0; cc < 3; cc++)
-										bl[3 * r + cc] = tb[3 * cc + r];
-							}
+							fea_block(f, fn, d, bl);
 							double wq = pw * qw[0] * qw[1] * qw[2];
 							for (int cz = 0; cz < nj[2]; cz++)
 								for (int cy = 0; cy < nj[1]; cy++)
@@ -202,9 +190,10 @@ static void galerkin_layer(void *vctx, size_t kk, int tid)
 									}
 						}
 					}
-			float *out = c->st + fea_node(c, I, J, K) * FEA_ST * 9;
-			for (int x = 0; x < FEA_ST * 9; x++)
-				out[x] = (float)acc[13 * 9 + x];
+			ptrdiff_t cn = fea_nl(c, I, J, K);
+			for (int fb = 0; fb < FEA_ST; fb++)
+				for (int x = 0; x < 9; x++)
+					*fea_st(c, cn, fb, x) = (float)acc[(13 + fb) * 9 + x];
 		}
 }
 
@@ -213,7 +202,8 @@ struct diag_ctx {
 	int level;
 };
 
-/* Jacobi weights of one node layer: invd = w_i / a_ii with
+/* Jacobi weights of one node layer of a level >= 1 (level 0:
+ * fea_jacobi0, the same rule): invd = w_i / a_ii with
  * w_i = min(jacobi_w, FEA_JACOBI_BOUND / g_i), g_i = sum_j |a_ij| / a_ii
  * the row's Gershgorin ratio (masked columns excluded).  Then every
  * eigenvalue of W D^-1 A is <= FEA_JACOBI_BOUND < 2, so each sweep
@@ -232,79 +222,27 @@ static void diag_layer(void *vctx, size_t kk, int tid)
 	(void)tid;
 	for (int j = 0; j <= l->ny; j++)
 		for (int i = 0; i <= l->nx; i++) {
-			unsigned mask = 0, nmask[27];
-			size_t n = 0;
-			ptrdiff_t n0 = 0;
+			const ptrdiff_t n0 = fea_nl(l, i, j, k);
 
-			if (c->level == 0) {
-				n0 = fea_n0(s, i, j, k);
-				mask = s->mask0[n0] & FEA_NODE_ALL;
-				memset(blk, 0, sizeof blk);
-				for (int d = 0; d < 27; d++)
-					nmask[d] = s->mask0[n0 + s->k0.xoff[d]] & FEA_NODE_ALL;
-				int uniform = !mask;
-				double w0v = s->w0[n0 + s->k0.eoff[0]];
-				for (int d = 0; d < 27 && uniform; d++)
-					uniform = !nmask[d];
-				for (int p = 1; p < 8 && uniform; p++)
-					uniform = s->w0[n0 + s->k0.eoff[p]] == w0v;
-				if (uniform && w0v > 0) {
-					/* a solid (or void) interior node: known ratio */
-					double dg = 8 * w0v * s->kdiag, g = s->k0.gsolid;
-					float v = (float)((w * g < FEA_JACOBI_BOUND ? w : FEA_JACOBI_BOUND / g) /
-							  dg);
-					for (int a = 0; a < 3; a++)
-						s->invd0[a * s->cs + n0] = v;
+			memset(blk, 0, sizeof blk);
+			for (int d = 0; d < 27; d++) {
+				int ii = i + d % 3 - 1, jj = j + (d / 3) % 3 - 1, kq = k + d / 9 - 1;
+				float bl[9];
+				if (ii < 0 || jj < 0 || kq < 0 || ii > l->nx || jj > l->ny || kq > l->nz)
 					continue;
-				}
-				if (mask != FEA_NODE_ALL)
-					for (int p = 0; p < 8; p++) {
-						double we = s->w0[n0 + s->k0.eoff[p]];
-						if (!(we > 0))
-							continue;
-						for (int b = 0; b < 8; b++) {
-							const double *kb = s->k0.kd[p][b];
-							double *bl = blk + 9 * s->k0.pd[p][b];
-							for (int x = 0; x < 9; x++)
-								bl[x] += we * kb[x];
-						}
-					}
-			} else {
-				n = fea_node(l, i, j, k);
-				memset(blk, 0, sizeof blk);
-				for (int d = 0; d < 27; d++) {
-					int ii = i + d % 3 - 1, jj = j + (d / 3) % 3 - 1, kq = k + d / 9 - 1;
-					nmask[d] = 0;
-					if (ii < 0 || jj < 0 || kq < 0 || ii > l->nx || jj > l->ny ||
-					    kq > l->nz)
-						continue;
-					if (d >= 13) {
-						const float *st = l->st + (n * FEA_ST + d - 13) * 9;
-						for (int x = 0; x < 9; x++)
-							blk[d * 9 + x] = st[x];
-					} else {
-						const float *st =
-							l->st + (fea_node(l, ii, jj, kq) * FEA_ST + 13 - d) * 9;
-						for (int r = 0; r < 3; r++)
-							for (int cc = 0; cc < 3; cc++)
-								blk[d * 9 + 3 * r + cc] = st[3 * cc + r];
-					}
-				}
+				fea_block(l, n0, d, bl);
+				for (int x = 0; x < 9; x++)
+					blk[d * 9 + x] = bl[x];
 			}
 			for (int a = 0; a < 3; a++) {
 				double dg = blk[13 * 9 + 4 * a], g = 0, v = 0;
-				if (!(mask & (1u << a)) && dg > 0) {
-					for (int d = 0; d < 27; d++)
-						for (int cc = 0; cc < 3; cc++)
-							if (!(nmask[d] & (1u << cc)))
-								g += fabs(blk[d * 9 + 3 * a + cc]);
+				if (dg > 0) {
+					for (int x = 0; x < 27 * 3; x++)
+						g += fabs(blk[x / 3 * 9 + 3 * a + x % 3]);
 					g /= dg;
 					v = (w * g < FEA_JACOBI_BOUND ? w : FEA_JACOBI_BOUND / g) / dg;
 				}
-				if (c->level == 0)
-					s->invd0[a * s->cs + n0] = (float)v;
-				else
-					l->invd[3 * n + a] = v;
+				l->invd[a * l->cs + n0] = (float)v;
 			}
 		}
 }
@@ -314,7 +252,7 @@ int fea_mg_build(struct fea_solver *s, struct err *e)
 	for (int lev = 0; lev < s->nlev; lev++) {
 		struct fea_level *l = &s->lv[lev];
 		if (lev == 1) {
-			memset(l->st, 0, l->nn * FEA_ST * 9 * sizeof *l->st);
+			memset(l->st, 0, (size_t)l->cs * FEA_ST * 9 * sizeof *l->st);
 			for (int parity = 0; parity < 2; parity++) {
 				struct l1_ctx c = {s, parity};
 				fea_par(s, (size_t)(l->nz + 1) / 2, 1, level1_layer, &c);
@@ -324,14 +262,17 @@ int fea_mg_build(struct fea_solver *s, struct err *e)
 			fea_par(s, (size_t)l->nz + 1, 1, galerkin_layer, &g);
 		}
 		struct diag_ctx dc = {s, lev};
-		fea_par(s, (size_t)l->nz + 1, 1, diag_layer, &dc);
+		if (lev == 0)
+			fea_jacobi0(s, FEA_JACOBI_BOUND);
+		else
+			fea_par(s, (size_t)l->nz + 1, 1, diag_layer, &dc);
 	}
 	return fea_coarse_factor(s, e);
 }
 
 struct scale_ctx {
-	const double *a, *b;
-	double *y;
+	const float *a, *b;
+	float *y;
 	size_t n;
 };
 
@@ -347,39 +288,38 @@ static void mul_block(void *vctx, size_t blk, int tid)
 		c->y[i] = c->a[i] * c->b[i];
 }
 
-static void swap_xt(struct fea_level *l)
+static void swap(float **a, float **b)
 {
-	double *t = l->x;
+	float *t = *a;
 
-	l->x = l->t;
-	l->t = t;
+	*a = *b;
+	*b = t;
 }
 
 void fea_vcycle(struct fea_solver *s, const double *r)
 {
 	const int L = s->nlev - 1, nu = s->opt.smooth;
-	float *tf;
 
 	/* level 0: b0 = r, x0 = invd0 b0 (the first sweep from 0) */
 	fea_first_sweep0(s, r);
 	if (L == 0) {
-		fea_coarse_solve0(s, s->b0, s->x0);
+		fea_coarse_solve(s, s->b0, s->x0);
 		return;
 	}
 	for (int it = 1; it < nu; it++) {
 		fea_apply0f(s, FEA_OP_JAC, s->x0, s->b0, s->t0);
-		tf = s->x0, s->x0 = s->t0, s->t0 = tf;
+		swap(&s->x0, &s->t0);
 	}
 	fea_apply0f(s, FEA_OP_RES, s->x0, s->b0, s->t0);
-	fea_restrict0(s, s->t0, s->lv[1].b);
+	fea_restrict(s, 0, s->t0, s->lv[1].b);
 	for (int lev = 1; lev < L; lev++) {
 		struct fea_level *l = &s->lv[lev];
-		struct scale_ctx c = {l->invd, l->b, l->x, 3 * l->nn};
+		struct scale_ctx c = {l->invd, l->b, l->x, 3 * (size_t)l->cs};
 
 		fea_par(s, (c.n + SCALE_BLOCK - 1) / SCALE_BLOCK, 1, mul_block, &c);
 		for (int it = 1; it < nu; it++) {
 			fea_apply(s, lev, FEA_OP_JAC, l->x, l->b, l->t);
-			swap_xt(l);
+			swap(&l->x, &l->t);
 		}
 		fea_apply(s, lev, FEA_OP_RES, l->x, l->b, l->t);
 		fea_restrict(s, lev, l->t, s->lv[lev + 1].b);
@@ -390,12 +330,12 @@ void fea_vcycle(struct fea_solver *s, const double *r)
 		fea_prolong_add(s, lev, s->lv[lev + 1].x, l->x);
 		for (int it = 0; it < nu; it++) {
 			fea_apply(s, lev, FEA_OP_JAC, l->x, l->b, l->t);
-			swap_xt(l);
+			swap(&l->x, &l->t);
 		}
 	}
-	fea_prolong0(s, s->lv[1].x, s->x0);
+	fea_prolong_add(s, 0, s->lv[1].x, s->x0);
 	for (int it = 0; it < nu; it++) {
 		fea_apply0f(s, FEA_OP_JAC, s->x0, s->b0, s->t0);
-		tf = s->x0, s->x0 = s->t0, s->t0 = tf;
+		swap(&s->x0, &s->t0);
 	}
 }
