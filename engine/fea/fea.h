@@ -69,7 +69,8 @@ struct fea_fix {
 struct fea_force {
 	enum fea_at at;
 	double box_mm[6];
-	double force_n[3]; /* total force in N, spread equally over the box's nodes */
+	double force_n[3]; /* total force in N, spread over the box's nodes in proportion
+			      to the stiffness (sum of rho^p) of the elements each touches */
 };
 
 /* A load case.  Arrays owned (fea_loads_fini). */
