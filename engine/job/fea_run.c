@@ -288,119 +288,6 @@ static int grid_from_mesh(const struct job_spec *js, const struct engine_fea_par
 	return rc;
 }
 
-/* ---- forces spread by stiffness --------------------------------------- */
-
-/* Node index range [*lo, *hi] along one axis of the nodes lo + i h
- * (i in 0..n) within [x0, x1]: the core's rule (engine/fea/select.c),
- * tolerance 1e-6 voxel. */
-static void node_span(double lo, double h, int n, double x0, double x1, int *a, int *b)
-{
-	double p = ceil((x0 - lo) / h - 1e-6), q = floor((x1 - lo) / h + 1e-6);
-
-	*a = p < 0 ? 0 : p > n ? n + 1 : (int)p;
-	*b = q > n ? n : q < 0 ? -1 : (int)q;
-}
-
-/* The nodes fo selects before the material test (fea.h, enum fea_at). */
-static void force_nodes(const struct fea_grid *g, const struct fea_force *fo, int lo[3],
-			int hi[3])
-{
-	const double glo[3] = {g->lo_mm.x, g->lo_mm.y, g->lo_mm.z};
-	const double plo[3] = {g->part_lo_mm.x, g->part_lo_mm.y, g->part_lo_mm.z};
-	const int n[3] = {g->nx, g->ny, g->nz};
-	double h = g->h_mm;
-
-	for (int a = 0; a < 3; a++) {
-		lo[a] = 0;
-		hi[a] = n[a];
-		if (fo->at == FEA_AT_BOX)
-			node_span(glo[a], h, n[a], plo[a] + fo->box_mm[a], plo[a] + fo->box_mm[3 + a],
-				  &lo[a], &hi[a]);
-	}
-	if (fo->at == FEA_AT_PLATE)
-		node_span(glo[2], h, n[2], plo[2] - h / 2, plo[2] + h / 2, &lo[2], &hi[2]);
-	else if (fo->at == FEA_AT_TOP)
-		node_span(glo[2], h, n[2], g->part_hi_mm.z - 1, INFINITY, &lo[2], &hi[2]);
-}
-
-/* Stiffness around node (i, j, k): the sum of rho^p over the elements
- * touching it (rho clamped to rho_min), 0 for a node touching none. */
-static double node_weight(const struct fea_grid *g, int i, int j, int k, double penal,
-			  double rho_min)
-{
-	double w = 0;
-
-	for (int dk = -1; dk <= 0; dk++)
-		for (int dj = -1; dj <= 0; dj++)
-			for (int di = -1; di <= 0; di++) {
-				int x = i + di, y = j + dj, z = k + dk;
-				float r;
-				if (x < 0 || y < 0 || z < 0 || x >= g->nx || y >= g->ny || z >= g->nz)
-					continue;
-				r = g->rho[((size_t)z * g->ny + y) * g->nx + x];
-				if (r > 0)
-					w += pow(r < rho_min ? rho_min : r, penal);
-			}
-	return w;
-}
-
-/* Each force's total spread over its nodes in proportion to the stiffness
- * around each node, instead of equally: on full voxels a face's nodes
- * then carry the consistent loads of a uniform traction (1 : 2 : 4 at
- * corners, edges and inside), and a node that touches only a sliver of
- * material (a voxel a few percent full, stiffness rho^3) carries a
- * matching sliver of the load instead of an equal share that it could
- * only hold by moving metres.  The core's equal split stays when its
- * selection and this one disagree on any node (*spread = "equal").
- * Written through fea_solver_force() before the solve.  0 or ERR_NOMEM. */
-static int spread_forces(struct fea_solver *s, const struct fea_grid *g,
-			 const struct fea_loads *l, double penal, double rho_min,
-			 const char **spread, struct err *e)
-{
-	size_t nn = (size_t)(g->nx + 1) * (g->ny + 1) * (g->nz + 1);
-	double *f = fea_solver_force(s), *mine = mem_calloc(3 * nn, sizeof *mine);
-	int ok = 1;
-
-	*spread = "equal";
-	if (!mine)
-		return ERR_SET(e, ERR_NOMEM, "out of memory for the load vector");
-	for (size_t q = 0; ok && q < l->nforces; q++) {
-		const struct fea_force *fo = &l->forces[q];
-		int lo[3], hi[3];
-		double sum = 0;
-		force_nodes(g, fo, lo, hi);
-		for (int pass = 0; pass < 2 && ok; pass++)
-			for (int k = lo[2]; k <= hi[2]; k++)
-				for (int j = lo[1]; j <= hi[1]; j++)
-					for (int i = lo[0]; i <= hi[0]; i++) {
-						double w = node_weight(g, i, j, k, penal, rho_min);
-						size_t n = ((size_t)k * (g->ny + 1) + j) * (g->nx + 1) + i;
-						if (!(w > 0))
-							continue;
-						if (!pass) {
-							sum += w;
-							continue;
-						}
-						for (int a = 0; a < 3; a++)
-							mine[3 * n + a] += fo->force_n[a] * w / sum;
-					}
-		if (!(sum > 0))
-			ok = 0;
-	}
-	/* the same loaded nodes as the core's selection, or keep its split */
-	for (size_t n = 0; ok && n < nn; n++) {
-		int core = f[3 * n] != 0 || f[3 * n + 1] != 0 || f[3 * n + 2] != 0;
-		int ours = mine[3 * n] != 0 || mine[3 * n + 1] != 0 || mine[3 * n + 2] != 0;
-		ok = core == ours;
-	}
-	if (ok) {
-		memcpy(f, mine, 3 * nn * sizeof *f);
-		*spread = "stiffness";
-	}
-	mem_free(mine);
-	return 0;
-}
-
 /* ---- results --------------------------------------------------------- */
 
 /* Element fields of the solution, for the VTK file and the maxima. */
@@ -482,7 +369,6 @@ int engine_fea(const struct job_spec *js, const struct engine_fea_params *p,
 	double t0 = progress_now_s(), t_model;
 	int threads = js->threads > 0 ? js->threads : pipeline_cpu_count();
 	int archive = is_archive(js->input_path), layers = 0, rc;
-	const char *spread = "equal";
 
 	memset(&g, 0, sizeof g);
 	memset(&loads, 0, sizeof loads);
@@ -515,8 +401,6 @@ int engine_fea(const struct job_spec *js, const struct engine_fea_params *p,
 	o.threads = threads;
 	rc = fea_solver_new(&g, &loads, &o, &s, e);
 	if (!rc)
-		rc = spread_forces(s, &g, &loads, o.penal, o.rho_min, &spread, e);
-	if (!rc)
 		rc = fea_solve(s, &r, e);
 	if (!rc)
 		rc = element_fields(s, &g, o.penal, o.rho_min, &vm, &se, e);
@@ -532,7 +416,7 @@ int engine_fea(const struct job_spec *js, const struct engine_fea_params *p,
 	    metrics_str(m, "input", archive ? "archive" : "mesh") ||
 	    (archive && metrics_int(m, "archive_layers", layers)) ||
 	    (!archive && metrics_int(m, "supersample", p->supersample)) ||
-	    metrics_str(m, "force_spread", spread) || metrics_num(m, "penal", p->penal) ||
+	    metrics_num(m, "penal", p->penal) ||
 	    metrics_str(m, "printer", js->printer.name) || metrics_num(m, "tol", p->tol) ||
 	    metrics_int(m, "threads", threads) ||
 	    metrics_num(m, "seconds.model", t_model - t0) ||
