@@ -1,0 +1,47 @@
+/* optimize.h - the rhombic engine's design updates (paper 001 section 5):
+ * uniform refinement, stiffness (eq. 5-13, optimize.c, with the FEA core
+ * of engine/fea/fea.h) and static stability (eq. 14-16, stability.c).
+ * docs/rhombic.md sections 5-6.
+ */
+#ifndef INFILLD_RHOMBIC_OPTIMIZE_H
+#define INFILLD_RHOMBIC_OPTIMIZE_H
+
+#include "engine/rhombic/rhombic.h"
+
+struct err;
+struct mesh;
+
+/* Volume and first moment (mm^3, mm^4: volume x centroid) of a closed,
+ * outward mesh by the divergence theorem. */
+void rh_mesh_mass(const struct mesh *m, double *vol, struct vec3 *moment);
+/* Solid volume and centre of mass of the part less t's cavities. */
+void rh_tree_mass(const struct rh_tree *t, double part_vol, struct vec3 part_moment, double *vol,
+		  struct vec3 *com);
+
+struct rh_stab_report {
+	struct vec3 com_solid;   /* the solid part's centre of mass (mm) */
+	struct vec3 com_initial; /* with the initial cavities */
+	struct vec3 com_after;   /* after the refinement */
+	struct vec3 hull_center; /* c_h: area centroid of the contact hull (z = 0) */
+	size_t hull_points;
+	int solid_inside;        /* the solid part's projected centre is inside the hull */
+	int inside;              /* the result's is */
+	double hull_distance_mm; /* signed distance of the result's to the hull edge (> 0 in) */
+	size_t splits;           /* leaves refined */
+	int updates;             /* sorts of eq. 16 (one per 2 % of the leaves) */
+};
+
+/* Refine t's cavity leaves in ascending order of eq. 16, re-sorting after
+ * every 2 % of them, until the projected centre of mass lies inside the
+ * convex hull of the first layer's section (or no leaf is left, or the
+ * solid fraction reaches max_fraction > 0).  ERR_GEOMETRY when the first
+ * layer has no area. */
+int rh_stability(struct rh_tree *t, const struct mesh *part, double layer_mm, double max_fraction,
+		 struct rh_stab_report *r, struct err *e);
+
+/* Uniform refinement: split every cavity leaf, one whole step at a time,
+ * until the solid fraction (part_vol - cavities) / part_vol first reaches
+ * target or no cavity is left.  *steps gets the number of steps. */
+int rh_uniform(struct rh_tree *t, double part_vol, double target, int *steps, struct err *e);
+
+#endif
