@@ -27,6 +27,7 @@ declare -A PREFIX=(
 	[api]="api_ log_ multipart_ problem_"
 	[db]="db_ queue_ store_"
 	[engine/core]="buf_ err_ mem_ metrics_ param_ parfor_ pipeline_ progress_ sink_ rng_"
+	[engine/fea]="fea_"
 	[engine/geom]="clip_ delaunay_ edt_ edt3_ geom_ hull_ path_ paths_ polytri_ polytope_ raster_ v3_ box3_"
 	[engine/hollow]="hollow_ hl_"
 	[engine/job]="common_ engine_ job_"

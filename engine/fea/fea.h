@@ -144,6 +144,9 @@ struct fea_result {
 	int levels;                 /* multigrid levels used */
 	size_t elements;            /* present elements (rho > 0) */
 	size_t dofs;                /* free unknowns */
+	size_t held_nodes;          /* nodes of parts with no path to a fixed node (or
+				       held against no rigid motion) and no force: held
+				       fixed, displacement 0 (see fea_solver_new) */
 	size_t mem_bytes;           /* solver memory (vectors + coarse operators) */
 };
 
@@ -158,6 +161,12 @@ struct fea_solver;
  * ERR_LIMIT when the grid is larger than memory allows. */
 int fea_solver_new(const struct fea_grid *g, const struct fea_loads *l, const struct fea_opts *o,
 		   struct fea_solver **out, struct err *e);
+/* The assembled load vector (N), 3 per node as indexed above, owned by
+ * s and writable: fea_solver_new fills it from the load case; callers
+ * that need arbitrary nodal loads (consistent tractions, tests) may
+ * overwrite it before fea_solve.  Entries on fixed, held or absent
+ * unknowns are ignored (the reaction there is not modelled). */
+double *fea_solver_force(struct fea_solver *s);
 /* Replace the densities (same grid size, same set of present elements:
  * 0 stays 0 and > 0 stays > 0); the next solve starts from the previous
  * displacement (warm start). */

@@ -1,0 +1,285 @@
+/* mg.c - the multigrid hierarchy and the V-cycle.
+ *
+ * Level 1 is the Galerkin operator P^T (D K D) P of the finest level,
+ * built element by element: a coarse element's 24 x 24 matrix is the sum
+ * over its 8 children c of w_c (D_c P_c)^T K0 (D_c P_c), with D_c the
+ * mask of the child's fixed unknowns; unmasked children (almost all) add
+ * w_c M_c with M_c = P_c^T K0 P_c precomputed.  Coarse elements of one
+ * z-layer parity are assembled into the node stencils in parallel (a
+ * layer touches node layers K and K + 1 only).  Levels >= 2 are the
+ * Galerkin triple product P^T A P on stencils, gathered per coarse node.
+ * Masking the product (not re-discretising the coarse grid) is what keeps
+ * fixed nodes that are not coarse nodes exact.  docs/fea.md, "Solver".
+ */
+#include "engine/fea/fea_int.h"
+
+#include <string.h>
+
+#include "engine/core/err.h"
+
+struct l1_ctx {
+	struct fea_solver *s;
+	int parity;
+};
+
+/* Coarse elements of layer K = 2 kk + parity of level 1. */
+static void level1_layer(void *vctx, size_t kk, int tid)
+{
+	const struct l1_ctx *c = vctx;
+	struct fea_solver *s = c->s;
+	const struct fea_level *f = &s->lv[0], *l = &s->lv[1];
+	const int K = 2 * (int)kk + c->parity;
+	double a[24 * 24], q[24 * 24], t[24 * 24];
+
+	(void)tid;
+	if (K >= l->nz)
+		return;
+	for (int J = 0; J < l->ny; J++)
+		for (int I = 0; I < l->nx; I++) {
+			int any = 0;
+
+			memset(a, 0, sizeof a);
+			for (int ch = 0; ch < 8; ch++) {
+				int fi = 2 * I + (ch & 1), fj = 2 * J + ((ch >> 1) & 1),
+				    fk = 2 * K + ((ch >> 2) & 1);
+				double w = s->w0[((size_t)fk * f->ny + fj) * f->nx + fi];
+				unsigned m8[8], masked = 0;
+
+				if (!(w > 0))
+					continue;
+				any = 1;
+				for (int ln = 0; ln < 8; ln++) {
+					m8[ln] = s->mask0[fea_node(f, fi + (ln & 1), fj + ((ln >> 1) & 1),
+								   fk + ((ln >> 2) & 1))] &
+						 FEA_NODE_ALL;
+					masked |= m8[ln];
+				}
+				if (!masked) {
+					const double *m = s->mc[ch];
+					for (int x = 0; x < 24 * 24; x++)
+						a[x] += w * m[x];
+					continue;
+				}
+				/* q = D_c P_c; a += w q^T K0 q */
+				memcpy(q, s->pc[ch], sizeof q);
+				for (int ln = 0; ln < 8; ln++)
+					for (int ax = 0; ax < 3; ax++)
+						if (m8[ln] & (1u << ax))
+							memset(q + (3 * ln + ax) * 24, 0, 24 * sizeof *q);
+				for (int r = 0; r < 24; r++)
+					for (int cc = 0; cc < 24; cc++) {
+						double sum = 0;
+						for (int x = 0; x < 24; x++)
+							sum += s->ke[r * 24 + x] * q[x * 24 + cc];
+						t[r * 24 + cc] = sum;
+					}
+				for (int r = 0; r < 24; r++)
+					for (int cc = 0; cc < 24; cc++) {
+						double sum = 0;
+						for (int x = 0; x < 24; x++)
+							sum += q[x * 24 + r] * t[x * 24 + cc];
+						a[r * 24 + cc] += w * sum;
+					}
+			}
+			if (!any)
+				continue;
+			for (int L = 0; L < 8; L++) {
+				int lx = L & 1, ly = (L >> 1) & 1, lz = (L >> 2) & 1;
+				float *st = l->st + fea_node(l, I + lx, J + ly, K + lz) * 27 * 9;
+				for (int M = 0; M < 8; M++) {
+					int d = ((M >> 2) - lz + 1) * 9 + (((M >> 1) & 1) - ly + 1) * 3 +
+						((M & 1) - lx + 1);
+					float *bl = st + d * 9;
+					for (int r = 0; r < 3; r++)
+						for (int cc = 0; cc < 3; cc++)
+							bl[3 * r + cc] +=
+								(float)a[(3 * L + r) * 24 + 3 * M + cc];
+				}
+			}
+		}
+}
+
+struct gal_ctx {
+	const struct fea_level *f, *c;
+};
+
+/* Coarse node layer K of P^T A P (fine level f with stencils). */
+static void galerkin_layer(void *vctx, size_t kk, int tid)
+{
+	const struct gal_ctx *g = vctx;
+	const struct fea_level *f = g->f, *c = g->c;
+	const int K = (int)kk;
+	double acc[27 * 9];
+
+	(void)tid;
+	for (int J = 0; J <= c->ny; J++)
+		for (int I = 0; I <= c->nx; I++) {
+			memset(acc, 0, sizeof acc);
+			for (int oz = -1; oz <= 1; oz++)
+				for (int oy = -1; oy <= 1; oy++)
+					for (int ox = -1; ox <= 1; ox++) {
+						int fi = 2 * I + ox, fj = 2 * J + oy, fk = 2 * K + oz;
+						if (fi < 0 || fj < 0 || fk < 0 || fi > f->nx || fj > f->ny ||
+						    fk > f->nz)
+							continue;
+						double pw = (ox ? 0.5 : 1) * (oy ? 0.5 : 1) * (oz ? 0.5 : 1);
+						const float *st = f->st + fea_node(f, fi, fj, fk) * 27 * 9;
+						for (int d = 0; d < 27; d++) {
+							int dx = d % 3 - 1, dy = (d / 3) % 3 - 1, dz = d / 9 - 1;
+							int j3[3] = {fi + dx, fj + dy, fk + dz};
+							const int lim[3] = {f->nx, f->ny, f->nz};
+							int Jc[3][2], nj[3];
+							double qw[3];
+							const float *bl = st + d * 9;
+							int outside = 0;
+							for (int ax = 0; ax < 3; ax++) {
+								if (j3[ax] < 0 || j3[ax] > lim[ax])
+									outside = 1;
+								if (j3[ax] & 1) {
+									Jc[ax][0] = (j3[ax] - 1) / 2;
+									Jc[ax][1] = (j3[ax] + 1) / 2;
+									nj[ax] = 2;
+									qw[ax] = 0.5;
+								} else {
+									Jc[ax][0] = j3[ax] / 2;
+									nj[ax] = 1;
+									qw[ax] = 1;
+								}
+							}
+							if (outside)
+								continue;
+							double wq = pw * qw[0] * qw[1] * qw[2];
+							for (int cz = 0; cz < nj[2]; cz++)
+								for (int cy = 0; cy < nj[1]; cy++)
+									for (int cx = 0; cx < nj[0]; cx++) {
+										int D = (Jc[2][cz] - K + 1) * 9 +
+											(Jc[1][cy] - J + 1) * 3 +
+											(Jc[0][cx] - I + 1);
+										double *ad = acc + D * 9;
+										for (int x = 0; x < 9; x++)
+											ad[x] += wq * bl[x];
+									}
+						}
+					}
+			float *out = c->st + fea_node(c, I, J, K) * 27 * 9;
+			for (int x = 0; x < 27 * 9; x++)
+				out[x] = (float)acc[x];
+		}
+}
+
+struct diag_ctx {
+	struct fea_solver *s;
+	int level;
+};
+
+static void diag_layer(void *vctx, size_t kk, int tid)
+{
+	const struct diag_ctx *c = vctx;
+	const struct fea_solver *s = c->s;
+	const struct fea_level *l = &s->lv[c->level];
+	const int k = (int)kk;
+	const double w = s->opt.jacobi_w;
+
+	(void)tid;
+	for (int j = 0; j <= l->ny; j++)
+		for (int i = 0; i <= l->nx; i++) {
+			size_t n = fea_node(l, i, j, k);
+			double d[3];
+			unsigned mask = 0;
+
+			if (c->level == 0) {
+				double sw = 0;
+				for (int p = 0; p < 8; p++) {
+					int ei = i - 1 + (p & 1), ej = j - 1 + ((p >> 1) & 1),
+					    ek = k - 1 + ((p >> 2) & 1);
+					if (ei < 0 || ej < 0 || ek < 0 || ei >= l->nx || ej >= l->ny ||
+					    ek >= l->nz)
+						continue;
+					sw += s->w0[((size_t)ek * l->ny + ej) * l->nx + ei];
+				}
+				d[0] = d[1] = d[2] = sw * s->kdiag;
+				mask = s->mask0[n] & FEA_NODE_ALL;
+			} else {
+				const float *self = l->st + (n * 27 + 13) * 9;
+				d[0] = self[0];
+				d[1] = self[4];
+				d[2] = self[8];
+			}
+			for (int a = 0; a < 3; a++)
+				l->invd[3 * n + a] = (mask & (1u << a)) || !(d[a] > 0) ? 0 : w / d[a];
+		}
+}
+
+int fea_mg_build(struct fea_solver *s, struct err *e)
+{
+	for (int lev = 0; lev < s->nlev; lev++) {
+		struct fea_level *l = &s->lv[lev];
+		if (lev == 1) {
+			memset(l->st, 0, l->nn * 27 * 9 * sizeof *l->st);
+			for (int parity = 0; parity < 2; parity++) {
+				struct l1_ctx c = {s, parity};
+				fea_par(s, (size_t)(l->nz + 1) / 2, 1, level1_layer, &c);
+			}
+		} else if (lev >= 2) {
+			struct gal_ctx g = {&s->lv[lev - 1], l};
+			fea_par(s, (size_t)l->nz + 1, 1, galerkin_layer, &g);
+		}
+		struct diag_ctx dc = {s, lev};
+		fea_par(s, (size_t)l->nz + 1, 1, diag_layer, &dc);
+	}
+	return fea_coarse_factor(s, e);
+}
+
+struct scale_ctx {
+	const double *a, *b;
+	double *y;
+	size_t n;
+};
+
+#define SCALE_BLOCK 16384
+
+static void mul_block(void *vctx, size_t blk, int tid)
+{
+	const struct scale_ctx *c = vctx;
+	size_t lo = blk * SCALE_BLOCK, hi = lo + SCALE_BLOCK < c->n ? lo + SCALE_BLOCK : c->n;
+
+	(void)tid;
+	for (size_t i = lo; i < hi; i++)
+		c->y[i] = c->a[i] * c->b[i];
+}
+
+static void swap_xt(struct fea_level *l)
+{
+	double *t = l->x;
+
+	l->x = l->t;
+	l->t = t;
+}
+
+void fea_vcycle(struct fea_solver *s)
+{
+	const int L = s->nlev - 1, nu = s->opt.smooth;
+
+	for (int lev = 0; lev < L; lev++) {
+		struct fea_level *l = &s->lv[lev];
+		struct scale_ctx c = {l->invd, l->b, l->x, 3 * l->nn};
+
+		/* first sweep from x = 0: x = invd b */
+		fea_par(s, (c.n + SCALE_BLOCK - 1) / SCALE_BLOCK, 1, mul_block, &c);
+		for (int it = 1; it < nu; it++) {
+			fea_apply(s, lev, FEA_OP_JAC, l->x, l->b, l->t);
+			swap_xt(l);
+		}
+		fea_apply(s, lev, FEA_OP_RES, l->x, l->b, l->t);
+		fea_restrict(s, lev, l->t, s->lv[lev + 1].b);
+	}
+	fea_coarse_solve(s, s->lv[L].b, s->lv[L].x);
+	for (int lev = L - 1; lev >= 0; lev--) {
+		struct fea_level *l = &s->lv[lev];
+		fea_prolong_add(s, lev, s->lv[lev + 1].x, l->x);
+		for (int it = 0; it < nu; it++) {
+			fea_apply(s, lev, FEA_OP_JAC, l->x, l->b, l->t);
+			swap_xt(l);
+		}
+	}
+}

@@ -1,0 +1,596 @@
+/* solve.c - the solver's life cycle (fea_solver_new/set_rho/free), the
+ * preconditioned conjugate gradients of fea_solve, and the results
+ * (displacements, element energies, stresses).  docs/fea.md, "Solver".
+ */
+#include "engine/fea/fea_int.h"
+
+#include <math.h>
+#include <stdio.h>
+#include <string.h>
+#include <time.h>
+#include <unistd.h>
+
+#include "engine/core/err.h"
+#include "engine/core/mem.h"
+
+/* Automatic levels: coarsen while the coarsest has more nodes than this. */
+#define COARSEST_NODES 2000
+
+void fea_opts_default(struct fea_opts *o)
+{
+	o->tol = 1e-6;
+	o->max_iter = 1000;
+	o->threads = 1;
+	o->levels = 0;
+	o->jacobi_w = 0.6;
+	o->smooth = 2;
+	o->penal = FEA_PENAL;
+	o->rho_min = FEA_RHO_MIN;
+}
+
+static double now_s(void)
+{
+	struct timespec ts;
+
+	clock_gettime(CLOCK_MONOTONIC, &ts);
+	return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+static int ceil_div(int a, int b)
+{
+	return (a + b - 1) / b;
+}
+
+static double nodes_at(const int n[3], int lev)
+{
+	double p = 1;
+
+	for (int a = 0; a < 3; a++)
+		p *= ceil_div(n[a], 1 << lev) + 1;
+	return p;
+}
+
+/* Multigrid levels for an nx x ny x nz grid (see fea.h, fea_opts). */
+static int pick_levels(const int n[3], int want)
+{
+	int lev = 1;
+
+	if (want > 0) {
+		lev = want > FEA_MAX_LEVELS ? FEA_MAX_LEVELS : want;
+		/* no level below one element per axis everywhere */
+		while (lev > 1 && ceil_div(n[0], 1 << (lev - 2)) == 1 &&
+		       ceil_div(n[1], 1 << (lev - 2)) == 1 && ceil_div(n[2], 1 << (lev - 2)) == 1)
+			lev--;
+		return lev;
+	}
+	while (lev < FEA_MAX_LEVELS && nodes_at(n, lev - 1) > COARSEST_NODES &&
+	       ceil_div(n[0], 1 << lev) >= 2 && ceil_div(n[1], 1 << lev) >= 2 &&
+	       ceil_div(n[2], 1 << lev) >= 2)
+		lev++;
+	return lev;
+}
+
+static void *alloc_count(struct fea_solver *s, size_t count, size_t size)
+{
+	void *p = mem_calloc(count, size);
+
+	if (p)
+		s->mem_bytes += count * size;
+	return p;
+}
+
+void fea_solver_free(struct fea_solver *s)
+{
+	if (!s)
+		return;
+	for (int l = 0; l < FEA_MAX_LEVELS; l++) {
+		mem_free(s->lv[l].st);
+		mem_free(s->lv[l].invd);
+		if (l > 0)
+			mem_free(s->lv[l].b);
+		mem_free(s->lv[l].x);
+		mem_free(s->lv[l].t);
+	}
+	mem_free(s->w0);
+	mem_free(s->mask0);
+	mem_free(s->u);
+	mem_free(s->r);
+	mem_free(s->p);
+	mem_free(s->q);
+	mem_free(s->dot_part);
+	mem_free(s->f_user);
+	mem_free(s->u_user);
+	fea_coarse_fini(&s->co);
+	mem_free(s);
+}
+
+static int check_inputs(const struct fea_grid *g, const struct fea_loads *l,
+			const struct fea_opts *o, struct err *e)
+{
+	if (!g || !g->rho || g->nx < 1 || g->ny < 1 || g->nz < 1)
+		return ERR_SET(e, ERR_PARAM, "fea grid is empty");
+	if (!(g->h_mm > 0) || !isfinite(g->h_mm))
+		return ERR_FIELD(e, "fea_voxel_mm", "voxel edge must be a finite number > 0, not %g",
+				 g->h_mm);
+	if (!(l->material.E_mpa > 0) || !isfinite(l->material.E_mpa))
+		return ERR_FIELD(e, "loads", "loads: E_mpa must be > 0 (got %g)", l->material.E_mpa);
+	if (!(l->material.nu > -1 && l->material.nu < 0.5))
+		return ERR_FIELD(e, "loads", "loads: nu must be in (-1, 0.5) (got %g)",
+				 l->material.nu);
+	if (!(o->tol > 0 && o->tol < 1))
+		return ERR_FIELD(e, "tol", "tolerance must be in (0, 1), not %g", o->tol);
+	if (o->max_iter < 1)
+		return ERR_FIELD(e, "max_iter", "max_iter must be >= 1, not %d", o->max_iter);
+	if (o->levels < 0)
+		return ERR_FIELD(e, "levels", "levels must be >= 0 (0 = automatic), not %d",
+				 o->levels);
+	if (!(o->jacobi_w > 0 && o->jacobi_w < 2))
+		return ERR_FIELD(e, "jacobi_w", "Jacobi weight must be in (0, 2), not %g",
+				 o->jacobi_w);
+	if (o->smooth < 1 || o->smooth > 50)
+		return ERR_FIELD(e, "smooth", "smoothing sweeps must be in 1..50, not %d", o->smooth);
+	if (!(o->penal >= 1 && o->penal <= 10))
+		return ERR_FIELD(e, "penal", "SIMP exponent must be in [1, 10], not %g", o->penal);
+	if (!(o->rho_min > 0 && o->rho_min <= 1))
+		return ERR_FIELD(e, "rho_min", "rho_min must be in (0, 1], not %g", o->rho_min);
+	return 0;
+}
+
+/* w0 from rho (caller's layout) into the padded layout; checks a changed
+ * rho keeps the set of present elements when `same` is set. */
+static int fill_weights(struct fea_solver *s, const float *rho, int same, struct err *e)
+{
+	const struct fea_level *L0 = &s->lv[0];
+	size_t present = 0;
+
+	for (int k = 0; k < s->uz; k++)
+		for (int j = 0; j < s->uy; j++)
+			for (int i = 0; i < s->ux; i++) {
+				size_t ue = ((size_t)k * s->uy + j) * s->ux + i;
+				size_t pe = ((size_t)k * L0->ny + j) * L0->nx + i;
+				double r = rho[ue], w = 0;
+				if (!isfinite(r) || r < 0)
+					return ERR_FIELD(e, "rho",
+							 "density of element %d,%d,%d is %g (not in [0, 1])",
+							 i, j, k, r);
+				if (r > 0) {
+					r = r < s->opt.rho_min ? s->opt.rho_min : r > 1 ? 1 : r;
+					w = pow(r, s->opt.penal);
+					present++;
+				}
+				if (same && (w > 0) != (s->w0[pe] > 0))
+					return ERR_FIELD(e, "rho",
+							 "element %d,%d,%d changed between absent and "
+							 "present (a new solver is needed)",
+							 i, j, k);
+				if (!same)
+					s->w0[pe] = (float)w;
+			}
+	if (same)
+		for (int k = 0; k < s->uz; k++)
+			for (int j = 0; j < s->uy; j++)
+				for (int i = 0; i < s->ux; i++) {
+					size_t ue = ((size_t)k * s->uy + j) * s->ux + i;
+					size_t pe = ((size_t)k * L0->ny + j) * L0->nx + i;
+					double r = rho[ue];
+					if (r > 0) {
+						r = r < s->opt.rho_min ? s->opt.rho_min : r > 1 ? 1 : r;
+						s->w0[pe] = (float)pow(r, s->opt.penal);
+					}
+				}
+	s->elements = present;
+	return 0;
+}
+
+static void count_dofs(struct fea_solver *s)
+{
+	s->dofs = 0;
+	for (size_t n = 0; n < s->lv[0].nn; n++)
+		for (int a = 0; a < 3; a++)
+			s->dofs += !(s->mask0[n] & (1u << a));
+}
+
+int fea_solver_new(const struct fea_grid *g, const struct fea_loads *l, const struct fea_opts *o,
+		   struct fea_solver **out, struct err *e)
+{
+	struct fea_opts od;
+	struct fea_solver *s;
+	int n[3], rc, nlev;
+	double t0 = now_s(), est = 0, phys;
+
+	if (!o) {
+		fea_opts_default(&od);
+		o = &od;
+	}
+	if ((rc = check_inputs(g, l, o, e)))
+		return rc;
+	n[0] = g->nx;
+	n[1] = g->ny;
+	n[2] = g->nz;
+	nlev = pick_levels(n, o->levels);
+
+	/* memory estimate before allocating (ERR_LIMIT beyond physical memory) */
+	{
+		int m = 1 << (nlev - 1);
+		double nn0 = 1;
+		for (int a = 0; a < 3; a++)
+			nn0 *= ceil_div(n[a], m) * m + 1;
+		est = nn0 * (8 * 3 * 7 + 1 + 4) + 2 * 24.0 * (g->nx + 1.0) * (g->ny + 1.0) * (g->nz + 1.0);
+		est += nn0 / 8 * (27 * 9 * 4 + 4 * 24) * 8 / 7;
+		phys = (double)sysconf(_SC_PHYS_PAGES) * (double)sysconf(_SC_PAGE_SIZE);
+		if (phys > 0 && est > phys)
+			return ERR_SET(e, ERR_LIMIT,
+				       "fea grid %dx%dx%d needs about %.0f MB, more than the %.0f MB of "
+				       "memory",
+				       g->nx, g->ny, g->nz, est / 1e6, phys / 1e6);
+	}
+
+	s = mem_calloc(1, sizeof *s);
+	if (!s)
+		return ERR_SET(e, ERR_NOMEM, "out of memory for the fea solver");
+	s->mem_bytes = sizeof *s;
+	s->ux = g->nx;
+	s->uy = g->ny;
+	s->uz = g->nz;
+	s->un_nodes = (size_t)(g->nx + 1) * (size_t)(g->ny + 1) * (size_t)(g->nz + 1);
+	s->un_elems = (size_t)g->nx * (size_t)g->ny * (size_t)g->nz;
+	s->h_mm = g->h_mm;
+	s->mat = l->material;
+	s->opt = *o;
+	s->threads = o->threads < 1 ? 1 : o->threads;
+	s->nlev = nlev;
+	for (int lev = 0; lev < nlev; lev++) {
+		struct fea_level *lv = &s->lv[lev];
+		int m = 1 << (nlev - 1);
+		lv->nx = ceil_div(g->nx, m) * m >> lev;
+		lv->ny = ceil_div(g->ny, m) * m >> lev;
+		lv->nz = ceil_div(g->nz, m) * m >> lev;
+		lv->nn = (size_t)(lv->nx + 1) * (size_t)(lv->ny + 1) * (size_t)(lv->nz + 1);
+		size_t v = 3 * lv->nn;
+		lv->invd = alloc_count(s, v, sizeof(double));
+		lv->x = alloc_count(s, v, sizeof(double));
+		lv->t = alloc_count(s, v, sizeof(double));
+		if (lev > 0) {
+			lv->b = alloc_count(s, v, sizeof(double));
+			lv->st = alloc_count(s, lv->nn * 27 * 9, sizeof(float));
+			if (!lv->b || !lv->st)
+				goto nomem;
+		}
+		if (!lv->invd || !lv->x || !lv->t)
+			goto nomem;
+	}
+	{
+		struct fea_level *L0 = &s->lv[0];
+		size_t v = 3 * L0->nn;
+		s->w0 = alloc_count(s, (size_t)L0->nx * L0->ny * L0->nz, sizeof(float));
+		s->mask0 = alloc_count(s, L0->nn, 1);
+		s->u = alloc_count(s, v, sizeof(double));
+		s->r = alloc_count(s, v, sizeof(double));
+		s->p = alloc_count(s, v, sizeof(double));
+		s->q = alloc_count(s, v, sizeof(double));
+		s->dot_part = alloc_count(s, v / FEA_DOT_BLOCK + 1, sizeof(double));
+		s->f_user = alloc_count(s, 3 * s->un_nodes, sizeof(double));
+		s->u_user = alloc_count(s, 3 * s->un_nodes, sizeof(double));
+		if (!s->w0 || !s->mask0 || !s->u || !s->r || !s->p || !s->q || !s->dot_part ||
+		    !s->f_user || !s->u_user)
+			goto nomem;
+		L0->b = s->r;
+	}
+
+	fea_element_matrix(s->mat, s->h_mm, s->ke);
+	s->kdiag = s->ke[0];
+	for (int c = 0; c < 8; c++) {
+		double t[24 * 24];
+		fea_child_prolong(c, s->pc[c]);
+		for (int r = 0; r < 24; r++)
+			for (int cc = 0; cc < 24; cc++) {
+				double sum = 0;
+				for (int x = 0; x < 24; x++)
+					sum += s->ke[r * 24 + x] * s->pc[c][x * 24 + cc];
+				t[r * 24 + cc] = sum;
+			}
+		for (int r = 0; r < 24; r++)
+			for (int cc = 0; cc < 24; cc++) {
+				double sum = 0;
+				for (int x = 0; x < 24; x++)
+					sum += s->pc[c][x * 24 + r] * t[x * 24 + cc];
+				s->mc[c][r * 24 + cc] = sum;
+			}
+	}
+	if ((rc = fill_weights(s, g->rho, 0, e)))
+		goto fail;
+	if ((rc = fea_select(s, g, l, e)))
+		goto fail;
+	count_dofs(s);
+	if ((rc = fea_mg_build(s, e)))
+		goto fail;
+	s->mem_bytes += (size_t)(s->co.kd + 1) * (size_t)s->co.n * sizeof(double) +
+			(size_t)s->co.n * sizeof(double);
+	s->setup_s = now_s() - t0;
+	*out = s;
+	return 0;
+nomem:
+	rc = ERR_SET(e, ERR_NOMEM, "out of memory for the fea solver (%dx%dx%d elements)", g->nx,
+		     g->ny, g->nz);
+fail:
+	fea_solver_free(s);
+	return rc;
+}
+
+int fea_solver_set_rho(struct fea_solver *s, const float *rho, struct err *e)
+{
+	double t0 = now_s();
+	int rc;
+
+	if ((rc = fill_weights(s, rho, 1, e)))
+		return rc;
+	if ((rc = fea_mg_build(s, e)))
+		return rc;
+	s->setup_s += now_s() - t0;
+	return 0;
+}
+
+double *fea_solver_force(struct fea_solver *s)
+{
+	return s->f_user;
+}
+
+const double *fea_displacement(const struct fea_solver *s)
+{
+	return s->u_user;
+}
+
+/* Copy between the caller's and the padded layout (masked unknowns 0). */
+static void user_to_padded(const struct fea_solver *s, const double *user, double *pad)
+{
+	const struct fea_level *L0 = &s->lv[0];
+
+	memset(pad, 0, 3 * L0->nn * sizeof *pad);
+	for (int k = 0; k <= s->uz; k++)
+		for (int j = 0; j <= s->uy; j++)
+			for (int i = 0; i <= s->ux; i++) {
+				size_t un = ((size_t)k * (s->uy + 1) + j) * (s->ux + 1) + i;
+				size_t pn = fea_node(L0, i, j, k);
+				for (int a = 0; a < 3; a++)
+					if (!(s->mask0[pn] & (1u << a)))
+						pad[3 * pn + a] = user[3 * un + a];
+			}
+}
+
+static void padded_to_user(const struct fea_solver *s, const double *pad, double *user)
+{
+	const struct fea_level *L0 = &s->lv[0];
+
+	for (int k = 0; k <= s->uz; k++)
+		for (int j = 0; j <= s->uy; j++)
+			for (int i = 0; i <= s->ux; i++) {
+				size_t un = ((size_t)k * (s->uy + 1) + j) * (s->ux + 1) + i;
+				size_t pn = fea_node(L0, i, j, k);
+				for (int a = 0; a < 3; a++)
+					user[3 * un + a] = pad[3 * pn + a];
+			}
+}
+
+struct axpy_ctx {
+	double alpha;
+	const double *x;
+	double *y, *z;
+	const double *w;
+	size_t n;
+	double *part;
+};
+
+#define VBLOCK FEA_DOT_BLOCK
+
+/* u += alpha p; r -= alpha q; part = |r|^2 per block */
+static void update_block(void *vctx, size_t blk, int tid)
+{
+	const struct axpy_ctx *c = vctx;
+	size_t lo = blk * VBLOCK, hi = lo + VBLOCK < c->n ? lo + VBLOCK : c->n;
+	double s2 = 0;
+
+	(void)tid;
+	for (size_t i = lo; i < hi; i++) {
+		c->y[i] += c->alpha * c->x[i];
+		c->z[i] -= c->alpha * c->w[i];
+		s2 += c->z[i] * c->z[i];
+	}
+	c->part[blk] = s2;
+}
+
+/* p = z + beta p */
+static void pupdate_block(void *vctx, size_t blk, int tid)
+{
+	const struct axpy_ctx *c = vctx;
+	size_t lo = blk * VBLOCK, hi = lo + VBLOCK < c->n ? lo + VBLOCK : c->n;
+
+	(void)tid;
+	for (size_t i = lo; i < hi; i++)
+		c->y[i] = c->x[i] + c->alpha * c->y[i];
+}
+
+/* r = f - q */
+static void sub_block(void *vctx, size_t blk, int tid)
+{
+	const struct axpy_ctx *c = vctx;
+	size_t lo = blk * VBLOCK, hi = lo + VBLOCK < c->n ? lo + VBLOCK : c->n;
+
+	(void)tid;
+	for (size_t i = lo; i < hi; i++)
+		c->y[i] -= c->x[i];
+}
+
+int fea_solve(struct fea_solver *s, struct fea_result *res, struct err *e)
+{
+	const size_t nv = 3 * s->lv[0].nn, nb = (nv + VBLOCK - 1) / VBLOCK;
+	double t0 = now_s(), fnorm, rr, rz, rel = 0;
+	int it = 0, converged = 0;
+	struct fea_result R;
+
+	memset(&R, 0, sizeof R);
+	/* r = f - A u (u: previous solution, 0 at first) */
+	user_to_padded(s, s->f_user, s->r);
+	fnorm = sqrt(fea_dot(s, s->r, s->r, nv));
+	if (!(fnorm > 0)) {
+		memset(s->u, 0, nv * sizeof *s->u);
+		converged = 1;
+	}
+	for (int restart = 0; !converged && restart < 50; restart++) {
+		/* (re)start from the true residual r = f - A u */
+		struct axpy_ctx sc = {0, s->q, s->r, NULL, NULL, nv, s->dot_part};
+		int it0 = it;
+
+		user_to_padded(s, s->f_user, s->r);
+		fea_apply(s, 0, FEA_OP_AX, s->u, NULL, s->q);
+		fea_par(s, nb, 1, sub_block, &sc);
+		rr = fea_dot(s, s->r, s->r, nv);
+		rel = sqrt(rr) / fnorm;
+		if (rel <= s->opt.tol) {
+			converged = 1;
+			break;
+		}
+		if (it >= s->opt.max_iter)
+			break;
+		fea_vcycle(s);
+		memcpy(s->p, s->lv[0].x, nv * sizeof *s->p);
+		rz = fea_dot(s, s->r, s->lv[0].x, nv);
+		while (it < s->opt.max_iter && rz > 0) {
+			double pq, alpha, beta, rz_new;
+			struct axpy_ctx uc;
+
+			fea_apply(s, 0, FEA_OP_AX, s->p, NULL, s->q);
+			pq = fea_dot(s, s->p, s->q, nv);
+			if (!(pq > 0))
+				break; /* breakdown: restart from the true residual */
+			alpha = rz / pq;
+			uc = (struct axpy_ctx){alpha, s->p, s->u, s->r, s->q, nv, s->dot_part};
+			fea_par(s, nb, 1, update_block, &uc);
+			rr = 0;
+			for (size_t b = 0; b < nb; b++)
+				rr += s->dot_part[b];
+			it++;
+			rel = sqrt(rr) / fnorm;
+			if (rel <= s->opt.tol)
+				break; /* confirmed on the true residual at the restart */
+			fea_vcycle(s);
+			rz_new = fea_dot(s, s->r, s->lv[0].x, nv);
+			beta = rz_new / rz;
+			rz = rz_new;
+			uc = (struct axpy_ctx){beta, s->lv[0].x, s->p, NULL, NULL, nv, NULL};
+			fea_par(s, nb, 1, pupdate_block, &uc);
+		}
+		if (it == it0)
+			break; /* no progress (breakdown at once) */
+	}
+	if (!converged)
+		return ERR_SET(e, ERR_GEOMETRY,
+			       "the solver did not converge: relative residual %.3g after %d CG "
+			       "iterations (tolerance %g)",
+			       rel, it, s->opt.tol);
+	padded_to_user(s, s->u, s->u_user);
+	{
+		double c = 0, mx = 0;
+		for (size_t n = 0; n < s->un_nodes; n++) {
+			const double *u = &s->u_user[3 * n], *f = &s->f_user[3 * n];
+			double m2 = u[0] * u[0] + u[1] * u[1] + u[2] * u[2];
+			c += f[0] * u[0] + f[1] * u[1] + f[2] * u[2];
+			mx = m2 > mx ? m2 : mx;
+		}
+		R.compliance_nmm = c;
+		R.max_displacement_mm = sqrt(mx);
+	}
+	R.residual = rel;
+	R.iterations = it;
+	R.levels = s->nlev;
+	R.elements = s->elements;
+	R.dofs = s->dofs;
+	R.held_nodes = s->held_nodes;
+	R.mem_bytes = s->mem_bytes;
+	R.solve_s = now_s() - t0 + s->setup_s;
+	s->setup_s = 0;
+	s->solved = 1;
+	*res = R;
+	return 0;
+}
+
+/* The caller's element (i, j, k): its 24 displacements and weight. */
+static double element_u(const struct fea_solver *s, int i, int j, int k, double ue[24])
+{
+	const struct fea_level *L0 = &s->lv[0];
+
+	for (int a = 0; a < 8; a++) {
+		size_t n = ((size_t)(k + ((a >> 2) & 1)) * (s->uy + 1) + (j + ((a >> 1) & 1))) *
+				   (s->ux + 1) +
+			   (i + (a & 1));
+		for (int x = 0; x < 3; x++)
+			ue[3 * a + x] = s->u_user[3 * n + x];
+	}
+	return s->w0[((size_t)k * L0->ny + j) * L0->nx + i];
+}
+
+void fea_element_energy(const struct fea_solver *s, float *out)
+{
+	for (int k = 0; k < s->uz; k++)
+		for (int j = 0; j < s->uy; j++)
+			for (int i = 0; i < s->ux; i++) {
+				double ue[24], en = 0;
+				size_t el = ((size_t)k * s->uy + j) * s->ux + i;
+				if (!(element_u(s, i, j, k, ue) > 0)) {
+					out[el] = 0;
+					continue;
+				}
+				for (int r = 0; r < 24; r++) {
+					double t = 0;
+					for (int c = 0; c < 24; c++)
+						t += s->ke[r * 24 + c] * ue[c];
+					en += ue[r] * t;
+				}
+				out[el] = (float)en;
+			}
+}
+
+void fea_element_stress(const struct fea_solver *s, float *vm, const uint8_t *mask,
+			double mean6[6])
+{
+	double d[36], b[6 * 24], sum[6] = {0};
+	size_t count = 0;
+
+	fea_dmatrix(s->mat, d);
+	fea_bcentre(s->h_mm, b);
+	for (int k = 0; k < s->uz; k++)
+		for (int j = 0; j < s->uy; j++)
+			for (int i = 0; i < s->ux; i++) {
+				double ue[24], eps[6], sg[6], w;
+				size_t el = ((size_t)k * s->uy + j) * s->ux + i;
+				w = element_u(s, i, j, k, ue);
+				if (!(w > 0)) {
+					if (vm)
+						vm[el] = 0;
+					continue;
+				}
+				for (int r = 0; r < 6; r++) {
+					eps[r] = 0;
+					for (int c = 0; c < 24; c++)
+						eps[r] += b[r * 24 + c] * ue[c];
+				}
+				for (int r = 0; r < 6; r++) {
+					sg[r] = 0;
+					for (int c = 0; c < 6; c++)
+						sg[r] += w * d[r * 6 + c] * eps[c];
+				}
+				if (vm) {
+					double a = sg[0] - sg[1], bb = sg[1] - sg[2], c = sg[2] - sg[0];
+					vm[el] = (float)sqrt(0.5 * (a * a + bb * bb + c * c) +
+							     3 * (sg[3] * sg[3] + sg[4] * sg[4] +
+								  sg[5] * sg[5]));
+				}
+				if (mean6 && (!mask || mask[el])) {
+					for (int r = 0; r < 6; r++)
+						sum[r] += sg[r];
+					count++;
+				}
+			}
+	if (mean6)
+		for (int r = 0; r < 6; r++)
+			mean6[r] = count ? sum[r] / (double)count : 0;
+}
