@@ -44,4 +44,58 @@ int rh_stability(struct rh_tree *t, const struct mesh *part, double layer_mm, do
  * target or no cavity is left.  *steps gets the number of steps. */
 int rh_uniform(struct rh_tree *t, double part_vol, double target, int *steps, struct err *e);
 
+/* ---- stiffness (optimize.c) ---- */
+
+struct fea_loads;
+struct progress;
+
+struct rh_stiff_opts {
+	double part_vol_mm3;  /* the solid part's volume (the fractions' denominator) */
+	double target;        /* volume fraction not to exceed (eq. 7) */
+	double split_pct;     /* share of the leaves split per iteration */
+	int max_iterations;
+	int adaptive;         /* 0: evaluate t as it is (uniform refinement) */
+	double fea_voxel_mm;  /* element edge, > 0 */
+	int supersample;      /* cavity sample points per element axis */
+	size_t max_elements;
+	int threads;
+	struct progress *progress; /* may be NULL */
+};
+
+/* One FEA solve of the history (the compliance-vs-volume curve). */
+struct rh_stiff_step {
+	double fraction;        /* solid volume / part volume */
+	double compliance_nmm;
+	double max_displacement_mm;
+	int cg_iterations;
+	double solve_s;
+};
+
+struct rh_stiff_report {
+	double compliance_nmm;       /* of the result */
+	double max_displacement_mm;
+	double compliance_solid_nmm; /* the solid part under the same load */
+	double max_displacement_solid_mm;
+	double fea_voxel_mm;
+	size_t elements;             /* present elements */
+	int iterations;              /* design updates (adaptive) */
+	double solve_s;              /* all solves */
+	struct rh_stiff_step *hist;  /* owned (rh_stiff_report_fini), one per solve, the
+					solid's last */
+	size_t nhist, caphist;
+};
+
+void rh_stiff_report_fini(struct rh_stiff_report *r);
+
+/* Section 5.1: voxelise the part (fea_voxelize_mesh), densities rho_e =
+ * max(part_fraction - cavity_fraction, rho_min) (cavity fraction by
+ * supersampling), then, with o->adaptive, iterate: solve (eq. 6), rank
+ * the leaves by G_C (eq. 10-13: the mean element energy over the
+ * material S_C their split adds), split the top split_pct % one by one,
+ * stop as soon as the next split would pass o->target.  Ends with the
+ * solid part's solve.  Errors of the FEA core (ERR_PARAM "loads" for a
+ * load box without material, ERR_LIMIT "fea_voxel_mm") pass through. */
+int rh_stiffness(struct rh_tree *t, const struct mesh *part, const struct fea_loads *loads,
+		 const struct rh_stiff_opts *o, struct rh_stiff_report *r, struct err *e);
+
 #endif

@@ -125,6 +125,8 @@ void rh_tree_recount(struct rh_tree *t);
  * cavities and cavity_volume_mm3 current; *added_mm3 (may be NULL) gets
  * the material added (cavity volume lost). */
 int rh_tree_refine(struct rh_tree *t, int32_t idx, double *added_mm3, struct err *e);
+/* The material rh_tree_refine(idx) would add (mm^3), without doing it. */
+double rh_tree_refine_gain(const struct rh_tree *t, int32_t idx);
 /* Deepest level holding a cell that is not RH_OUT, + 1. */
 int rh_tree_levels(const struct rh_tree *t);
 

@@ -7,6 +7,7 @@
 #include "engine/rhombic/optimize.h"
 #include "engine/rhombic/rhombic.h"
 #include "engine/core/mem.h"
+#include "engine/fea/fea.h"
 #include "engine/geom/clip.h"
 #include "engine/slice/slice.h"
 
@@ -21,6 +22,11 @@
 #define RH_VOX_TARGET 8e6
 #define RH_VOX_MAX ((size_t)64 << 20)
 #define RH_ORIENT_STEP_DEG 15.0
+/* Stiffness analysis: elements of wall_mm / 2, coarsened by 1.25 until
+ * the part's box holds at most RH_FEA_TARGET of them. */
+#define RH_FEA_TARGET 400000.0
+#define RH_FEA_MAX ((size_t)8 << 20)
+#define RH_FEA_SUPERSAMPLE 4
 
 enum { RH_OBJ_STIFFNESS = 0, RH_OBJ_STABILITY };
 enum { RH_REFINE_ADAPTIVE = 0, RH_REFINE_UNIFORM };
@@ -106,10 +112,63 @@ struct rh_job {
 	int objective, refine;
 	struct rh_stab_report stab;
 	int did_stab;
+	struct rh_stiff_report stiff;
+	int did_stiff;
+	char loads_text[4096];      /* the load case used, canonical form */
 	double s_classify, s_build, s_optimize;
 	double area_sum_mm2, layer_mm;
 	int layers;
 };
+
+/* The default material: PLA on FDM printers, a standard resin otherwise. */
+static struct fea_material rh_material(const struct printer *printer)
+{
+	struct fea_material m = {FEA_RESIN_E_MPA, FEA_RESIN_NU};
+
+	if (printer && printer->kind == PRINTER_FDM) {
+		m.E_mpa = FEA_PLA_E_MPA;
+		m.nu = FEA_PLA_NU;
+	}
+	return m;
+}
+
+/* Element edge for the stiffness analysis (fea_voxel_mm = 0). */
+static double auto_fea_voxel(const struct rh_params *p, struct vec3 sz)
+{
+	double h = p->wall_mm / 2;
+
+	while ((ceil(sz.x / h) + 2) * (ceil(sz.y / h) + 2) * (ceil(sz.z / h) + 2) > RH_FEA_TARGET)
+		h *= 1.25;
+	return h;
+}
+
+static int run_stiffness(struct rh_job *s, const struct engine_ctx *ctx, int adaptive,
+			 struct err *e)
+{
+	struct rh_stiff_opts o;
+	struct fea_loads l;
+	int rc;
+
+	if ((rc = fea_loads_parse(s->p.loads, rh_material(ctx->printer), &l, e)) != 0)
+		return rc;
+	fea_loads_format(&l, s->loads_text, sizeof s->loads_text, NULL);
+	memset(&o, 0, sizeof o);
+	o.part_vol_mm3 = s->part_vol_mm3;
+	o.target = s->p.volume_fraction;
+	o.split_pct = s->p.split_pct;
+	o.max_iterations = s->p.max_iterations;
+	o.adaptive = adaptive;
+	o.fea_voxel_mm = s->p.fea_voxel_mm > 0 ? s->p.fea_voxel_mm
+					       : auto_fea_voxel(&s->p, box3_size(ctx->report->bbox));
+	o.supersample = RH_FEA_SUPERSAMPLE;
+	o.max_elements = RH_FEA_MAX;
+	o.threads = ctx->threads;
+	o.progress = ctx->progress;
+	rc = rh_stiffness(&s->tree, ctx->mesh, &l, &o, &s->stiff, e);
+	fea_loads_fini(&l);
+	s->did_stiff = rc == 0;
+	return rc;
+}
 
 static int rh_validate(const void *params, const struct common_params *common,
 		       const struct printer *printer, struct err *e)
@@ -126,6 +185,13 @@ static int rh_validate(const void *params, const struct common_params *common,
 		return ERR_FIELD(e, "skin_mm",
 				 "skin_mm (%g) must be at least wall_mm (%g): the skin is a wall too",
 				 p->skin_mm, p->wall_mm);
+	if (p->objective == RH_OBJ_STIFFNESS) {
+		struct fea_loads l;
+		int rc = fea_loads_parse(p->loads, rh_material(printer), &l, e);
+		if (rc)
+			return rc;
+		fea_loads_fini(&l);
+	}
 	if (p->orient_deg != -1 && p->orient_deg < 0)
 		return ERR_FIELD(e, "orient_deg", "orient_deg is -1 (automatic) or in [0, 180), not %g",
 				 p->orient_deg);
@@ -228,11 +294,14 @@ static int rh_prepare(const struct engine_ctx *ctx, const void *params, void **o
 	t1 = progress_now_s();
 	if (s->refine == RH_REFINE_UNIFORM) {
 		rc = rh_uniform(&s->tree, s->part_vol_mm3, s->p.volume_fraction, &s->steps, e);
+		/* the result's compliance: one solve (and the solid's) */
+		if (!rc && s->objective == RH_OBJ_STIFFNESS)
+			rc = run_stiffness(s, ctx, 0, e);
 	} else if (s->objective == RH_OBJ_STABILITY) {
 		rc = rh_stability(&s->tree, ctx->mesh, ctx->layer_mm, 0, &s->stab, e);
 		s->did_stab = rc == 0;
 	} else {
-		rc = ERR_SET(e, ERR_UNSUPPORTED, "rhombic: objective=stiffness needs the FEA core");
+		rc = run_stiffness(s, ctx, 1, e);
 	}
 	if (rc)
 		goto fail;
@@ -328,6 +397,31 @@ static int rh_metrics(void *state, struct metrics *m, struct err *e)
 		rc |= metrics_int(m, "rhombic.stability_splits", (long long)s->stab.splits);
 		rc |= metrics_int(m, "rhombic.iterations", s->stab.updates);
 	}
+	if (s->did_stiff) {
+		const struct rh_stiff_report *r = &s->stiff;
+		char buf[160];
+		rc |= metrics_num(m, "rhombic.compliance_nmm", r->compliance_nmm);
+		rc |= metrics_num(m, "rhombic.compliance_solid_nmm", r->compliance_solid_nmm);
+		rc |= metrics_num(m, "rhombic.compliance_normalized",
+				  r->compliance_nmm / r->compliance_solid_nmm);
+		rc |= metrics_num(m, "rhombic.max_displacement_mm", r->max_displacement_mm);
+		rc |= metrics_num(m, "rhombic.max_displacement_solid_mm",
+				  r->max_displacement_solid_mm);
+		rc |= metrics_int(m, "rhombic.iterations", r->iterations);
+		rc |= metrics_num(m, "rhombic.fea_voxel_mm", r->fea_voxel_mm);
+		rc |= metrics_int(m, "rhombic.fea_elements", (long long)r->elements);
+		rc |= metrics_int(m, "rhombic.fea_solves", (long long)r->nhist);
+		rc |= metrics_num(m, "rhombic.fea_solve_s", r->solve_s);
+		rc |= metrics_str(m, "rhombic.loads", s->loads_text);
+		/* per solve: the compliance-vs-volume curve (the solid's last) */
+		for (size_t i = 0; i < r->nhist; i++) {
+			snprintf(buf, sizeof buf, "%d", r->hist[i].cg_iterations);
+			rc |= metrics_append_str(m, "rhombic.fea_iterations", buf);
+			snprintf(buf, sizeof buf, "%.6f %.6g %.6g", r->hist[i].fraction,
+				 r->hist[i].compliance_nmm, r->hist[i].max_displacement_mm);
+			rc |= metrics_append_str(m, "rhombic.history", buf);
+		}
+	}
 	rc |= metrics_num(m, "rhombic.seconds.voxels", s->s_classify);
 	rc |= metrics_num(m, "rhombic.seconds.initial", s->s_build);
 	rc |= metrics_num(m, "rhombic.seconds.optimize", s->s_optimize);
@@ -345,6 +439,7 @@ static void rh_release(void *state)
 	if (!s)
 		return;
 	rh_tree_fini(&s->tree);
+	rh_stiff_report_fini(&s->stiff);
 	rh_carve_fini(&s->carve);
 	slice_free(s->slicer);
 	mesh_free(s->result);

@@ -63,30 +63,6 @@ void rh_tree_mass(const struct rh_tree *t, double part_vol, struct vec3 part_mom
 	*com = V > 0 ? v3_scale(M, 1 / V) : v3(0, 0, 0);
 }
 
-/* Material a refinement of cavity leaf idx adds (mm^3), without doing it. */
-static double refine_gain(const struct rh_tree *t, int32_t idx)
-{
-	struct rh_cavity cv;
-	double add;
-
-	rh_cell_cavity(&t->f, &t->c[idx], &cv);
-	add = cv.volume_mm3;
-	if (rh_tree_can_split(t, idx)) {
-		/* the children's cavities: 4 or 8 cells of the next level */
-		const struct rh_cell *c = &t->c[idx];
-		struct rh_cell ch = *c;
-		struct rh_cavity cc;
-		int L = c->level + 1, n = t->f.vsplit[L] > t->f.vsplit[c->level] ? 8 : 4;
-		ch.level = (uint8_t)L;
-		ch.i = 2 * c->i;
-		ch.j = 2 * c->j;
-		ch.kv = n == 8 ? 2 * c->kv : c->kv;
-		rh_cell_cavity(&t->f, &ch, &cc);
-		add -= n * cc.volume_mm3;
-	}
-	return add;
-}
-
 struct stab_key {
 	double d;
 	int32_t idx;
@@ -204,7 +180,7 @@ int rh_stability(struct rh_tree *t, const struct mesh *part, double layer_mm, do
 		for (size_t i = 0; i < t->n; i++)
 			if (t->c[i].state == RH_CAVITY && nk < capk) {
 				struct vec3 cc = cell_center(&t->f, &t->c[i]);
-				double mc = refine_gain(t, (int32_t)i);
+				double mc = rh_tree_refine_gain(t, (int32_t)i);
 				keys[nk].d = 2 * mc / (mc + mg) *
 					     ((cg.x - ch.x) * (cc.x - cg.x) + (cg.y - ch.y) * (cc.y - cg.y));
 				keys[nk++].idx = (int32_t)i;

@@ -282,6 +282,29 @@ int rh_tree_refine(struct rh_tree *t, int32_t idx, double *added_mm3, struct err
 	return 0;
 }
 
+double rh_tree_refine_gain(const struct rh_tree *t, int32_t idx)
+{
+	struct rh_cavity cv;
+	double add;
+
+	rh_cell_cavity(&t->f, &t->c[idx], &cv);
+	add = cv.volume_mm3;
+	if (rh_tree_can_split(t, idx)) {
+		/* the children's cavities: 4 or 8 cells of the next level */
+		const struct rh_cell *c = &t->c[idx];
+		struct rh_cell ch = *c;
+		struct rh_cavity cc;
+		int L = c->level + 1, n = t->f.vsplit[L] > t->f.vsplit[c->level] ? 8 : 4;
+		ch.level = (uint8_t)L;
+		ch.i = 2 * c->i;
+		ch.j = 2 * c->j;
+		ch.kv = n == 8 ? 2 * c->kv : c->kv;
+		rh_cell_cavity(&t->f, &ch, &cc);
+		add -= n * cc.volume_mm3;
+	}
+	return add;
+}
+
 int rh_tree_levels(const struct rh_tree *t)
 {
 	int L = 0;
