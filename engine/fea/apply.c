@@ -1,8 +1,7 @@
-/* apply.c - the level kernels of the multigrid-CG solver: the finest
- * level's matrix-free operator (sum_e rho_e^p K0 x_e, gathered per node:
- * no races, no colouring), the coarse levels' stencil operator, both
- * fused with the residual and damped-Jacobi updates; restriction P^T and
- * prolongation P (trilinear); parallel dot products.
+/* apply.c - the coarse levels' kernels of the multigrid-CG solver: the
+ * stencil operator fused with the residual and damped-Jacobi updates,
+ * restriction P^T and prolongation P (trilinear) between levels >= 1,
+ * parallel dot products.  The finest level's are in kernel0.c.
  * Design: docs/fea.md, "Solver".
  */
 #include "engine/fea/fea_int.h"
@@ -43,55 +42,6 @@ static inline void put3(const struct apply_ctx *c, size_t n, unsigned mask, cons
 	}
 }
 
-/* Finest level, one node layer k. */
-static void apply0_layer(void *vctx, size_t kk, int tid)
-{
-	const struct apply_ctx *c = vctx;
-	const struct fea_solver *s = c->s;
-	const struct fea_level *l = c->l;
-	const int NX = l->nx, NY = l->ny, NZ = l->nz, k = (int)kk;
-	const ptrdiff_t sy = NX + 1, sz = (ptrdiff_t)(NX + 1) * (NY + 1);
-	const double *x = c->x;
-	const double *ke = s->ke;
-
-	(void)tid;
-	for (int j = 0; j <= NY; j++)
-		for (int i = 0; i <= NX; i++) {
-			size_t n = fea_node(l, i, j, k);
-			unsigned mask = s->mask0[n];
-			double acc[3] = {0, 0, 0};
-
-			if ((mask & FEA_NODE_ALL) == FEA_NODE_ALL) {
-				c->y[3 * n] = c->y[3 * n + 1] = c->y[3 * n + 2] = 0;
-				continue;
-			}
-			for (int p = 0; p < 8; p++) {
-				int ex = p & 1, ey = (p >> 1) & 1, ez = (p >> 2) & 1;
-				int ei = i - 1 + ex, ej = j - 1 + ey, ek = k - 1 + ez;
-				if (ei < 0 || ej < 0 || ek < 0 || ei >= NX || ej >= NY || ek >= NZ)
-					continue;
-				double w = s->w0[((size_t)ek * NY + ej) * NX + ei];
-				if (!(w > 0))
-					continue;
-				/* this node is corner a = 7 - p of the element */
-				const double *row = ke + (size_t)(3 * (7 - p)) * 24;
-				double t[3] = {0, 0, 0};
-				for (int b = 0; b < 8; b++) {
-					ptrdiff_t off = (ex - 1 + (b & 1)) + sy * (ey - 1 + ((b >> 1) & 1)) +
-							sz * (ez - 1 + ((b >> 2) & 1));
-					const double *xb = x + 3 * ((ptrdiff_t)n + off);
-					for (int r = 0; r < 3; r++)
-						t[r] += row[r * 24 + 3 * b] * xb[0] +
-							row[r * 24 + 3 * b + 1] * xb[1] +
-							row[r * 24 + 3 * b + 2] * xb[2];
-				}
-				for (int r = 0; r < 3; r++)
-					acc[r] += w * t[r];
-			}
-			put3(c, n, mask, acc);
-		}
-}
-
 /* Stencil level, one node layer k. */
 static void applyc_layer(void *vctx, size_t kk, int tid)
 {
@@ -130,7 +80,7 @@ void fea_apply(struct fea_solver *s, int level, enum fea_op op, const double *x,
 {
 	struct apply_ctx c = {s, &s->lv[level], op, x, b, y};
 
-	fea_par(s, (size_t)c.l->nz + 1, 1, level == 0 ? apply0_layer : applyc_layer, &c);
+	fea_par(s, (size_t)c.l->nz + 1, 1, applyc_layer, &c);
 }
 
 struct grid_ctx {
@@ -202,7 +152,7 @@ static void prolong_layer(void *vctx, size_t kk, int tid)
 		for (int i = 0; i <= f->nx; i++) {
 			int Iv[2] = {i >> 1, (i + 1) >> 1}, ni = (i & 1) ? 2 : 1;
 			size_t n = fea_node(f, i, j, k);
-			unsigned mask = g->masked ? g->s->mask0[n] & FEA_NODE_ALL : 0;
+			unsigned mask = 0;
 			double acc[3] = {0, 0, 0};
 			double w = (ni == 2 ? 0.5 : 1) * (nj == 2 ? 0.5 : 1) * (nk == 2 ? 0.5 : 1);
 
@@ -226,13 +176,14 @@ static void prolong_layer(void *vctx, size_t kk, int tid)
 
 void fea_prolong_add(struct fea_solver *s, int level, const double *xc, double *x)
 {
-	struct grid_ctx g = {s, &s->lv[level], &s->lv[level + 1], level == 0, xc, x};
+	struct grid_ctx g = {s, &s->lv[level], &s->lv[level + 1], 0, xc, x};
 
 	fea_par(s, (size_t)g.f->nz + 1, 1, prolong_layer, &g);
 }
 
 struct dot_ctx {
 	const double *a, *b;
+	const float *bf;
 	size_t n;
 	double *part;
 };
@@ -245,6 +196,12 @@ static void dot_block(void *vctx, size_t blk, int tid)
 	size_t i = lo;
 
 	(void)tid;
+	if (d->bf) {
+		for (; i < hi; i++)
+			s0 += d->a[i] * (double)d->bf[i];
+		d->part[blk] = s0;
+		return;
+	}
 	for (; i + 4 <= hi; i += 4) {
 		s0 += d->a[i] * d->b[i];
 		s1 += d->a[i + 1] * d->b[i + 1];
@@ -259,7 +216,19 @@ static void dot_block(void *vctx, size_t blk, int tid)
 double fea_dot(struct fea_solver *s, const double *a, const double *b, size_t n)
 {
 	size_t nb = (n + FEA_DOT_BLOCK - 1) / FEA_DOT_BLOCK;
-	struct dot_ctx d = {a, b, n, s->dot_part};
+	struct dot_ctx d = {a, b, NULL, n, s->dot_part};
+	double sum = 0;
+
+	fea_par(s, nb, 1, dot_block, &d);
+	for (size_t i = 0; i < nb; i++)
+		sum += s->dot_part[i];
+	return sum;
+}
+
+double fea_dot_df(struct fea_solver *s, const double *a, const float *b, size_t n)
+{
+	size_t nb = (n + FEA_DOT_BLOCK - 1) / FEA_DOT_BLOCK;
+	struct dot_ctx d = {a, NULL, b, n, s->dot_part};
 	double sum = 0;
 
 	fea_par(s, nb, 1, dot_block, &d);

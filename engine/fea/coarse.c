@@ -98,7 +98,7 @@ int fea_coarse_factor(struct fea_solver *s, struct err *e)
 		for (int k = 0; k < l->nz; k++)
 			for (int j = 0; j < l->ny; j++)
 				for (int i = 0; i < l->nx; i++) {
-					double w = s->w0[((size_t)k * l->ny + j) * l->nx + i];
+					double w = s->w0[fea_n0(s, i, j, k)];
 					int id[8];
 					unsigned m8[8];
 					if (!(w > 0))
@@ -107,7 +107,7 @@ int fea_coarse_factor(struct fea_solver *s, struct err *e)
 						int ii = i + (a & 1), jj = j + ((a >> 1) & 1),
 						    kk = k + ((a >> 2) & 1);
 						id[a] = band_node(c, l, ii, jj, kk);
-						m8[a] = s->mask0[fea_node(l, ii, jj, kk)];
+						m8[a] = s->mask0[fea_n0(s, ii, jj, kk)];
 					}
 					for (int a = 0; a < 24; a++) {
 						if (m8[a / 3] & (1u << (a % 3)))
@@ -197,5 +197,31 @@ void fea_coarse_solve(struct fea_solver *s, const double *b, double *x)
 				int bn = band_node(c, l, i, j, k);
 				for (int a = 0; a < 3; a++)
 					x[3 * n + a] = l->invd[3 * n + a] > 0 ? c->rhs[3 * bn + a] : 0;
+			}
+}
+
+void fea_coarse_solve0(struct fea_solver *s, const float *b, float *x)
+{
+	struct fea_coarse *c = &s->co;
+	const struct fea_level *l = &s->lv[0];
+	int one = 1, info = 0, ldab = c->kd + 1;
+
+	for (int k = 0; k <= l->nz; k++)
+		for (int j = 0; j <= l->ny; j++)
+			for (int i = 0; i <= l->nx; i++) {
+				ptrdiff_t n = fea_n0(s, i, j, k);
+				int bn = band_node(c, l, i, j, k);
+				for (int a = 0; a < 3; a++)
+					c->rhs[3 * bn + a] = b[a * s->cs + n];
+			}
+	dpbtrs_("L", &c->n, &c->kd, &one, c->ab, &ldab, c->rhs, &c->n, &info, 1);
+	for (int k = 0; k <= l->nz; k++)
+		for (int j = 0; j <= l->ny; j++)
+			for (int i = 0; i <= l->nx; i++) {
+				ptrdiff_t n = fea_n0(s, i, j, k);
+				int bn = band_node(c, l, i, j, k);
+				for (int a = 0; a < 3; a++)
+					x[a * s->cs + n] =
+						s->mask0[n] & (1u << a) ? 0 : (float)c->rhs[3 * bn + a];
 			}
 }

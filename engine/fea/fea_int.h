@@ -28,7 +28,8 @@
 #define FEA_NODE_ALL 7u
 
 /* One multigrid level.  Level 0 is matrix-free (element weights w0 and
- * K0); levels >= 1 hold 27-point stencils of 3 x 3 blocks:
+ * K0) in its own layout (below); levels >= 1 hold 27-point stencils of
+ * 3 x 3 blocks, unknowns interleaved (3 n + axis):
  * st[(n * 27 + d) * 9 + 3 r + c], d = (dz + 1) * 9 + (dy + 1) * 3 + dx + 1,
  * the coupling of unknown (n, r) to (n + d, c).  Unknowns whose diagonal
  * is 0 (no free fine unknown under them) have all-zero rows and columns;
@@ -38,10 +39,10 @@ struct fea_level {
 	int nx, ny, nz; /* elements per axis */
 	size_t nn;      /* nodes */
 	float *st;      /* levels >= 1, owned */
-	double *invd;   /* 3 nn: jacobi_w / diagonal, 0 on masked unknowns */
-	double *b;      /* 3 nn right-hand side (level 0: the CG residual, borrowed) */
-	double *x;      /* 3 nn solution (owned; swapped with t by smoothing) */
-	double *t;      /* 3 nn scratch */
+	double *invd;   /* levels >= 1: 3 nn, Jacobi weight / diagonal, 0 on masked */
+	double *b;      /* levels >= 1: 3 nn right-hand side */
+	double *x;      /* levels >= 1: 3 nn solution (swapped with t by smoothing) */
+	double *t;      /* levels >= 1: 3 nn scratch */
 };
 
 /* The band Cholesky factor of the coarsest level (coarse.c). */
@@ -51,6 +52,29 @@ struct fea_coarse {
 	double *ab;      /* (kd + 1) * n, LAPACK lower band storage, owned */
 	double *rhs;     /* n, owned */
 };
+
+/* Tables of the finest level's kernels (kernel0.c), offsets in the
+ * level-0 layout. */
+struct fea_k0 {
+	ptrdiff_t xoff[27];     /* the 27 neighbour nodes (d as in fea_level) */
+	ptrdiff_t eoff[8];      /* the 8 elements around a node, octant p = ex + 2 ey + 4 ez:
+				   element (i - 1 + ex, j - 1 + ey, k - 1 + ez) */
+	unsigned char pd[8][8]; /* neighbour d of local node b of octant p's element */
+	float kf[8][8][9];      /* K0 rows of the node (corner 7 - p) x columns of b */
+	double kd[8][8][9];
+	int snz[3];             /* the solid stencil (all 8 weights 1): nonzeros per row */
+	unsigned char sidx[3][81]; /* their 3 d + c */
+	float sf[3][81];
+	double sd[3][81];
+};
+
+/* Level 0 layout: structure of arrays, one array of cs entries per axis,
+ * node (i, j, k) at ((k + 1) sy + j + 1) sx + i + 1 with a zero halo
+ * around the grid (i = -1, j = -1, k = -1 and k = nz + 1; the next row's
+ * and plane's halo close the other sides), rows padded to a multiple of
+ * 8 (sx).  Element (i, j, k) lives at the index of its low corner node
+ * (w0: weight 0 outside the grid), so kernels need no bounds checks.
+ * Every level-0 array has 16 spare entries before and after (fea_n0). */
 
 struct fea_solver {
 	/* the caller's grid */
@@ -66,14 +90,20 @@ struct fea_solver {
 	double kdiag;            /* K0's diagonal entry (all 24 are equal) */
 	double mc[8][24 * 24];   /* P_c^T K0 P_c of the 8 children (mg.c) */
 	double pc[8][24 * 24];   /* P_c */
+	struct fea_k0 k0;
 
-	/* finest level, padded */
+	/* levels; level 0 padded to a multiple of 2^(nlev - 1) elements */
 	int nlev;
 	struct fea_level lv[FEA_MAX_LEVELS];
-	float *w0;        /* padded elements: rho^p, 0 = absent */
-	uint8_t *mask0;   /* padded nodes: FEA_NODE_* bits */
-	double *u, *r, *p, *q; /* CG vectors, 3 per padded node */
-	double *dot_part;  /* partial sums of fea_dot, one per FEA_DOT_BLOCK */
+
+	/* level 0 arrays (layout above) */
+	ptrdiff_t sx, sy, sz, cs;
+	float *w0;          /* element weights rho^p, 0 = absent */
+	uint8_t *mask0;     /* FEA_NODE_* bits, halo: all masked */
+	float *invd0;       /* 3 cs: Jacobi weight / diagonal, 0 on masked */
+	float *b0, *x0, *t0; /* 3 cs: V-cycle rhs, solution, scratch (float) */
+	double *u, *r, *p, *q; /* 3 cs: CG vectors */
+	double *dot_part;   /* partial sums of fea_dot, one per FEA_DOT_BLOCK */
 
 	double *f_user;   /* load, caller's numbering (fea_solver_force) */
 	double *u_user;   /* displacement, caller's numbering */
@@ -84,6 +114,11 @@ struct fea_solver {
 	double setup_s;   /* coarse set-up time not yet reported by a solve */
 	int solved;
 };
+
+static inline ptrdiff_t fea_n0(const struct fea_solver *s, int i, int j, int k)
+{
+	return ((ptrdiff_t)(k + 1) * s->sy + (j + 1)) * s->sx + (i + 1);
+}
 
 static inline size_t fea_node(const struct fea_level *l, int i, int j, int k)
 {
@@ -101,34 +136,49 @@ void fea_child_prolong(int c, double p[24 * 24]);
 int fea_select(struct fea_solver *s, const struct fea_grid *g, const struct fea_loads *l,
 	       struct err *e);
 
-/* apply.c: level kernels.  op selects what is written to y:
+/* Kernels.  op selects what is written to y:
  *   FEA_OP_AX   y = A x
  *   FEA_OP_RES  y = b - A x
  *   FEA_OP_JAC  y = x + invd (b - A x)   (one damped Jacobi sweep)
  * A is the masked operator (identity on masked unknowns); x must be 0 on
  * masked unknowns (all vectors of the solver are), and so is y. */
 enum fea_op { FEA_OP_AX = 0, FEA_OP_RES, FEA_OP_JAC };
+
+/* kernel0.c: level 0.  fea_k0_init fills s->k0 from s->ke. */
+void fea_k0_init(struct fea_solver *s);
+void fea_apply0f(struct fea_solver *s, enum fea_op op, const float *x, const float *b, float *y);
+void fea_apply0d(struct fea_solver *s, const double *x, double *y); /* y = A x */
+/* b0 = (float) r, x0 = invd0 b0: the first Jacobi sweep from 0 */
+void fea_first_sweep0(struct fea_solver *s, const double *r);
+void fea_restrict0(struct fea_solver *s, const float *r0, double *b1);
+void fea_prolong0(struct fea_solver *s, const double *x1, float *x0); /* masked */
+
+/* apply.c: levels >= 1 (interleaved unknowns, double vectors). */
 void fea_apply(struct fea_solver *s, int level, enum fea_op op, const double *x,
 	       const double *b, double *y);
-/* b_{l+1} = P^T r_l, x_l += P x_{l+1} (level 0: masked). */
+/* b_{l+1} = P^T r_l, x_l += P x_{l+1}, level >= 1 */
 void fea_restrict(struct fea_solver *s, int level, const double *r, double *bc);
 void fea_prolong_add(struct fea_solver *s, int level, const double *xc, double *x);
-/* Parallel dot product of n <= 3 nn0 doubles, summed in a fixed order
- * (results do not depend on the thread count). */
+/* Parallel dot products of 3 cs level-0 doubles (and floats), summed in
+ * a fixed order (results do not depend on the thread count). */
 #define FEA_DOT_BLOCK 16384
 double fea_dot(struct fea_solver *s, const double *a, const double *b, size_t n);
+double fea_dot_df(struct fea_solver *s, const double *a, const float *b, size_t n);
 /* parfor_run with the solver's threads, serial for small n. */
 void fea_par(const struct fea_solver *s, size_t n, size_t chunk, parfor_fn fn, void *ctx);
 
 /* mg.c: operators of levels 1.. and the Jacobi weights of every level
  * (after w0 or mask0 change), then the coarsest factor. */
 int fea_mg_build(struct fea_solver *s, struct err *e);
-/* One V-cycle from level 0: lv[0].x = M lv[0].b. */
-void fea_vcycle(struct fea_solver *s);
+/* One V-cycle: s->x0 = M r (float). */
+void fea_vcycle(struct fea_solver *s, const double *r);
 
 /* coarse.c */
 int fea_coarse_factor(struct fea_solver *s, struct err *e);
+/* x = A^-1 b on the coarsest level (levels >= 1: interleaved doubles;
+ * a one-level solver: b0 -> x0, level-0 layout floats). */
 void fea_coarse_solve(struct fea_solver *s, const double *b, double *x);
+void fea_coarse_solve0(struct fea_solver *s, const float *b, float *x);
 void fea_coarse_fini(struct fea_coarse *c);
 
 #endif

@@ -175,7 +175,7 @@ int fea_select(struct fea_solver *s, const struct fea_grid *g, const struct fea_
 {
 	const struct fea_level *L0 = &s->lv[0];
 	int NX = L0->nx, NY = L0->ny, NZ = L0->nz;
-	size_t nn = L0->nn;
+	size_t nn = (size_t)s->cs;
 	uint8_t *m = s->mask0;
 	int32_t *par = NULL, *cid = NULL;
 	struct part *parts = NULL;
@@ -186,19 +186,16 @@ int fea_select(struct fea_solver *s, const struct fea_grid *g, const struct fea_
 	if (l->nfixed == 0)
 		return ERR_FIELD(e, "loads", "loads: no constraint (add a 'fixed' statement)");
 
-	/* absent nodes: touching no present element */
+	/* absent nodes: touching no present element (and the halo) */
+	memset(m, FEA_NODE_ALL | FEA_NODE_ABSENT, (size_t)s->cs);
 	for (int k = 0; k <= NZ; k++)
 		for (int j = 0; j <= NY; j++)
 			for (int i = 0; i <= NX; i++) {
+				ptrdiff_t n = fea_n0(s, i, j, k);
 				int present = 0;
-				for (int c = 0; c < 8 && !present; c++) {
-					int ei = i - 1 + (c & 1), ej = j - 1 + ((c >> 1) & 1),
-					    ek = k - 1 + ((c >> 2) & 1);
-					if (ei < 0 || ej < 0 || ek < 0 || ei >= NX || ej >= NY || ek >= NZ)
-						continue;
-					present = s->w0[((size_t)ek * NY + ej) * NX + ei] > 0;
-				}
-				m[fea_node(L0, i, j, k)] = present ? 0 : FEA_NODE_ALL | FEA_NODE_ABSENT;
+				for (int p = 0; p < 8; p++)
+					present |= s->w0[n + s->k0.eoff[p]] > 0;
+				m[n] = present ? 0 : FEA_NODE_ALL | FEA_NODE_ABSENT;
 			}
 
 	/* constraints */
@@ -211,7 +208,7 @@ int fea_select(struct fea_solver *s, const struct fea_grid *g, const struct fea_
 		for (int k = r[2].lo; k <= r[2].hi; k++)
 			for (int j = r[1].lo; j <= r[1].hi; j++)
 				for (int i = r[0].lo; i <= r[0].hi; i++) {
-					uint8_t *mk = &m[fea_node(L0, i, j, k)];
+					uint8_t *mk = &m[fea_n0(s, i, j, k)];
 					if (*mk & FEA_NODE_ABSENT)
 						continue;
 					*mk |= (uint8_t)(fx->axes & FEA_NODE_ALL);
@@ -236,7 +233,7 @@ int fea_select(struct fea_solver *s, const struct fea_grid *g, const struct fea_
 			for (int k = r[2].lo; k <= r[2].hi; k++)
 				for (int j = r[1].lo; j <= r[1].hi; j++)
 					for (int i = r[0].lo; i <= r[0].hi; i++) {
-						uint8_t *mk = &m[fea_node(L0, i, j, k)];
+						uint8_t *mk = &m[fea_n0(s, i, j, k)];
 						if (*mk & FEA_NODE_ABSENT)
 							continue;
 						if (pass == 0) {
@@ -276,13 +273,13 @@ int fea_select(struct fea_solver *s, const struct fea_grid *g, const struct fea_
 	for (int k = 0; k < NZ; k++)
 		for (int j = 0; j < NY; j++)
 			for (int i = 0; i < NX; i++) {
-				if (!(s->w0[((size_t)k * NY + j) * NX + i] > 0))
+				if (!(s->w0[fea_n0(s, i, j, k)] > 0))
 					continue;
-				int32_t a = (int32_t)fea_node(L0, i, j, k);
+				int32_t a = (int32_t)fea_n0(s, i, j, k);
 				for (int c = 1; c < 8; c++)
 					uf_union(par, a,
-						 (int32_t)fea_node(L0, i + (c & 1), j + ((c >> 1) & 1),
-								   k + ((c >> 2) & 1)));
+						 (int32_t)fea_n0(s, i + (c & 1), j + ((c >> 1) & 1),
+								 k + ((c >> 2) & 1)));
 			}
 	for (size_t n = 0; n < nn; n++) {
 		cid[n] = -1;
@@ -301,7 +298,7 @@ int fea_select(struct fea_solver *s, const struct fea_grid *g, const struct fea_
 		for (int k = 0; k <= NZ; k++)
 			for (int j = 0; j <= NY; j++)
 				for (int i = 0; i <= NX; i++) {
-					size_t n = fea_node(L0, i, j, k);
+					size_t n = (size_t)fea_n0(s, i, j, k);
 					if (m[n] & FEA_NODE_ABSENT)
 						continue;
 					if (pass == 0)

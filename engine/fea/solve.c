@@ -5,6 +5,7 @@
 #include "engine/fea/fea_int.h"
 
 #include <math.h>
+#include <stdint.h>
 #include <stdio.h>
 #include <string.h>
 #include <time.h>
@@ -79,6 +80,28 @@ static void *alloc_count(struct fea_solver *s, size_t count, size_t size)
 	return p;
 }
 
+/* Level-0 arrays keep L0_MARGIN spare bytes on both sides (fea_int.h). */
+#define L0_MARGIN 128
+
+static void *alloc0(struct fea_solver *s, size_t count, size_t size)
+{
+	char *p;
+
+	if (count > (SIZE_MAX - 2 * L0_MARGIN) / size)
+		return NULL;
+	p = mem_calloc(1, count * size + 2 * L0_MARGIN);
+	if (!p)
+		return NULL;
+	s->mem_bytes += count * size + 2 * L0_MARGIN;
+	return p + L0_MARGIN;
+}
+
+static void free0(void *p)
+{
+	if (p)
+		mem_free((char *)p - L0_MARGIN);
+}
+
 void fea_solver_free(struct fea_solver *s)
 {
 	if (!s)
@@ -86,17 +109,20 @@ void fea_solver_free(struct fea_solver *s)
 	for (int l = 0; l < FEA_MAX_LEVELS; l++) {
 		mem_free(s->lv[l].st);
 		mem_free(s->lv[l].invd);
-		if (l > 0)
-			mem_free(s->lv[l].b);
+		mem_free(s->lv[l].b);
 		mem_free(s->lv[l].x);
 		mem_free(s->lv[l].t);
 	}
-	mem_free(s->w0);
-	mem_free(s->mask0);
-	mem_free(s->u);
-	mem_free(s->r);
-	mem_free(s->p);
-	mem_free(s->q);
+	free0(s->w0);
+	free0(s->mask0);
+	free0(s->invd0);
+	free0(s->b0);
+	free0(s->x0);
+	free0(s->t0);
+	free0(s->u);
+	free0(s->r);
+	free0(s->p);
+	free0(s->q);
 	mem_free(s->dot_part);
 	mem_free(s->f_user);
 	mem_free(s->u_user);
@@ -140,14 +166,13 @@ static int check_inputs(const struct fea_grid *g, const struct fea_loads *l,
  * rho keeps the set of present elements when `same` is set. */
 static int fill_weights(struct fea_solver *s, const float *rho, int same, struct err *e)
 {
-	const struct fea_level *L0 = &s->lv[0];
 	size_t present = 0;
 
 	for (int k = 0; k < s->uz; k++)
 		for (int j = 0; j < s->uy; j++)
 			for (int i = 0; i < s->ux; i++) {
 				size_t ue = ((size_t)k * s->uy + j) * s->ux + i;
-				size_t pe = ((size_t)k * L0->ny + j) * L0->nx + i;
+				ptrdiff_t pe = fea_n0(s, i, j, k);
 				double r = rho[ue], w = 0;
 				if (!isfinite(r) || r < 0)
 					return ERR_FIELD(e, "rho",
@@ -171,7 +196,7 @@ static int fill_weights(struct fea_solver *s, const float *rho, int same, struct
 			for (int j = 0; j < s->uy; j++)
 				for (int i = 0; i < s->ux; i++) {
 					size_t ue = ((size_t)k * s->uy + j) * s->ux + i;
-					size_t pe = ((size_t)k * L0->ny + j) * L0->nx + i;
+					ptrdiff_t pe = fea_n0(s, i, j, k);
 					double r = rho[ue];
 					if (r > 0) {
 						r = r < s->opt.rho_min ? s->opt.rho_min : r > 1 ? 1 : r;
@@ -185,7 +210,7 @@ static int fill_weights(struct fea_solver *s, const float *rho, int same, struct
 static void count_dofs(struct fea_solver *s)
 {
 	s->dofs = 0;
-	for (size_t n = 0; n < s->lv[0].nn; n++)
+	for (ptrdiff_t n = 0; n < s->cs; n++)
 		for (int a = 0; a < 3; a++)
 			s->dofs += !(s->mask0[n] & (1u << a));
 }
@@ -247,38 +272,46 @@ int fea_solver_new(const struct fea_grid *g, const struct fea_loads *l, const st
 		lv->nz = ceil_div(g->nz, m) * m >> lev;
 		lv->nn = (size_t)(lv->nx + 1) * (size_t)(lv->ny + 1) * (size_t)(lv->nz + 1);
 		size_t v = 3 * lv->nn;
+		if (lev == 0)
+			continue;
 		lv->invd = alloc_count(s, v, sizeof(double));
 		lv->x = alloc_count(s, v, sizeof(double));
 		lv->t = alloc_count(s, v, sizeof(double));
-		if (lev > 0) {
-			lv->b = alloc_count(s, v, sizeof(double));
-			lv->st = alloc_count(s, lv->nn * 27 * 9, sizeof(float));
-			if (!lv->b || !lv->st)
-				goto nomem;
-		}
-		if (!lv->invd || !lv->x || !lv->t)
+		lv->b = alloc_count(s, v, sizeof(double));
+		lv->st = alloc_count(s, lv->nn * 27 * 9, sizeof(float));
+		if (!lv->invd || !lv->x || !lv->t || !lv->b || !lv->st)
 			goto nomem;
 	}
 	{
-		struct fea_level *L0 = &s->lv[0];
-		size_t v = 3 * L0->nn;
-		s->w0 = alloc_count(s, (size_t)L0->nx * L0->ny * L0->nz, sizeof(float));
-		s->mask0 = alloc_count(s, L0->nn, 1);
-		s->u = alloc_count(s, v, sizeof(double));
-		s->r = alloc_count(s, v, sizeof(double));
-		s->p = alloc_count(s, v, sizeof(double));
-		s->q = alloc_count(s, v, sizeof(double));
+		const struct fea_level *L0 = &s->lv[0];
+		size_t cs, v;
+		s->sx = (L0->nx + 2 + 7) / 8 * 8;
+		s->sy = L0->ny + 2;
+		s->sz = L0->nz + 3;
+		s->cs = (s->sx * s->sy * s->sz + 15) / 16 * 16;
+		cs = (size_t)s->cs;
+		v = 3 * cs;
+		s->w0 = alloc0(s, cs, sizeof(float));
+		s->mask0 = alloc0(s, cs, 1);
+		s->invd0 = alloc0(s, v, sizeof(float));
+		s->b0 = alloc0(s, v, sizeof(float));
+		s->x0 = alloc0(s, v, sizeof(float));
+		s->t0 = alloc0(s, v, sizeof(float));
+		s->u = alloc0(s, v, sizeof(double));
+		s->r = alloc0(s, v, sizeof(double));
+		s->p = alloc0(s, v, sizeof(double));
+		s->q = alloc0(s, v, sizeof(double));
 		s->dot_part = alloc_count(s, v / FEA_DOT_BLOCK + 1, sizeof(double));
 		s->f_user = alloc_count(s, 3 * s->un_nodes, sizeof(double));
 		s->u_user = alloc_count(s, 3 * s->un_nodes, sizeof(double));
-		if (!s->w0 || !s->mask0 || !s->u || !s->r || !s->p || !s->q || !s->dot_part ||
-		    !s->f_user || !s->u_user)
+		if (!s->w0 || !s->mask0 || !s->invd0 || !s->b0 || !s->x0 || !s->t0 || !s->u ||
+		    !s->r || !s->p || !s->q || !s->dot_part || !s->f_user || !s->u_user)
 			goto nomem;
-		L0->b = s->r;
 	}
 
 	fea_element_matrix(s->mat, s->h_mm, s->ke);
 	s->kdiag = s->ke[0];
+	fea_k0_init(s);
 	for (int c = 0; c < 8; c++) {
 		double t[24 * 24];
 		fea_child_prolong(c, s->pc[c]);
@@ -340,34 +373,30 @@ const double *fea_displacement(const struct fea_solver *s)
 	return s->u_user;
 }
 
-/* Copy between the caller's and the padded layout (masked unknowns 0). */
+/* Copy between the caller's layout and level 0's (masked unknowns 0). */
 static void user_to_padded(const struct fea_solver *s, const double *user, double *pad)
 {
-	const struct fea_level *L0 = &s->lv[0];
-
-	memset(pad, 0, 3 * L0->nn * sizeof *pad);
+	memset(pad, 0, 3 * (size_t)s->cs * sizeof *pad);
 	for (int k = 0; k <= s->uz; k++)
 		for (int j = 0; j <= s->uy; j++)
 			for (int i = 0; i <= s->ux; i++) {
 				size_t un = ((size_t)k * (s->uy + 1) + j) * (s->ux + 1) + i;
-				size_t pn = fea_node(L0, i, j, k);
+				ptrdiff_t pn = fea_n0(s, i, j, k);
 				for (int a = 0; a < 3; a++)
 					if (!(s->mask0[pn] & (1u << a)))
-						pad[3 * pn + a] = user[3 * un + a];
+						pad[a * s->cs + pn] = user[3 * un + a];
 			}
 }
 
 static void padded_to_user(const struct fea_solver *s, const double *pad, double *user)
 {
-	const struct fea_level *L0 = &s->lv[0];
-
 	for (int k = 0; k <= s->uz; k++)
 		for (int j = 0; j <= s->uy; j++)
 			for (int i = 0; i <= s->ux; i++) {
 				size_t un = ((size_t)k * (s->uy + 1) + j) * (s->ux + 1) + i;
-				size_t pn = fea_node(L0, i, j, k);
+				ptrdiff_t pn = fea_n0(s, i, j, k);
 				for (int a = 0; a < 3; a++)
-					user[3 * un + a] = pad[3 * pn + a];
+					user[3 * un + a] = pad[a * s->cs + pn];
 			}
 }
 
@@ -378,6 +407,7 @@ struct axpy_ctx {
 	const double *w;
 	size_t n;
 	double *part;
+	const float *xf;
 };
 
 #define VBLOCK FEA_DOT_BLOCK
@@ -398,7 +428,7 @@ static void update_block(void *vctx, size_t blk, int tid)
 	c->part[blk] = s2;
 }
 
-/* p = z + beta p */
+/* p = z + beta p (z float) */
 static void pupdate_block(void *vctx, size_t blk, int tid)
 {
 	const struct axpy_ctx *c = vctx;
@@ -406,7 +436,7 @@ static void pupdate_block(void *vctx, size_t blk, int tid)
 
 	(void)tid;
 	for (size_t i = lo; i < hi; i++)
-		c->y[i] = c->x[i] + c->alpha * c->y[i];
+		c->y[i] = (double)c->xf[i] + c->alpha * c->y[i];
 }
 
 /* r = f - q */
@@ -422,7 +452,7 @@ static void sub_block(void *vctx, size_t blk, int tid)
 
 int fea_solve(struct fea_solver *s, struct fea_result *res, struct err *e)
 {
-	const size_t nv = 3 * s->lv[0].nn, nb = (nv + VBLOCK - 1) / VBLOCK;
+	const size_t nv = 3 * (size_t)s->cs, nb = (nv + VBLOCK - 1) / VBLOCK;
 	double t0 = now_s(), fnorm, rr, rz, rel = 0;
 	int it = 0, converged = 0;
 	struct fea_result R;
@@ -437,11 +467,11 @@ int fea_solve(struct fea_solver *s, struct fea_result *res, struct err *e)
 	}
 	for (int restart = 0; !converged && restart < 50; restart++) {
 		/* (re)start from the true residual r = f - A u */
-		struct axpy_ctx sc = {0, s->q, s->r, NULL, NULL, nv, s->dot_part};
+		struct axpy_ctx sc = {0, s->q, s->r, NULL, NULL, nv, s->dot_part, NULL};
 		int it0 = it;
 
 		user_to_padded(s, s->f_user, s->r);
-		fea_apply(s, 0, FEA_OP_AX, s->u, NULL, s->q);
+		fea_apply0d(s, s->u, s->q);
 		fea_par(s, nb, 1, sub_block, &sc);
 		rr = fea_dot(s, s->r, s->r, nv);
 		rel = sqrt(rr) / fnorm;
@@ -451,19 +481,20 @@ int fea_solve(struct fea_solver *s, struct fea_result *res, struct err *e)
 		}
 		if (it >= s->opt.max_iter)
 			break;
-		fea_vcycle(s);
-		memcpy(s->p, s->lv[0].x, nv * sizeof *s->p);
-		rz = fea_dot(s, s->r, s->lv[0].x, nv);
+		fea_vcycle(s, s->r);
+		for (size_t i = 0; i < nv; i++)
+			s->p[i] = s->x0[i];
+		rz = fea_dot_df(s, s->r, s->x0, nv);
 		while (it < s->opt.max_iter && rz > 0) {
 			double pq, alpha, beta, rz_new;
 			struct axpy_ctx uc;
 
-			fea_apply(s, 0, FEA_OP_AX, s->p, NULL, s->q);
+			fea_apply0d(s, s->p, s->q);
 			pq = fea_dot(s, s->p, s->q, nv);
 			if (!(pq > 0))
 				break; /* breakdown: restart from the true residual */
 			alpha = rz / pq;
-			uc = (struct axpy_ctx){alpha, s->p, s->u, s->r, s->q, nv, s->dot_part};
+			uc = (struct axpy_ctx){alpha, s->p, s->u, s->r, s->q, nv, s->dot_part, NULL};
 			fea_par(s, nb, 1, update_block, &uc);
 			rr = 0;
 			for (size_t b = 0; b < nb; b++)
@@ -472,11 +503,11 @@ int fea_solve(struct fea_solver *s, struct fea_result *res, struct err *e)
 			rel = sqrt(rr) / fnorm;
 			if (rel <= s->opt.tol)
 				break; /* confirmed on the true residual at the restart */
-			fea_vcycle(s);
-			rz_new = fea_dot(s, s->r, s->lv[0].x, nv);
+			fea_vcycle(s, s->r);
+			rz_new = fea_dot_df(s, s->r, s->x0, nv);
 			beta = rz_new / rz;
 			rz = rz_new;
-			uc = (struct axpy_ctx){beta, s->lv[0].x, s->p, NULL, NULL, nv, NULL};
+			uc = (struct axpy_ctx){beta, NULL, s->p, NULL, NULL, nv, NULL, s->x0};
 			fea_par(s, nb, 1, pupdate_block, &uc);
 		}
 		if (it == it0)
@@ -516,8 +547,6 @@ int fea_solve(struct fea_solver *s, struct fea_result *res, struct err *e)
 /* The caller's element (i, j, k): its 24 displacements and weight. */
 static double element_u(const struct fea_solver *s, int i, int j, int k, double ue[24])
 {
-	const struct fea_level *L0 = &s->lv[0];
-
 	for (int a = 0; a < 8; a++) {
 		size_t n = ((size_t)(k + ((a >> 2) & 1)) * (s->uy + 1) + (j + ((a >> 1) & 1))) *
 				   (s->ux + 1) +
@@ -525,7 +554,7 @@ static double element_u(const struct fea_solver *s, int i, int j, int k, double 
 		for (int x = 0; x < 3; x++)
 			ue[3 * a + x] = s->u_user[3 * n + x];
 	}
-	return s->w0[((size_t)k * L0->ny + j) * L0->nx + i];
+	return s->w0[fea_n0(s, i, j, k)];
 }
 
 void fea_element_energy(const struct fea_solver *s, float *out)
