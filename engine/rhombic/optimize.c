@@ -153,6 +153,7 @@ static int solve(struct stiff *st, const struct fea_loads *loads, struct rh_stif
 	if (!st->sv) {
 		fea_opts_default(&fo);
 		fo.threads = st->o->threads;
+		fo.penal = st->o->penal;
 		rc = fea_solver_new(&st->g, loads, &fo, &st->sv, e);
 	} else {
 		rc = fea_solver_set_rho(st->sv, st->g.rho, e);
@@ -304,7 +305,8 @@ static int cmp_desc(const void *pa, const void *pb)
 static int rank_leaves(struct stiff *st, struct leaf_key **keys, size_t *cap, size_t *nk,
 		       struct err *e)
 {
-	const double scale = FEA_PENAL / 2 * pow(FEA_RHO_MIN, FEA_PENAL - 1);
+	const double pe = st->o->penal;
+	const double scale = pe / 2 * pow(FEA_RHO_MIN, pe - 1);
 	struct rh_tree *t = st->t;
 	int rc;
 

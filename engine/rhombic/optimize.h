@@ -57,6 +57,7 @@ struct rh_stiff_opts {
 	int adaptive;         /* 0: evaluate t as it is (uniform refinement) */
 	double fea_voxel_mm;  /* element edge, > 0 */
 	int supersample;      /* cavity sample points per element axis */
+	double penal;         /* SIMP exponent of the element densities (fea_opts.penal) */
 	size_t max_elements;
 	int threads;
 	struct progress *progress; /* may be NULL */

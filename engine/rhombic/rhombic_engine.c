@@ -42,6 +42,7 @@ struct rh_params {
 	double fea_voxel_mm;
 	double voxel_mm;
 	int max_iterations;
+	double penal;
 	char loads[4096];
 };
 
@@ -87,6 +88,11 @@ static const struct param_desc rh_desc[] = {
 	{.name = "max_iterations", .type = PARAM_INT, .offset = P(max_iterations), .min = 1,
 	 .max = 10000, .def = 300, .unit = "",
 	 .help = "Most stiffness iterations (each one FEA solve)."},
+	{.name = "penal", .type = PARAM_NUM, .offset = P(penal), .min = 1, .max = 5,
+	 .def = FEA_PENAL, .unit = "",
+	 .help = "Exponent p of the element stiffness rho^p K0 (rho: the element's material "
+		 "fraction); 3 = the paper's SIMP; 1 = linear in the fraction, so walls thinner "
+		 "than an element keep their stiffness."},
 	{.name = "loads", .type = PARAM_STR, .offset = P(loads), .max = 4095, .str_cap = 4096,
 	 .unit = "",
 	 .help = "Load case of the stiffness objective in the FEA text form (docs/fea.md), e.g. "
@@ -161,6 +167,7 @@ static int run_stiffness(struct rh_job *s, const struct engine_ctx *ctx, int ada
 	o.fea_voxel_mm = s->p.fea_voxel_mm > 0 ? s->p.fea_voxel_mm
 					       : auto_fea_voxel(&s->p, box3_size(ctx->report->bbox));
 	o.supersample = RH_FEA_SUPERSAMPLE;
+	o.penal = s->p.penal;
 	o.max_elements = RH_FEA_MAX;
 	o.threads = ctx->threads;
 	o.progress = ctx->progress;
