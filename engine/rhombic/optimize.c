@@ -140,7 +140,7 @@ static void set_densities(struct stiff *st, int solid)
 		}
 		if (!solid)
 			r -= st->cnt[e] / s3;
-		st->g.rho[e] = (float)(r > FEA_RHO_MIN ? r : FEA_RHO_MIN);
+		st->g.rho[e] = (float)(r > st->o->rho_min ? r : st->o->rho_min);
 	}
 }
 
@@ -154,6 +154,7 @@ static int solve(struct stiff *st, const struct fea_loads *loads, struct rh_stif
 		fea_opts_default(&fo);
 		fo.threads = st->o->threads;
 		fo.penal = st->o->penal;
+		fo.rho_min = st->o->rho_min;
 		rc = fea_solver_new(&st->g, loads, &fo, &st->sv, e);
 	} else {
 		rc = fea_solver_set_rho(st->sv, st->g.rho, e);
@@ -306,7 +307,7 @@ static int rank_leaves(struct stiff *st, struct leaf_key **keys, size_t *cap, si
 		       struct err *e)
 {
 	const double pe = st->o->penal;
-	const double scale = pe / 2 * pow(FEA_RHO_MIN, pe - 1);
+	const double scale = pe / 2 * pow(st->o->rho_min, pe - 1);
 	struct rh_tree *t = st->t;
 	int rc;
 

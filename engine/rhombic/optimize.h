@@ -58,6 +58,7 @@ struct rh_stiff_opts {
 	double fea_voxel_mm;  /* element edge, > 0 */
 	int supersample;      /* cavity sample points per element axis */
 	double penal;         /* SIMP exponent of the element densities (fea_opts.penal) */
+	double rho_min;       /* density of the cavities' elements (fea_opts.rho_min) */
 	size_t max_elements;
 	int threads;
 	struct progress *progress; /* may be NULL */

@@ -27,6 +27,10 @@
 #define RH_FEA_TARGET 400000.0
 #define RH_FEA_MAX ((size_t)8 << 20)
 #define RH_FEA_SUPERSAMPLE 4
+/* Cavity elements: stiffness 0.1^3 = 1e-3 of the solid's (docs/rhombic.md,
+ * "Deviations": at the paper's 0.001^3 the solver's tolerance leaves the
+ * cavities' displacements, whose energies rank the cells, undetermined). */
+#define RH_RHO_MIN 0.1
 
 enum { RH_OBJ_STIFFNESS = 0, RH_OBJ_STABILITY };
 enum { RH_REFINE_ADAPTIVE = 0, RH_REFINE_UNIFORM };
@@ -43,6 +47,7 @@ struct rh_params {
 	double voxel_mm;
 	int max_iterations;
 	double penal;
+	double rho_min;
 	char loads[4096];
 };
 
@@ -93,6 +98,10 @@ static const struct param_desc rh_desc[] = {
 	 .help = "Exponent p of the element stiffness rho^p K0 (rho: the element's material "
 		 "fraction); 3 = the paper's SIMP; 1 = linear in the fraction, so walls thinner "
 		 "than an element keep their stiffness."},
+	{.name = "rho_min", .type = PARAM_NUM, .offset = P(rho_min), .min = 1e-4, .max = 0.5,
+	 .def = RH_RHO_MIN, .unit = "",
+	 .help = "Density of the cavities' elements in the stiffness analysis: their stiffness "
+		 "is rho_min^penal of the solid's (default 0.1^3 = 1e-3; paper: 0.001^3)."},
 	{.name = "loads", .type = PARAM_STR, .offset = P(loads), .max = 4095, .str_cap = 4096,
 	 .unit = "",
 	 .help = "Load case of the stiffness objective in the FEA text form (docs/fea.md), e.g. "
@@ -168,6 +177,7 @@ static int run_stiffness(struct rh_job *s, const struct engine_ctx *ctx, int ada
 					       : auto_fea_voxel(&s->p, box3_size(ctx->report->bbox));
 	o.supersample = RH_FEA_SUPERSAMPLE;
 	o.penal = s->p.penal;
+	o.rho_min = s->p.rho_min;
 	o.max_elements = RH_FEA_MAX;
 	o.threads = ctx->threads;
 	o.progress = ctx->progress;
