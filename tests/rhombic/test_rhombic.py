@@ -77,6 +77,30 @@ def read_stl(path):
     return tris, verts
 
 
+def write_box_stl(path, x, y, z):
+    """A closed box [0, x] x [0, y] x [0, z], outward triangles."""
+    v = [(i * x, j * y, k * z) for k in (0, 1) for j in (0, 1) for i in (0, 1)]
+    faces = [(0, 2, 1), (1, 2, 3), (4, 5, 6), (5, 7, 6), (0, 1, 4), (1, 5, 4),
+             (2, 6, 3), (3, 6, 7), (0, 4, 2), (2, 4, 6), (1, 3, 5), (3, 7, 5)]
+    with open(path, "wb") as f:
+        f.write(b"\0" * 80 + struct.pack("<I", len(faces)))
+        for a, b, c in faces:
+            f.write(struct.pack("<3f", 0, 0, 0))
+            for i in (a, b, c):
+                f.write(struct.pack("<3f", *v[i]))
+            f.write(b"\0\0")
+
+
+# Fig. 12: 100 x 50 x 6.25 mm standing on its 100 x 6.25 face; left bottom
+# end fixed, right bottom end on a roller, 62 N down on the top middle.
+# Boxes in mm from the part's minimum corner (docs/fea.md).
+BEAM_LOADS = ("fixed box=0,0,-0.5,2,6.25,0.5 axes=xyz; fixed box=98,0,-0.5,100,6.25,0.5 axes=z; "
+              "force box=48,0,49.5,52,6.25,50.5 n=0,0,-62")
+BEAM = ["--engine", "rhombic", "--printer", "generic-fdm", "--set", "orient_deg=0",
+        "--set", "wall_mm=0.5", "--set", "skin_mm=0.5", "--set", "fea_voxel_mm=1",
+        "--set", f"loads={BEAM_LOADS}"]
+
+
 def signed_volume(tris, verts):
     s = 0.0
     for a, b, c in tris:
@@ -181,6 +205,45 @@ class RhombicCli(unittest.TestCase):
         self.assertGreater(r["com_hull_distance_mm"], 0)
         self.assertLess(r["volume_fraction"], 1)
 
+    def test_beam_adaptive_vs_uniform(self):
+        """Fig. 12: uniform refinement to about 0.6, then the stiffness
+        optimisation at the uniform result's fraction.  Paper: normalised
+        compliance 1.94 (uniform) vs 1.25 (adaptive), ratio 1.55.  Measured
+        here (1 mm elements): 1.99 vs 1.74, ratio 1.14, max displacement
+        0.048 vs 0.040 mm (docs/rhombic.md, "Figures")."""
+        beam = self.path("beam.stl")
+        write_box_stl(beam, 100, 6.25, 50)
+        u = self.job(beam, self.path("beam_u.stl"), *BEAM, "--set", "refine=uniform",
+                     "--set", "volume_fraction=0.6")["rhombic"]
+        vf = u["volume_fraction"]
+        self.assertGreaterEqual(vf, 0.6)
+        self.assertLess(vf, 0.65)
+        a = self.job(beam, self.path("beam_a.stl"), *BEAM,
+                     "--set", f"volume_fraction={vf!r}")["rhombic"]
+        ratio = u["compliance_normalized"] / a["compliance_normalized"]
+        print(f"beam: initial {u['volume_fraction_initial']:.3f}; uniform {vf:.4f} "
+              f"C/C_solid {u['compliance_normalized']:.3f} max |u| "
+              f"{u['max_displacement_mm']:.4f} mm; adaptive {a['volume_fraction']:.4f} "
+              f"C/C_solid {a['compliance_normalized']:.3f} max |u| "
+              f"{a['max_displacement_mm']:.4f} mm in {a['iterations']} iterations "
+              f"({a['fea_solve_s']:.1f} s of solves); ratio {ratio:.3f}")
+        self.assertLessEqual(a["volume_fraction"], vf + 1e-9)
+        self.assertGreater(a["volume_fraction"], vf - 0.01)
+        self.assertEqual(a["volume_fraction_initial"], u["volume_fraction_initial"])
+        self.assertGreater(a["iterations"], 3)
+        self.assertGreaterEqual(ratio, 1.10)
+        self.assertLess(a["max_displacement_mm"], 0.9 * u["max_displacement_mm"])
+        # the compliance falls with every refinement (the history's last
+        # entry is the solid part's solve)
+        hist = [tuple(map(float, h.split())) for h in a["history"]]
+        self.assertEqual(len(hist), a["fea_solves"])
+        self.assertEqual(hist[-1][0], 1.0)
+        for (f0, c0, _), (f1, c1, _) in zip(hist[:-2], hist[1:-1]):
+            self.assertGreater(f1, f0)
+            self.assertLess(c1, c0)
+        self.assertAlmostEqual(hist[-1][1], a["compliance_solid_nmm"],
+                               delta=1e-5 * a["compliance_solid_nmm"])
+
     def test_bad_parameters(self):
         src = os.path.join(MESHES, "femur.off")
         cases = [
@@ -192,6 +255,9 @@ class RhombicCli(unittest.TestCase):
             (["--set", "volume_fraction=0"], "volume_fraction"),
             (["--set", "objective=stiff"], "objective"),
             (["--set", "wall_mm=20", "--set", "skin_mm=20"], "wall_mm"),
+            (["--set", "loads=fixed plate; force box=0,0,60,5,5,61 n=0,0,-10",
+              "--set", "fea_voxel_mm=2"], "loads"),
+            (["--set", "loads=fixed plate; force nowhere"], "loads"),
         ]
         for extra, field in cases:
             with self.subTest(extra=extra):
