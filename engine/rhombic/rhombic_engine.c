@@ -22,9 +22,11 @@
 #define RH_VOX_TARGET 8e6
 #define RH_VOX_MAX ((size_t)64 << 20)
 #define RH_ORIENT_STEP_DEG 15.0
-/* Stiffness analysis: elements of wall_mm / 2, coarsened by 1.25 until
- * the part's box holds at most RH_FEA_TARGET of them. */
+/* Stiffness analysis: elements of wall_mm / 2, coarsened by 1.1 until the
+ * part holds at most RH_FEA_TARGET of them (its volume / h^3) and its box
+ * at most RH_FEA_BOX (the solver's vectors span the box). */
 #define RH_FEA_TARGET 400000.0
+#define RH_FEA_BOX 2e6
 #define RH_FEA_MAX ((size_t)8 << 20)
 #define RH_FEA_SUPERSAMPLE 4
 /* Cavity elements: stiffness 0.1^3 = 1e-3 of the solid's (docs/rhombic.md,
@@ -85,7 +87,7 @@ static const struct param_desc rh_desc[] = {
 	{.name = "fea_voxel_mm", .type = PARAM_NUM, .offset = P(fea_voxel_mm), .min = 0, .max = 100,
 	 .def = 0, .flags = PARAM_F_AUTO, .unit = "mm",
 	 .help = "Element edge of the stiffness analysis; 0 = wall_mm / 2, coarsened until the "
-		 "part's box holds at most 400k elements."},
+		 "part holds at most 400k elements and its box 2M."},
 	{.name = "voxel_mm", .type = PARAM_NUM, .offset = P(voxel_mm), .min = 0, .max = 100,
 	 .def = 0, .flags = PARAM_F_AUTO, .unit = "mm",
 	 .help = "Voxel edge of the cell classification grid; 0 = wall_mm / 4, coarsened until "
@@ -148,12 +150,13 @@ static struct fea_material rh_material(const struct printer *printer)
 }
 
 /* Element edge for the stiffness analysis (fea_voxel_mm = 0). */
-static double auto_fea_voxel(const struct rh_params *p, struct vec3 sz)
+static double auto_fea_voxel(const struct rh_params *p, struct vec3 sz, double vol_mm3)
 {
 	double h = p->wall_mm / 2;
 
-	while ((ceil(sz.x / h) + 2) * (ceil(sz.y / h) + 2) * (ceil(sz.z / h) + 2) > RH_FEA_TARGET)
-		h *= 1.25;
+	while (vol_mm3 / (h * h * h) > RH_FEA_TARGET ||
+	       (ceil(sz.x / h) + 2) * (ceil(sz.y / h) + 2) * (ceil(sz.z / h) + 2) > RH_FEA_BOX)
+		h *= 1.1;
 	return h;
 }
 
@@ -174,7 +177,8 @@ static int run_stiffness(struct rh_job *s, const struct engine_ctx *ctx, int ada
 	o.max_iterations = s->p.max_iterations;
 	o.adaptive = adaptive;
 	o.fea_voxel_mm = s->p.fea_voxel_mm > 0 ? s->p.fea_voxel_mm
-					       : auto_fea_voxel(&s->p, box3_size(ctx->report->bbox));
+					       : auto_fea_voxel(&s->p, box3_size(ctx->report->bbox),
+								s->part_vol_mm3);
 	o.supersample = RH_FEA_SUPERSAMPLE;
 	o.penal = s->p.penal;
 	o.rho_min = s->p.rho_min;
