@@ -1,12 +1,17 @@
-/* apply.c - the coarse levels' kernels of the multigrid-CG solver: the
- * stencil operator fused with the residual and damped-Jacobi updates,
- * restriction P^T and prolongation P (trilinear) between levels >= 1,
- * parallel dot products.  The finest level's are in kernel0.c.
- * Design: docs/fea.md, "Solver".
+/* apply.c - the coarse levels' stencil operator (fused with the residual
+ * and damped-Jacobi updates), restriction P^T and prolongation P
+ * (trilinear) between any two levels, parallel dot products.  Every level
+ * uses level 0's structure-of-arrays layout with a zero halo (fea_int.h),
+ * so the stencil kernel runs across 8 nodes of a row without bounds
+ * checks, AVX2+FMA when the CPU has it.  The finest level's operator is
+ * in kernel0.c.  docs/fea.md, "Solver".
  */
 #include "engine/fea/fea_int.h"
 
 #include <string.h>
+
+typedef float vf8 __attribute__((vector_size(32)));
+typedef float vf8u __attribute__((vector_size(32), aligned(4), may_alias));
 
 void fea_par(const struct fea_solver *s, size_t n, size_t chunk, parfor_fn fn, void *ctx)
 {
@@ -15,170 +20,197 @@ void fea_par(const struct fea_solver *s, size_t n, size_t chunk, parfor_fn fn, v
 }
 
 struct apply_ctx {
-	struct fea_solver *s;
 	const struct fea_level *l;
 	enum fea_op op;
-	const double *x, *b;
-	double *y;
+	const float *x, *b;
+	float *y;
 };
 
-/* Write the node's three results through the op (masked -> 0). */
-static inline void put3(const struct apply_ctx *c, size_t n, unsigned mask, const double acc[3])
+#define LD(p) (*(const vf8u *)(p))
+
+/* One plane: y = op(A x), 8 nodes per step.  Forward blocks are read at
+ * the node, backward ones (transposed) at the neighbour; halo entries
+ * of st and x are 0, and so are the rows of zero-diagonal unknowns, so
+ * no mask is needed. */
+static inline __attribute__((always_inline)) void applyc_body(const struct apply_ctx *c, int k)
 {
-	for (int a = 0; a < 3; a++) {
-		size_t u = 3 * n + (size_t)a;
-		double v;
-		if (mask & (1u << a)) {
-			c->y[u] = 0;
-			continue;
+	const struct fea_level *l = c->l;
+	const ptrdiff_t cs = l->cs;
+	const float *x = c->x, *st = l->st;
+	ptrdiff_t off[14];
+
+	for (int f = 0; f < 14; f++) {
+		int d = 13 + f;
+		off[f] = (d % 3 - 1) + (d / 3 % 3 - 1) * l->sx + (d / 9 - 1) * l->sx * l->sy;
+	}
+	for (int j = 0; j <= l->ny; j++) {
+		const ptrdiff_t row = fea_nl(l, -1, j, k);
+		for (ptrdiff_t c0 = 0; c0 < l->sx; c0 += 8) {
+			const ptrdiff_t n = row + c0;
+			vf8 a0 = {0}, a1 = {0}, a2 = {0}, b0 = {0}, b1 = {0}, b2 = {0};
+
+			for (int f = 0; f < 14; f++) {
+				const ptrdiff_t m = n + off[f];
+				const float *sf = st + 9 * f * cs + n;
+				vf8 x0 = LD(x + m), x1 = LD(x + cs + m), x2 = LD(x + 2 * cs + m);
+				a0 += LD(sf) * x0;
+				a1 += LD(sf + 3 * cs) * x0;
+				a2 += LD(sf + 6 * cs) * x0;
+				a0 += LD(sf + cs) * x1;
+				a1 += LD(sf + 4 * cs) * x1;
+				a2 += LD(sf + 7 * cs) * x1;
+				a0 += LD(sf + 2 * cs) * x2;
+				a1 += LD(sf + 5 * cs) * x2;
+				a2 += LD(sf + 8 * cs) * x2;
+			}
+			for (int f = 1; f < 14; f++) {
+				const ptrdiff_t m = n - off[f];
+				const float *sf = st + 9 * f * cs + m;
+				vf8 x0 = LD(x + m), x1 = LD(x + cs + m), x2 = LD(x + 2 * cs + m);
+				b0 += LD(sf) * x0;
+				b1 += LD(sf + cs) * x0;
+				b2 += LD(sf + 2 * cs) * x0;
+				b0 += LD(sf + 3 * cs) * x1;
+				b1 += LD(sf + 4 * cs) * x1;
+				b2 += LD(sf + 5 * cs) * x1;
+				b0 += LD(sf + 6 * cs) * x2;
+				b1 += LD(sf + 7 * cs) * x2;
+				b2 += LD(sf + 8 * cs) * x2;
+			}
+			for (int q = 0; q < 3; q++) {
+				vf8 acc = q == 0 ? a0 + b0 : q == 1 ? a1 + b1 : a2 + b2, v;
+				const ptrdiff_t at = q * cs + n;
+				if (c->op == FEA_OP_AX)
+					v = acc;
+				else if (c->op == FEA_OP_RES)
+					v = LD(c->b + at) - acc;
+				else
+					v = LD(x + at) + LD(l->invd + at) * (LD(c->b + at) - acc);
+				*(vf8u *)(c->y + at) = v;
+			}
 		}
-		if (c->op == FEA_OP_AX)
-			v = acc[a];
-		else if (c->op == FEA_OP_RES)
-			v = c->b[u] - acc[a];
-		else
-			v = c->x[u] + c->l->invd[u] * (c->b[u] - acc[a]);
-		c->y[u] = v;
 	}
 }
 
-/* Stencil level, one node layer k. */
-static void applyc_layer(void *vctx, size_t kk, int tid)
+__attribute__((target("avx2,fma"), optimize("fp-contract=fast"))) static void
+applyc_avx2(void *vctx, size_t k, int tid)
 {
-	const struct apply_ctx *c = vctx;
-	const struct fea_level *l = c->l;
-	const int NX = l->nx, NY = l->ny, NZ = l->nz, k = (int)kk;
-	const double *x = c->x;
-
 	(void)tid;
-	for (int j = 0; j <= NY; j++)
-		for (int i = 0; i <= NX; i++) {
-			size_t n = fea_node(l, i, j, k);
-			const float *st = l->st + n * 27 * 9;
-			double acc[3] = {0, 0, 0};
-			unsigned mask = 0;
-
-			for (int dz = k > 0 ? -1 : 0; dz <= (k < NZ ? 1 : 0); dz++)
-				for (int dy = j > 0 ? -1 : 0; dy <= (j < NY ? 1 : 0); dy++)
-					for (int dx = i > 0 ? -1 : 0; dx <= (i < NX ? 1 : 0); dx++) {
-						const float *bl =
-							st + ((dz + 1) * 9 + (dy + 1) * 3 + dx + 1) * 9;
-						const double *xm = x + 3 * fea_node(l, i + dx, j + dy, k + dz);
-						for (int r = 0; r < 3; r++)
-							acc[r] += bl[3 * r] * xm[0] + bl[3 * r + 1] * xm[1] +
-								  bl[3 * r + 2] * xm[2];
-					}
-			for (int a = 0; a < 3; a++)
-				if (!(l->invd[3 * n + a] > 0))
-					mask |= 1u << a; /* zero-diagonal unknown: stays 0 */
-			put3(c, n, mask, acc);
-		}
+	applyc_body(vctx, (int)k);
 }
 
-void fea_apply(struct fea_solver *s, int level, enum fea_op op, const double *x,
-	       const double *b, double *y)
+static void applyc_base(void *vctx, size_t k, int tid)
 {
-	struct apply_ctx c = {s, &s->lv[level], op, x, b, y};
+	(void)tid;
+	applyc_body(vctx, (int)k);
+}
 
-	fea_par(s, (size_t)c.l->nz + 1, 1, applyc_layer, &c);
+void fea_apply(struct fea_solver *s, int level, enum fea_op op, const float *x, const float *b,
+	       float *y)
+{
+	struct apply_ctx c = {&s->lv[level], op, x, b, y};
+
+	fea_par(s, (size_t)c.l->nz + 1, 1, fea_have_avx2() ? applyc_avx2 : applyc_base, &c);
 }
 
 struct grid_ctx {
 	const struct fea_solver *s;
 	const struct fea_level *f, *c; /* fine, coarse */
 	int masked;
-	const double *in;
-	double *out;
+	const float *in;
+	float *out;
 };
 
-/* bc[I] = sum over fine nodes 2I + o (o in {-1, 0, 1}^3) of w(o) r. */
-static void restrict_layer(void *vctx, size_t kk, int tid)
+/* bc[I] = sum over fine nodes 2I + o (o in {-1, 0, 1}^3) of w(o) r
+ * (the fine halo is 0, so no bounds checks). */
+static void restrict_plane(void *vctx, size_t kk, int tid)
 {
 	const struct grid_ctx *g = vctx;
 	const struct fea_level *f = g->f, *c = g->c;
 	const int K = (int)kk;
+	static const float wt[3] = {0.5f, 1, 0.5f};
 
 	(void)tid;
 	for (int J = 0; J <= c->ny; J++)
 		for (int I = 0; I <= c->nx; I++) {
-			double acc[3] = {0, 0, 0};
-			for (int oz = -1; oz <= 1; oz++) {
-				int fk = 2 * K + oz;
-				if (fk < 0 || fk > f->nz)
-					continue;
-				for (int oy = -1; oy <= 1; oy++) {
-					int fj = 2 * J + oy;
-					if (fj < 0 || fj > f->ny)
-						continue;
-					for (int ox = -1; ox <= 1; ox++) {
-						int fi = 2 * I + ox;
-						if (fi < 0 || fi > f->nx)
-							continue;
-						double w = (ox ? 0.5 : 1) * (oy ? 0.5 : 1) * (oz ? 0.5 : 1);
-						const double *r = g->in + 3 * fea_node(f, fi, fj, fk);
-						acc[0] += w * r[0];
-						acc[1] += w * r[1];
-						acc[2] += w * r[2];
+			float acc[3] = {0, 0, 0};
+			ptrdiff_t n = fea_nl(f, 2 * I, 2 * J, 2 * K);
+			for (int oz = 0; oz < 3; oz++)
+				for (int oy = 0; oy < 3; oy++) {
+					float wyz = wt[oy] * wt[oz];
+					ptrdiff_t m = n + (oy - 1) * f->sx + (oz - 1) * f->sx * f->sy;
+					for (int q = 0; q < 3; q++) {
+						const float *r = g->in + q * f->cs + m;
+						acc[q] += wyz * (0.5f * r[-1] + r[0] + 0.5f * r[1]);
 					}
 				}
-			}
-			double *o = g->out + 3 * fea_node(c, I, J, K);
-			o[0] = acc[0];
-			o[1] = acc[1];
-			o[2] = acc[2];
+			ptrdiff_t o = fea_nl(c, I, J, K);
+			for (int q = 0; q < 3; q++)
+				g->out[q * c->cs + o] = acc[q];
 		}
 }
 
-void fea_restrict(struct fea_solver *s, int level, const double *r, double *bc)
+void fea_restrict(struct fea_solver *s, int level, const float *r, float *bc)
 {
 	struct grid_ctx g = {s, &s->lv[level], &s->lv[level + 1], 0, r, bc};
 
-	fea_par(s, (size_t)g.c->nz + 1, 1, restrict_layer, &g);
+	fea_par(s, (size_t)g.c->nz + 1, 1, restrict_plane, &g);
 }
 
-/* x[i] += sum over the coarse nodes around i of w x_c (fine layer k). */
-static void prolong_layer(void *vctx, size_t kk, int tid)
+/* Coarse nodes per chunk of a row in prolong_plane. */
+#define PROLONG_CHUNK 256
+
+/* x[i] += sum over the coarse nodes around i of w x_c (fine plane k):
+ * per fine row, the (up to 4) coarse rows around it are blended in y and
+ * z first, then interpolated along x. */
+static void prolong_plane(void *vctx, size_t kk, int tid)
 {
 	const struct grid_ctx *g = vctx;
 	const struct fea_level *f = g->f, *c = g->c;
 	const int k = (int)kk;
-	int K[2], nk = (k & 1) ? 2 : 1;
+	const int K[2] = {k >> 1, (k + 1) >> 1}, nk = (k & 1) ? 2 : 1;
+	float tmp[3][PROLONG_CHUNK + 1];
 
 	(void)tid;
-	K[0] = k >> 1;
-	K[1] = (k + 1) >> 1;
 	for (int j = 0; j <= f->ny; j++) {
-		int Jv[2] = {j >> 1, (j + 1) >> 1}, nj = (j & 1) ? 2 : 1;
-		for (int i = 0; i <= f->nx; i++) {
-			int Iv[2] = {i >> 1, (i + 1) >> 1}, ni = (i & 1) ? 2 : 1;
-			size_t n = fea_node(f, i, j, k);
-			unsigned mask = 0;
-			double acc[3] = {0, 0, 0};
-			double w = (ni == 2 ? 0.5 : 1) * (nj == 2 ? 0.5 : 1) * (nk == 2 ? 0.5 : 1);
-
-			if (mask == FEA_NODE_ALL)
-				continue;
-			for (int c3 = 0; c3 < nk; c3++)
-				for (int c2 = 0; c2 < nj; c2++)
-					for (int c1 = 0; c1 < ni; c1++) {
-						const double *xc =
-							g->in + 3 * fea_node(c, Iv[c1], Jv[c2], K[c3]);
-						acc[0] += xc[0];
-						acc[1] += xc[1];
-						acc[2] += xc[2];
-					}
-			for (int a = 0; a < 3; a++)
-				if (!(mask & (1u << a)))
-					g->out[3 * n + a] += w * acc[a];
+		const int Jv[2] = {j >> 1, (j + 1) >> 1}, nj = (j & 1) ? 2 : 1;
+		const float wyz = (nj == 2 ? 0.5f : 1) * (nk == 2 ? 0.5f : 1);
+		for (int I0 = 0; I0 < c->nx; I0 += PROLONG_CHUNK) {
+			int I1 = I0 + PROLONG_CHUNK < c->nx ? I0 + PROLONG_CHUNK : c->nx;
+			for (int q = 0; q < 3; q++) {
+				const float *rw[4];
+				int nr = 0;
+				for (int c3 = 0; c3 < nk; c3++)
+					for (int c2 = 0; c2 < nj; c2++)
+						rw[nr++] = g->in + q * c->cs + fea_nl(c, 0, Jv[c2], K[c3]);
+				for (int I = I0; I <= I1; I++) {
+					float acc = rw[0][I];
+					for (int r = 1; r < nr; r++)
+						acc += rw[r][I];
+					tmp[q][I - I0] = wyz * acc;
+				}
+			}
+			const ptrdiff_t n0 = fea_nl(f, 0, j, k);
+			const int iend = I1 < c->nx ? 2 * I1 - 1 : 2 * I1;
+			for (int i = 2 * I0; i <= iend; i++) {
+				const ptrdiff_t n = n0 + i;
+				const unsigned mask = g->masked ? g->s->mask0[n] & FEA_NODE_ALL : 0;
+				const int h = (i >> 1) - I0;
+				for (int q = 0; q < 3; q++) {
+					float v = (i & 1) ? 0.5f * (tmp[q][h] + tmp[q][h + 1]) : tmp[q][h];
+					if (!(mask & (1u << q)))
+						g->out[q * f->cs + n] += v;
+				}
+			}
 		}
 	}
 }
 
-void fea_prolong_add(struct fea_solver *s, int level, const double *xc, double *x)
+void fea_prolong_add(struct fea_solver *s, int level, const float *xc, float *x)
 {
-	struct grid_ctx g = {s, &s->lv[level], &s->lv[level + 1], 0, xc, x};
+	struct grid_ctx g = {s, &s->lv[level], &s->lv[level + 1], level == 0, xc, x};
 
-	fea_par(s, (size_t)g.f->nz + 1, 1, prolong_layer, &g);
+	fea_par(s, (size_t)g.f->nz + 1, 1, prolong_plane, &g);
 }
 
 struct dot_ctx {

@@ -68,7 +68,7 @@ int fea_coarse_factor(struct fea_solver *s, struct err *e)
 					p[b] = t;
 				}
 		memcpy(c->perm, p, sizeof p);
-		double nd = 3.0 * (double)l->nn;
+		double nd = 3.0 * n3[0] * n3[1] * n3[2];
 		double kd = 3.0 * ((double)n3[p[0]] * n3[p[1]] + n3[p[0]] + 1) + 2;
 		if (kd > nd - 1)
 			kd = nd - 1;
@@ -124,18 +124,21 @@ int fea_coarse_factor(struct fea_solver *s, struct err *e)
 		for (int k = 0; k <= l->nz; k++)
 			for (int j = 0; j <= l->ny; j++)
 				for (int i = 0; i <= l->nx; i++) {
-					const float *st = l->st + fea_node(l, i, j, k) * 27 * 9;
+					ptrdiff_t nl = fea_nl(l, i, j, k);
 					int row = 3 * band_node(c, l, i, j, k);
-					for (int d = 0; d < 27; d++) {
+					for (int d = 13; d < 27; d++) {
 						int ii = i + d % 3 - 1, jj = j + (d / 3) % 3 - 1,
 						    kk = k + d / 9 - 1;
-						if (ii < 0 || jj < 0 || kk < 0 || ii > l->nx || jj > l->ny ||
-						    kk > l->nz)
+						if (ii < 0 || jj < 0 || ii > l->nx || jj > l->ny || kk > l->nz)
 							continue;
 						int col = 3 * band_node(c, l, ii, jj, kk);
 						for (int r = 0; r < 3; r++)
-							for (int cc = 0; cc < 3; cc++)
-								band_add(c, row + r, col + cc, st[d * 9 + 3 * r + cc]);
+							for (int cc = 0; cc < 3; cc++) {
+								float v = *fea_st(l, nl, d - 13, 3 * r + cc);
+								band_add(c, row + r, col + cc, v);
+								if (d != 13)
+									band_add(c, col + cc, row + r, v);
+							}
 					}
 				}
 	}
@@ -175,53 +178,31 @@ int fea_coarse_factor(struct fea_solver *s, struct err *e)
 	return rc;
 }
 
-void fea_coarse_solve(struct fea_solver *s, const double *b, double *x)
+void fea_coarse_solve(struct fea_solver *s, const float *b, float *x)
 {
 	struct fea_coarse *c = &s->co;
 	const struct fea_level *l = &s->lv[s->nlev - 1];
+	const float *invd = s->nlev == 1 ? s->invd0 : l->invd;
 	int one = 1, info = 0, ldab = c->kd + 1;
 
 	for (int k = 0; k <= l->nz; k++)
 		for (int j = 0; j <= l->ny; j++)
 			for (int i = 0; i <= l->nx; i++) {
-				size_t n = fea_node(l, i, j, k);
+				ptrdiff_t n = fea_nl(l, i, j, k);
 				int bn = band_node(c, l, i, j, k);
 				for (int a = 0; a < 3; a++)
-					c->rhs[3 * bn + a] = b[3 * n + a];
+					c->rhs[3 * bn + a] = b[a * l->cs + n];
 			}
 	dpbtrs_("L", &c->n, &c->kd, &one, c->ab, &ldab, c->rhs, &c->n, &info, 1);
+	/* unknowns with a zero Jacobi weight are masked or have an identity
+	 * row: 0 */
 	for (int k = 0; k <= l->nz; k++)
 		for (int j = 0; j <= l->ny; j++)
 			for (int i = 0; i <= l->nx; i++) {
-				size_t n = fea_node(l, i, j, k);
+				ptrdiff_t n = fea_nl(l, i, j, k);
 				int bn = band_node(c, l, i, j, k);
 				for (int a = 0; a < 3; a++)
-					x[3 * n + a] = l->invd[3 * n + a] > 0 ? c->rhs[3 * bn + a] : 0;
-			}
-}
-
-void fea_coarse_solve0(struct fea_solver *s, const float *b, float *x)
-{
-	struct fea_coarse *c = &s->co;
-	const struct fea_level *l = &s->lv[0];
-	int one = 1, info = 0, ldab = c->kd + 1;
-
-	for (int k = 0; k <= l->nz; k++)
-		for (int j = 0; j <= l->ny; j++)
-			for (int i = 0; i <= l->nx; i++) {
-				ptrdiff_t n = fea_n0(s, i, j, k);
-				int bn = band_node(c, l, i, j, k);
-				for (int a = 0; a < 3; a++)
-					c->rhs[3 * bn + a] = b[a * s->cs + n];
-			}
-	dpbtrs_("L", &c->n, &c->kd, &one, c->ab, &ldab, c->rhs, &c->n, &info, 1);
-	for (int k = 0; k <= l->nz; k++)
-		for (int j = 0; j <= l->ny; j++)
-			for (int i = 0; i <= l->nx; i++) {
-				ptrdiff_t n = fea_n0(s, i, j, k);
-				int bn = band_node(c, l, i, j, k);
-				for (int a = 0; a < 3; a++)
-					x[a * s->cs + n] =
-						s->mask0[n] & (1u << a) ? 0 : (float)c->rhs[3 * bn + a];
+					x[a * l->cs + n] =
+						invd[a * l->cs + n] > 0 ? (float)c->rhs[3 * bn + a] : 0;
 			}
 }

@@ -69,7 +69,8 @@ struct fea_fix {
 struct fea_force {
 	enum fea_at at;
 	double box_mm[6];
-	double force_n[3]; /* total force in N, spread equally over the box's nodes */
+	double force_n[3]; /* total force in N, spread over the box's nodes in proportion
+			      to the stiffness (sum of rho^p) of the elements each touches */
 };
 
 /* A load case.  Arrays owned (fea_loads_fini). */
@@ -113,11 +114,13 @@ struct fea_grid {
 void fea_grid_fini(struct fea_grid *g);
 
 /* Solid fraction of every voxel of edge h_mm over m's bounding box
- * (padded by one voxel), each voxel sampled on ss x ss x ss points
- * (ss = supersample, >= 1: exact coverage in x-y from sliced polygons
- * at ss heights per voxel), so walls thinner than a voxel still count.
- * part_lo/hi = m's bbox.  threads as parfor.  0, ERR_LIMIT (over
- * max_elements, naming fea_voxel_mm) or ERR_NOMEM. */
+ * (padded by one voxel: lo_mm = bbox.lo - h), exact area coverage in
+ * x-y of the mesh sliced at ss = supersample heights inside each voxel
+ * layer (1..64), averaged, so walls thinner than a voxel still count.
+ * m must be welded (slice.h).  part_lo/hi = m's bbox.  threads as
+ * parfor.  On success g->rho is owned by g (fea_grid_fini).  0,
+ * ERR_PARAM (h_mm, supersample), ERR_GEOMETRY (empty mesh), ERR_LIMIT
+ * (over max_elements, field fea_voxel_mm) or ERR_NOMEM. */
 int fea_voxelize_mesh(const struct mesh *m, double h_mm, int supersample, size_t max_elements,
 		      int threads, struct fea_grid *g, struct err *e);
 
@@ -126,7 +129,8 @@ struct fea_opts {
 	int max_iter;    /* CG iterations, default 1000 */
 	int threads;     /* parfor threads, <= 0 = 1 */
 	int levels;      /* multigrid levels including the finest, 0 = automatic */
-	double jacobi_w; /* damped Jacobi weight, default 0.6 */
+	double jacobi_w; /* damped Jacobi weight, default 0.6; lowered per row where
+			    w lambda_max would reach 1.9 (docs/fea.md, "Smoother") */
 	int smooth;      /* pre- and post-smoothing sweeps per level, default 2 */
 	double penal;    /* SIMP p, default FEA_PENAL */
 	double rho_min;  /* default FEA_RHO_MIN */
@@ -153,12 +157,18 @@ struct fea_result {
 struct fea_solver;
 
 /* Build a solver for grid g (copied: the caller may free g afterwards)
- * and load case l.  Errors, one line each, ERR_PARAM field "loads":
- * a constraint or force box that holds no material node; a force on a
- * node fixed along a direction the force pushes; no constraint at all.
- * ERR_GEOMETRY when the model is not constrained against rigid motion
- * (parts with no path to a fixed node, or a singular coarse operator);
- * ERR_LIMIT when the grid is larger than memory allows. */
+ * and load case l (o NULL = defaults).  Errors, one line each, ERR_PARAM
+ * field "loads": a constraint or force place that holds no material
+ * node; a force on a node fixed along a direction the force pushes; no
+ * constraint at all; E or nu out of range.  ERR_PARAM naming the option
+ * for bad opts (field "rho" for a density outside [0, 1]).
+ * ERR_GEOMETRY when the model is not constrained against rigid motion: a
+ * loaded part (nodes joined through present elements) with no fixed
+ * node, or whose fixed unknowns leave a rigid motion free (one fixed
+ * line or point), or a singular coarsest operator (pieces joined only
+ * along an edge or at a corner).  Parts with no force that are not held
+ * are held fixed instead (fea_result.held_nodes).  ERR_LIMIT when the
+ * grid is larger than memory allows, ERR_NOMEM. */
 int fea_solver_new(const struct fea_grid *g, const struct fea_loads *l, const struct fea_opts *o,
 		   struct fea_solver **out, struct err *e);
 /* The assembled load vector (N), 3 per node as indexed above, owned by
@@ -171,8 +181,10 @@ double *fea_solver_force(struct fea_solver *s);
  * 0 stays 0 and > 0 stays > 0); the next solve starts from the previous
  * displacement (warm start). */
 int fea_solver_set_rho(struct fea_solver *s, const float *rho, struct err *e);
-/* Solve K(rho) u = f.  ERR_GEOMETRY if CG does not reach tol within
- * max_iter (message gives the residual reached). */
+/* Solve K(rho) u = f (f: fea_solver_force).  ERR_GEOMETRY if CG does not
+ * reach tol within max_iter, or stalls above it (tol below the rounding
+ * floor of K u); the message gives the true residual reached.  The
+ * output r is filled on success only. */
 int fea_solve(struct fea_solver *s, struct fea_result *r, struct err *e);
 void fea_solver_free(struct fea_solver *s);
 

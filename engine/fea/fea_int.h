@@ -18,6 +18,7 @@
 #include "engine/fea/fea.h"
 
 #define FEA_MAX_LEVELS 12
+#define FEA_ST 14 /* stored 3 x 3 blocks per node, levels >= 1 */
 
 /* mask0 bits of a finest-level node: bits 0..2 the fixed axes
  * (FEA_AXIS_*); an absent node (touching no present element) or a held
@@ -27,23 +28,50 @@
 #define FEA_NODE_FORCE 32u /* carries load (selection bookkeeping) */
 #define FEA_NODE_ALL 7u
 
-/* One multigrid level.  Level 0 is matrix-free (element weights w0 and
- * K0) in its own layout (below); levels >= 1 hold 27-point stencils of
- * 3 x 3 blocks, unknowns interleaved (3 n + axis):
- * st[(n * 27 + d) * 9 + 3 r + c], d = (dz + 1) * 9 + (dy + 1) * 3 + dx + 1,
- * the coupling of unknown (n, r) to (n + d, c).  Unknowns whose diagonal
- * is 0 (no free fine unknown under them) have all-zero rows and columns;
- * they stay 0 in every vector (their Jacobi weight is 0) and get an
- * identity row in the coarsest factor. */
+/* One multigrid level.  Every level uses the layout of level 0 (below):
+ * structure of arrays, one array of cs entries per axis, node (i, j, k)
+ * at fea_nl(l, i, j, k), a zero halo.  Level 0 is matrix-free (element
+ * weights w0 and K0); levels >= 1 hold 27-point stencils of 3 x 3
+ * blocks: block d of node n, d = (dz + 1) * 9 + (dy + 1) * 3 + dx + 1,
+ * couples unknown (n, r) to (n + d, c).  The operator is symmetric, so
+ * only the self block and the 13 forward ones (d >= 13, f = d - 13) are
+ * stored, entry (f, r, c) of all nodes in one array:
+ * st[(9 f + 3 r + c) cs + n] (fea_st); block d < 13 of n is block
+ * 26 - d of n + d, transposed.  Unknowns whose diagonal is 0 (no free
+ * fine unknown under them) have all-zero rows and columns; their Jacobi
+ * weight is 0 and they get an identity row in the coarsest factor. */
 struct fea_level {
-	int nx, ny, nz; /* elements per axis */
-	size_t nn;      /* nodes */
-	float *st;      /* levels >= 1, owned */
-	double *invd;   /* levels >= 1: 3 nn, Jacobi weight / diagonal, 0 on masked */
-	double *b;      /* levels >= 1: 3 nn right-hand side */
-	double *x;      /* levels >= 1: 3 nn solution (swapped with t by smoothing) */
-	double *t;      /* levels >= 1: 3 nn scratch */
+	int nx, ny, nz;             /* elements per axis */
+	ptrdiff_t sx, sy, sz, cs;   /* row stride, rows per plane, planes, entries per array */
+	float *st;                  /* levels >= 1: FEA_ST * 9 arrays of cs, owned */
+	float *invd;                /* levels >= 1: 3 cs, Jacobi weight / diagonal, 0 on masked */
+	float *b, *x, *t;           /* levels >= 1: 3 cs rhs, solution, scratch (x, t swap) */
 };
+
+static inline ptrdiff_t fea_nl(const struct fea_level *l, int i, int j, int k)
+{
+	return ((ptrdiff_t)(k + 1) * l->sy + (j + 1)) * l->sx + (i + 1);
+}
+
+/* Entry (f, r c) of node n's stored blocks. */
+static inline float *fea_st(const struct fea_level *l, ptrdiff_t n, int f, int rc)
+{
+	return l->st + (ptrdiff_t)(9 * f + rc) * l->cs + n;
+}
+
+/* Block d of node n (any d; n + d inside the grid or its halo) into b. */
+static inline void fea_block(const struct fea_level *l, ptrdiff_t n, int d, float b[9])
+{
+	if (d >= 13) {
+		for (int x = 0; x < 9; x++)
+			b[x] = *fea_st(l, n, d - 13, x);
+	} else {
+		ptrdiff_t m = n + (d % 3 - 1) + (d / 3 % 3 - 1) * l->sx + (d / 9 - 1) * l->sx * l->sy;
+		for (int r = 0; r < 3; r++)
+			for (int c = 0; c < 3; c++)
+				b[3 * r + c] = *fea_st(l, m, 13 - d, 3 * c + r);
+	}
+}
 
 /* The band Cholesky factor of the coarsest level (coarse.c). */
 struct fea_coarse {
@@ -63,18 +91,19 @@ struct fea_k0 {
 	float kf[8][8][9];      /* K0 rows of the node (corner 7 - p) x columns of b */
 	double kd[8][8][9];
 	int snz[3];             /* the solid stencil (all 8 weights 1): nonzeros per row */
-	unsigned char sidx[3][81]; /* their 3 d + c */
+	ptrdiff_t soff[3][81];  /* their x offsets: axis * cs + xoff[d] */
 	float sf[3][81];
 	double sd[3][81];
 };
 
-/* Level 0 layout: structure of arrays, one array of cs entries per axis,
- * node (i, j, k) at ((k + 1) sy + j + 1) sx + i + 1 with a zero halo
+/* The level layout: structure of arrays, one array of cs entries per
+ * axis, node (i, j, k) at ((k + 1) sy + j + 1) sx + i + 1 with a zero halo
  * around the grid (i = -1, j = -1, k = -1 and k = nz + 1; the next row's
  * and plane's halo close the other sides), rows padded to a multiple of
  * 8 (sx).  Element (i, j, k) lives at the index of its low corner node
  * (w0: weight 0 outside the grid), so kernels need no bounds checks.
- * Every level-0 array has 16 spare entries before and after (fea_n0). */
+ * Every level array has 16 spare entries before and after (fea_n0 is
+ * fea_nl of level 0). */
 
 struct fea_solver {
 	/* the caller's grid */
@@ -90,13 +119,14 @@ struct fea_solver {
 	double kdiag;            /* K0's diagonal entry (all 24 are equal) */
 	double mc[8][24 * 24];   /* P_c^T K0 P_c of the 8 children (mg.c) */
 	double pc[8][24 * 24];   /* P_c */
+	double msum[24 * 24];    /* sum of the 8 M_c: a solid unmasked parent */
 	struct fea_k0 k0;
 
 	/* levels; level 0 padded to a multiple of 2^(nlev - 1) elements */
 	int nlev;
 	struct fea_level lv[FEA_MAX_LEVELS];
 
-	/* level 0 arrays (layout above) */
+	/* level 0 arrays (layout above; lv[0] has the same strides) */
 	ptrdiff_t sx, sy, sz, cs;
 	float *w0;          /* element weights rho^p, 0 = absent */
 	uint8_t *mask0;     /* FEA_NODE_* bits, halo: all masked */
@@ -120,11 +150,6 @@ static inline ptrdiff_t fea_n0(const struct fea_solver *s, int i, int j, int k)
 	return ((ptrdiff_t)(k + 1) * s->sy + (j + 1)) * s->sx + (i + 1);
 }
 
-static inline size_t fea_node(const struct fea_level *l, int i, int j, int k)
-{
-	return ((size_t)k * (size_t)(l->ny + 1) + (size_t)j) * (size_t)(l->nx + 1) + (size_t)i;
-}
-
 /* element.c */
 void fea_dmatrix(struct fea_material mat, double d[36]);
 void fea_bcentre(double h_mm, double b[6 * 24]);
@@ -144,21 +169,24 @@ int fea_select(struct fea_solver *s, const struct fea_grid *g, const struct fea_
  * masked unknowns (all vectors of the solver are), and so is y. */
 enum fea_op { FEA_OP_AX = 0, FEA_OP_RES, FEA_OP_JAC };
 
-/* kernel0.c: level 0.  fea_k0_init fills s->k0 from s->ke. */
+/* kernel0.c: level 0.  fea_k0_init fills s->k0 from s->ke.
+ * fea_have_avx2: the CPU runs the AVX2+FMA builds of the kernels. */
+int fea_have_avx2(void);
 void fea_k0_init(struct fea_solver *s);
 void fea_apply0f(struct fea_solver *s, enum fea_op op, const float *x, const float *b, float *y);
 void fea_apply0d(struct fea_solver *s, const double *x, double *y); /* y = A x */
+/* invd0 from w0 and mask0 (weights capped at bound / Gershgorin ratio) */
+void fea_jacobi0(struct fea_solver *s, double bound);
 /* b0 = (float) r, x0 = invd0 b0: the first Jacobi sweep from 0 */
 void fea_first_sweep0(struct fea_solver *s, const double *r);
-void fea_restrict0(struct fea_solver *s, const float *r0, double *b1);
-void fea_prolong0(struct fea_solver *s, const double *x1, float *x0); /* masked */
 
-/* apply.c: levels >= 1 (interleaved unknowns, double vectors). */
-void fea_apply(struct fea_solver *s, int level, enum fea_op op, const double *x,
-	       const double *b, double *y);
-/* b_{l+1} = P^T r_l, x_l += P x_{l+1}, level >= 1 */
-void fea_restrict(struct fea_solver *s, int level, const double *r, double *bc);
-void fea_prolong_add(struct fea_solver *s, int level, const double *xc, double *x);
+/* apply.c: the stencil operator of levels >= 1 (float vectors), and
+ * b_{l+1} = P^T r_l, x_l += P x_{l+1} between any two levels (level 0:
+ * masked unknowns left alone). */
+void fea_apply(struct fea_solver *s, int level, enum fea_op op, const float *x, const float *b,
+	       float *y);
+void fea_restrict(struct fea_solver *s, int level, const float *r, float *bc);
+void fea_prolong_add(struct fea_solver *s, int level, const float *xc, float *x);
 /* Parallel dot products of 3 cs level-0 doubles (and floats), summed in
  * a fixed order (results do not depend on the thread count). */
 #define FEA_DOT_BLOCK 16384
@@ -175,10 +203,9 @@ void fea_vcycle(struct fea_solver *s, const double *r);
 
 /* coarse.c */
 int fea_coarse_factor(struct fea_solver *s, struct err *e);
-/* x = A^-1 b on the coarsest level (levels >= 1: interleaved doubles;
- * a one-level solver: b0 -> x0, level-0 layout floats). */
-void fea_coarse_solve(struct fea_solver *s, const double *b, double *x);
-void fea_coarse_solve0(struct fea_solver *s, const float *b, float *x);
+/* x = A^-1 b on the coarsest level (its layout; level 0 when there is
+ * one level: masked unknowns 0). */
+void fea_coarse_solve(struct fea_solver *s, const float *b, float *x);
 void fea_coarse_fini(struct fea_coarse *c);
 
 #endif

@@ -19,6 +19,10 @@ typedef int vi8 __attribute__((vector_size(32)));
 typedef float vf4 __attribute__((vector_size(16)));
 typedef double vd4 __attribute__((vector_size(32)));
 typedef long long vl4 __attribute__((vector_size(32)));
+/* unaligned views for loads and stores */
+typedef float vf8u __attribute__((vector_size(32), aligned(4), may_alias));
+typedef float vf4u __attribute__((vector_size(16), aligned(4), may_alias));
+typedef double vd4u __attribute__((vector_size(32), aligned(8), may_alias));
 
 void fea_k0_init(struct fea_solver *s)
 {
@@ -50,7 +54,7 @@ void fea_k0_init(struct fea_solver *s)
 			for (int c = 0; c < 3; c++)
 				if (fabs(st[d][3 * r + c]) > 1e-12 * s->kdiag) {
 					int q = K->snz[r]++;
-					K->sidx[r][q] = (unsigned char)(3 * d + c);
+					K->soff[r][q] = c * s->cs + K->xoff[d];
 					K->sd[r][q] = st[d][3 * r + c];
 					K->sf[r][q] = (float)st[d][3 * r + c];
 				}
@@ -59,173 +63,158 @@ void fea_k0_init(struct fea_solver *s)
 struct k0_ctx {
 	struct fea_solver *s;
 	enum fea_op op;
-	const void *x, *b;
+	const void *x, *b, *invd;
 	void *y;
 };
 
 #define INLINE static inline __attribute__((always_inline))
 
-/* One plane (k) of y = op(A x), float, 8 nodes per step. */
+/* All lanes of a comparison true. */
+#define ALL4(v)                                                                    \
+	__extension__({                                                            \
+		long long e4_[4];                                                  \
+		memcpy(e4_, &(v), sizeof e4_);                                     \
+		(e4_[0] & e4_[1] & e4_[2] & e4_[3]) == -1;                         \
+	})
+
+/* a += wt (the three K0 rows of this node's corner in octant p's
+ * element) x, inside PLANE_BODY (uses its K, xn, cs, a0..a2). */
+#define OCTANT(T, V, VU, KB, p, wt)                                                              \
+	do {                                                                         \
+		V t0 = {0}, t1 = {0}, t2 = {0}, v0 = {0}, v1 = {0}, v2 = {0};        \
+		for (int bn = 0; bn < 8; bn += 2) {                                  \
+			const T *kb = K->KB[p][bn];                                  \
+			const T *xb = xn + K->xoff[K->pd[p][bn]];                    \
+			V x0 = *(const VU *)xb, x1 = *(const VU *)(xb + cs),         \
+			  x2 = *(const VU *)(xb + 2 * cs);                           \
+			t0 += kb[0] * x0;                                            \
+			t1 += kb[3] * x0;                                            \
+			t2 += kb[6] * x0;                                            \
+			t0 += kb[1] * x1;                                            \
+			t1 += kb[4] * x1;                                            \
+			t2 += kb[7] * x1;                                            \
+			t0 += kb[2] * x2;                                            \
+			t1 += kb[5] * x2;                                            \
+			t2 += kb[8] * x2;                                            \
+			kb = K->KB[p][bn + 1];                                       \
+			xb = xn + K->xoff[K->pd[p][bn + 1]];                         \
+			x0 = *(const VU *)xb;                                        \
+			x1 = *(const VU *)(xb + cs);                                 \
+			x2 = *(const VU *)(xb + 2 * cs);                             \
+			v0 += kb[0] * x0;                                            \
+			v1 += kb[3] * x0;                                            \
+			v2 += kb[6] * x0;                                            \
+			v0 += kb[1] * x1;                                            \
+			v1 += kb[4] * x1;                                            \
+			v2 += kb[7] * x1;                                            \
+			v0 += kb[2] * x2;                                            \
+			v1 += kb[5] * x2;                                            \
+			v2 += kb[8] * x2;                                            \
+		}                                                                    \
+		const V wv_ = (wt);                                                  \
+		a0 += wv_ * (t0 + v0);                                               \
+		a1 += wv_ * (t1 + v1);                                               \
+		a2 += wv_ * (t2 + v2);                                               \
+	} while (0)
+
+/* One plane (k) of y = op(A x), L nodes per step; T scalar, V vector,
+ * VU its unaligned view, VI the comparison type, KB/SB the coefficient
+ * tables, LOADW the weights as V. */
+#define PLANE_BODY(T, V, VU, VI, L, KB, SB, LOADW)                                   \
+	const struct fea_solver *s = c->s;                                           \
+	const struct fea_k0 *K = &s->k0;                                             \
+	const ptrdiff_t cs = s->cs;                                                  \
+	const T *x = c->x, *b = c->b, *iv = c->invd;                                 \
+	T *y = c->y;                                                                 \
+                                                                                     \
+	for (int j = 0; j <= s->lv[0].ny; j++) {                                     \
+		const ptrdiff_t row = fea_n0(s, -1, j, k);                           \
+		for (ptrdiff_t c0 = 0; c0 < s->sx; c0 += L) {                        \
+			const ptrdiff_t n = row + c0;                                \
+			const T *xn = x + n;                                         \
+			V w[8], a0 = {0}, a1 = {0}, a2 = {0}, sum = {0};             \
+			VI eq;                                                       \
+                                                                                     \
+			for (int p = 0; p < 8; p++) {                                \
+				w[p] = LOADW(s->w0 + n + K->eoff[p]);                \
+				sum += w[p];                                         \
+			}                                                            \
+			eq = sum == 0;                                               \
+			if (ALL4(eq))                                                \
+				goto out_##T;                                        \
+			unsigned dm = 0;                                             \
+			int nd = 0;                                                  \
+			for (int p = 1; p < 8; p++) {                                \
+				VI e1 = w[p] == w[0];                                \
+				if (!ALL4(e1))                                       \
+					dm |= 1u << p, nd++;                         \
+			}                                                            \
+			if (nd <= 5) {                                               \
+				/* solid stencil, 3 partial sums per row */          \
+				for (int r = 0; r < 3; r++) {                        \
+					V u0 = {0}, u1 = {0}, u2 = {0};              \
+					const ptrdiff_t *so = K->soff[r];            \
+					const T *sc = K->SB[r];                      \
+					int q = 0, nz = K->snz[r];                   \
+					for (; q + 3 <= nz; q += 3) {                \
+						u0 += sc[q] * *(const VU *)(xn + so[q]); \
+						u1 += sc[q + 1] * *(const VU *)(xn + so[q + 1]); \
+						u2 += sc[q + 2] * *(const VU *)(xn + so[q + 2]); \
+					}                                            \
+					for (; q < nz; q++)                          \
+						u0 += sc[q] * *(const VU *)(xn + so[q]); \
+					u0 = (u0 + u1 + u2) * w[0];                  \
+					if (r == 0)                                  \
+						a0 = u0;                             \
+					else if (r == 1)                             \
+						a1 = u0;                             \
+					else                                         \
+						a2 = u0;                             \
+				}                                                    \
+				/* w = w[0] everywhere + (w[p] - w[0]) on octant p */ \
+				for (int p = 1; p < 8; p++)                          \
+					if (dm & (1u << p))                          \
+						OCTANT(T, V, VU, KB, p, w[p] - w[0]); \
+			} else {                                                     \
+				for (int p = 0; p < 8; p++) {                        \
+					VI z = w[p] == 0;                            \
+					if (!ALL4(z))                                \
+						OCTANT(T, V, VU, KB, p, w[p]);      \
+				}                                                    \
+			}                                                            \
+		out_##T:;                                                            \
+			VI m = {0};                                                  \
+			for (int l = 0; l < L; l++)                                  \
+				m[l] = s->mask0[n + l];                              \
+			for (int q = 0; q < 3; q++) {                                \
+				V acc = q == 0 ? a0 : q == 1 ? a1 : a2, v;           \
+				VI fr = (m & (1 << q)) == 0;                         \
+				const ptrdiff_t at = q * cs + n;                     \
+				if (c->op == FEA_OP_AX)                              \
+					v = acc;                                     \
+				else if (c->op == FEA_OP_RES)                        \
+					v = *(const VU *)(b + at) - acc;             \
+				else                                                 \
+					v = *(const VU *)(x + at) +                  \
+					    *(const VU *)(iv + at) *                 \
+						    (*(const VU *)(b + at) - acc);   \
+				v = (V)((VI)v & fr);                                 \
+				*(VU *)(y + at) = v;                                 \
+			}                                                            \
+		}                                                                    \
+	}
+
+#define LOADW_F(p) (*(const vf8u *)(p))
+#define LOADW_D(p) __builtin_convertvector(*(const vf4u *)(p), vd4)
+
 INLINE void plane_f(const struct k0_ctx *c, int k)
 {
-	const struct fea_solver *s = c->s;
-	const struct fea_k0 *K = &s->k0;
-	const ptrdiff_t cs = s->cs;
-	const float *x = c->x, *b = c->b, *invd = s->invd0;
-	float *y = c->y;
-
-	for (int j = 0; j <= s->lv[0].ny; j++) {
-		ptrdiff_t row = fea_n0(s, -1, j, k);
-		for (ptrdiff_t c0 = 0; c0 < s->sx; c0 += 8) {
-			const ptrdiff_t n = row + c0;
-			vf8 w[8], X[81], a0 = {0}, a1 = {0}, a2 = {0}, sum = {0};
-			vi8 eq = {0}, m;
-			long long e4[4];
-			unsigned char mb[8];
-
-			for (int p = 0; p < 8; p++) {
-				memcpy(&w[p], s->w0 + n + K->eoff[p], sizeof w[p]);
-				sum += w[p];
-			}
-			eq = sum == 0;
-			memcpy(e4, &eq, sizeof e4);
-			if ((e4[0] & e4[1] & e4[2] & e4[3]) != -1) {
-				for (int d = 0; d < 27; d++)
-					for (int q = 0; q < 3; q++)
-						memcpy(&X[3 * d + q], x + q * cs + n + K->xoff[d], sizeof X[0]);
-				eq = w[1] == w[0];
-				for (int p = 2; p < 8; p++)
-					eq &= w[p] == w[0];
-				memcpy(e4, &eq, sizeof e4);
-				if ((e4[0] & e4[1] & e4[2] & e4[3]) == -1) {
-					for (int q = 0; q < K->snz[0]; q++)
-						a0 += K->sf[0][q] * X[K->sidx[0][q]];
-					for (int q = 0; q < K->snz[1]; q++)
-						a1 += K->sf[1][q] * X[K->sidx[1][q]];
-					for (int q = 0; q < K->snz[2]; q++)
-						a2 += K->sf[2][q] * X[K->sidx[2][q]];
-					a0 *= w[0];
-					a1 *= w[0];
-					a2 *= w[0];
-				} else {
-					for (int p = 0; p < 8; p++) {
-						vf8 t0 = {0}, t1 = {0}, t2 = {0};
-						vi8 z = w[p] == 0;
-						memcpy(e4, &z, sizeof e4);
-						if ((e4[0] & e4[1] & e4[2] & e4[3]) == -1)
-							continue;
-						for (int bn = 0; bn < 8; bn++) {
-							const float *kb = K->kf[p][bn];
-							const vf8 *xb = X + 3 * K->pd[p][bn];
-							t0 += kb[0] * xb[0] + kb[1] * xb[1] + kb[2] * xb[2];
-							t1 += kb[3] * xb[0] + kb[4] * xb[1] + kb[5] * xb[2];
-							t2 += kb[6] * xb[0] + kb[7] * xb[1] + kb[8] * xb[2];
-						}
-						a0 += w[p] * t0;
-						a1 += w[p] * t1;
-						a2 += w[p] * t2;
-					}
-				}
-			}
-			memcpy(mb, s->mask0 + n, sizeof mb);
-			m = (vi8){mb[0], mb[1], mb[2], mb[3], mb[4], mb[5], mb[6], mb[7]};
-			for (int q = 0; q < 3; q++) {
-				vf8 acc = q == 0 ? a0 : q == 1 ? a1 : a2, v, bv, xv, iv;
-				vi8 fr = (m & (1 << q)) == 0;
-				ptrdiff_t at = q * cs + n;
-				if (c->op == FEA_OP_AX) {
-					v = acc;
-				} else {
-					memcpy(&bv, b + at, sizeof bv);
-					if (c->op == FEA_OP_RES) {
-						v = bv - acc;
-					} else {
-						memcpy(&xv, x + at, sizeof xv);
-						memcpy(&iv, invd + at, sizeof iv);
-						v = xv + iv * (bv - acc);
-					}
-				}
-				v = (vf8)((vi8)v & fr);
-				memcpy(y + at, &v, sizeof v);
-			}
-		}
-	}
+	PLANE_BODY(float, vf8, vf8u, vi8, 8, kf, sf, LOADW_F)
 }
 
-/* One plane of y = A x, double, 4 nodes per step (the CG's operator). */
 INLINE void plane_d(const struct k0_ctx *c, int k)
 {
-	const struct fea_solver *s = c->s;
-	const struct fea_k0 *K = &s->k0;
-	const ptrdiff_t cs = s->cs;
-	const double *x = c->x;
-	double *y = c->y;
-
-	for (int j = 0; j <= s->lv[0].ny; j++) {
-		ptrdiff_t row = fea_n0(s, -1, j, k);
-		for (ptrdiff_t c0 = 0; c0 < s->sx; c0 += 4) {
-			const ptrdiff_t n = row + c0;
-			vd4 w[8], X[81], a0 = {0}, a1 = {0}, a2 = {0}, sum = {0};
-			vl4 eq, m;
-			long long e4[4];
-			unsigned char mb[4];
-
-			for (int p = 0; p < 8; p++) {
-				vf4 wf;
-				memcpy(&wf, s->w0 + n + K->eoff[p], sizeof wf);
-				w[p] = __builtin_convertvector(wf, vd4);
-				sum += w[p];
-			}
-			eq = sum == 0;
-			memcpy(e4, &eq, sizeof e4);
-			if ((e4[0] & e4[1] & e4[2] & e4[3]) != -1) {
-				for (int d = 0; d < 27; d++)
-					for (int q = 0; q < 3; q++)
-						memcpy(&X[3 * d + q], x + q * cs + n + K->xoff[d], sizeof X[0]);
-				eq = w[1] == w[0];
-				for (int p = 2; p < 8; p++)
-					eq &= w[p] == w[0];
-				memcpy(e4, &eq, sizeof e4);
-				if ((e4[0] & e4[1] & e4[2] & e4[3]) == -1) {
-					for (int q = 0; q < K->snz[0]; q++)
-						a0 += K->sd[0][q] * X[K->sidx[0][q]];
-					for (int q = 0; q < K->snz[1]; q++)
-						a1 += K->sd[1][q] * X[K->sidx[1][q]];
-					for (int q = 0; q < K->snz[2]; q++)
-						a2 += K->sd[2][q] * X[K->sidx[2][q]];
-					a0 *= w[0];
-					a1 *= w[0];
-					a2 *= w[0];
-				} else {
-					for (int p = 0; p < 8; p++) {
-						vd4 t0 = {0}, t1 = {0}, t2 = {0};
-						vl4 z = w[p] == 0;
-						memcpy(e4, &z, sizeof e4);
-						if ((e4[0] & e4[1] & e4[2] & e4[3]) == -1)
-							continue;
-						for (int bn = 0; bn < 8; bn++) {
-							const double *kb = K->kd[p][bn];
-							const vd4 *xb = X + 3 * K->pd[p][bn];
-							t0 += kb[0] * xb[0] + kb[1] * xb[1] + kb[2] * xb[2];
-							t1 += kb[3] * xb[0] + kb[4] * xb[1] + kb[5] * xb[2];
-							t2 += kb[6] * xb[0] + kb[7] * xb[1] + kb[8] * xb[2];
-						}
-						a0 += w[p] * t0;
-						a1 += w[p] * t1;
-						a2 += w[p] * t2;
-					}
-				}
-			}
-			memcpy(mb, s->mask0 + n, sizeof mb);
-			m = (vl4){mb[0], mb[1], mb[2], mb[3]};
-			for (int q = 0; q < 3; q++) {
-				vd4 v = q == 0 ? a0 : q == 1 ? a1 : a2;
-				vl4 fr = (m & (1 << q)) == 0;
-				v = (vd4)((vl4)v & fr);
-				memcpy(y + q * cs + n, &v, sizeof v);
-			}
-		}
-	}
+	PLANE_BODY(double, vd4, vd4u, vl4, 4, kd, sd, LOADW_D)
 }
 
 #define FAST __attribute__((target("avx2,fma"), optimize("fp-contract=fast")))
@@ -254,7 +243,7 @@ static void plane_d_base(void *ctx, size_t k, int tid)
 	plane_d(ctx, (int)k);
 }
 
-static int have_avx2(void)
+int fea_have_avx2(void)
 {
 	__builtin_cpu_init();
 	return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma");
@@ -262,16 +251,16 @@ static int have_avx2(void)
 
 void fea_apply0f(struct fea_solver *s, enum fea_op op, const float *x, const float *b, float *y)
 {
-	struct k0_ctx c = {s, op, x, b, y};
+	struct k0_ctx c = {s, op, x, b, s->invd0, y};
 
-	fea_par(s, (size_t)s->lv[0].nz + 1, 1, have_avx2() ? plane_f_avx2 : plane_f_base, &c);
+	fea_par(s, (size_t)s->lv[0].nz + 1, 1, fea_have_avx2() ? plane_f_avx2 : plane_f_base, &c);
 }
 
 void fea_apply0d(struct fea_solver *s, const double *x, double *y)
 {
-	struct k0_ctx c = {s, FEA_OP_AX, x, NULL, y};
+	struct k0_ctx c = {s, FEA_OP_AX, x, NULL, NULL, y};
 
-	fea_par(s, (size_t)s->lv[0].nz + 1, 1, have_avx2() ? plane_d_avx2 : plane_d_base, &c);
+	fea_par(s, (size_t)s->lv[0].nz + 1, 1, fea_have_avx2() ? plane_d_avx2 : plane_d_base, &c);
 }
 
 /* b0 = (float) r, x0 = invd0 b0, over one plane of all three axes. */
@@ -293,95 +282,90 @@ static void first_plane(void *vctx, size_t k, int tid)
 
 void fea_first_sweep0(struct fea_solver *s, const double *r)
 {
-	struct k0_ctx c = {s, FEA_OP_AX, r, NULL, NULL};
+	struct k0_ctx c = {s, FEA_OP_AX, r, NULL, NULL, NULL};
 
 	fea_par(s, (size_t)s->lv[0].nz + 1, 1, first_plane, &c);
 }
 
-struct tr_ctx {
-	struct fea_solver *s;
-	const float *f;
-	const double *d;
-	float *fo;
-	double *dout;
-};
-
-/* b1[I] = sum over fine nodes 2I + o (o in {-1, 0, 1}^3) of w(o) r0 */
-static void restrict0_plane(void *vctx, size_t kk, int tid)
+/* Jacobi weights of level 0, one plane, 8 nodes per step: the 27 blocks
+ * of each node's row assembled from its elements (as the operator), then
+ * invd = min(jacobi_w, bound / g) / a_ii with g the row's Gershgorin
+ * ratio over the unmasked columns (mg.c explains the bound). */
+INLINE void jacobi0_body(const struct k0_ctx *c, int k)
 {
-	const struct tr_ctx *c = vctx;
 	const struct fea_solver *s = c->s;
-	const struct fea_level *l1 = &s->lv[1];
-	const int K = (int)kk;
-	static const float wt[3] = {0.5f, 1, 0.5f};
+	const struct fea_k0 *K = &s->k0;
+	const float w = (float)s->opt.jacobi_w, bound = (float)*(const double *)c->b;
 
-	(void)tid;
-	for (int J = 0; J <= l1->ny; J++)
-		for (int I = 0; I <= l1->nx; I++) {
-			double acc[3] = {0, 0, 0};
-			ptrdiff_t n = fea_n0(s, 2 * I, 2 * J, 2 * K);
-			for (int oz = 0; oz < 3; oz++)
-				for (int oy = 0; oy < 3; oy++) {
-					float wyz = wt[oy] * wt[oz];
-					ptrdiff_t m = n + (oy - 1) * s->sx + (oz - 1) * s->sx * s->sy;
-					for (int q = 0; q < 3; q++) {
-						const float *r = c->f + q * s->cs + m;
-						acc[q] += wyz * (0.5f * r[-1] + r[0] + 0.5f * r[1]);
-					}
-				}
-			double *o = c->dout + 3 * fea_node(l1, I, J, K);
-			o[0] = acc[0];
-			o[1] = acc[1];
-			o[2] = acc[2];
-		}
-}
+	for (int j = 0; j <= s->lv[0].ny; j++) {
+		const ptrdiff_t row = fea_n0(s, -1, j, k);
+		for (ptrdiff_t c0 = 0; c0 < s->sx; c0 += 8) {
+			const ptrdiff_t n = row + c0;
+			vf8 wv[8], blk[27 * 9], sum = {0};
+			vi8 z;
 
-void fea_restrict0(struct fea_solver *s, const float *r0, double *b1)
-{
-	struct tr_ctx c = {s, r0, NULL, NULL, b1};
-
-	fea_par(s, (size_t)s->lv[1].nz + 1, 1, restrict0_plane, &c);
-}
-
-/* x0 += P x1 on fine plane k, masked */
-static void prolong0_plane(void *vctx, size_t kk, int tid)
-{
-	const struct tr_ctx *c = vctx;
-	const struct fea_solver *s = c->s;
-	const struct fea_level *f = &s->lv[0], *l1 = &s->lv[1];
-	const int k = (int)kk;
-	const int K[2] = {k >> 1, (k + 1) >> 1}, nk = (k & 1) ? 2 : 1;
-
-	(void)tid;
-	for (int j = 0; j <= f->ny; j++) {
-		int Jv[2] = {j >> 1, (j + 1) >> 1}, nj = (j & 1) ? 2 : 1;
-		for (int i = 0; i <= f->nx; i++) {
-			int Iv[2] = {i >> 1, (i + 1) >> 1}, ni = (i & 1) ? 2 : 1;
-			ptrdiff_t n = fea_n0(s, i, j, k);
-			unsigned mask = s->mask0[n] & FEA_NODE_ALL;
-			double acc[3] = {0, 0, 0};
-			double w = (ni == 2 ? 0.5 : 1) * (nj == 2 ? 0.5 : 1) * (nk == 2 ? 0.5 : 1);
-
-			if (mask == FEA_NODE_ALL)
+			for (int p = 0; p < 8; p++) {
+				wv[p] = LOADW_F(s->w0 + n + K->eoff[p]);
+				sum += wv[p];
+			}
+			z = sum == 0;
+			if (ALL4(z)) {
+				vf8 zero = {0};
+				for (int q = 0; q < 3; q++)
+					*(vf8u *)(s->invd0 + q * s->cs + n) = zero;
 				continue;
-			for (int c3 = 0; c3 < nk; c3++)
-				for (int c2 = 0; c2 < nj; c2++)
-					for (int c1 = 0; c1 < ni; c1++) {
-						const double *xc = c->d + 3 * fea_node(l1, Iv[c1], Jv[c2], K[c3]);
-						acc[0] += xc[0];
-						acc[1] += xc[1];
-						acc[2] += xc[2];
+			}
+			memset(blk, 0, sizeof blk);
+			for (int p = 0; p < 8; p++)
+				for (int bn = 0; bn < 8; bn++) {
+					const float *kb = K->kf[p][bn];
+					vf8 *bl = blk + 9 * K->pd[p][bn];
+					for (int x = 0; x < 9; x++)
+						bl[x] += kb[x] * wv[p];
+				}
+			vi8 own = {0}, nm[27];
+			for (int d = 0; d < 27; d++)
+				for (int l = 0; l < 8; l++)
+					nm[d][l] = s->mask0[n + K->xoff[d] + l];
+			own = nm[13];
+			for (int a = 0; a < 3; a++) {
+				vf8 g = {0}, dg = blk[13 * 9 + 4 * a], v;
+				for (int d = 0; d < 27; d++)
+					for (int cc = 0; cc < 3; cc++) {
+						vf8 e = blk[d * 9 + 3 * a + cc];
+						vi8 fr = (nm[d] & (1 << cc)) == 0;
+						e = (vf8)((vi8)e & (vi8){0x7fffffff, 0x7fffffff, 0x7fffffff,
+									  0x7fffffff, 0x7fffffff, 0x7fffffff,
+									  0x7fffffff, 0x7fffffff}); /* |e| */
+						g += (vf8)((vi8)e & fr);
 					}
-			for (int q = 0; q < 3; q++)
-				if (!(mask & (1u << q)))
-					c->fo[q * s->cs + n] += (float)(w * acc[q]);
+				for (int l = 0; l < 8; l++) {
+					float gl = dg[l] > 0 ? g[l] / dg[l] : 0;
+					v[l] = dg[l] > 0 && !(own[l] & (1 << a))
+						       ? (w * gl < bound ? w : bound / gl) / dg[l]
+						       : 0;
+				}
+				*(vf8u *)(s->invd0 + a * s->cs + n) = v;
+			}
 		}
 	}
 }
 
-void fea_prolong0(struct fea_solver *s, const double *x1, float *x0)
+FAST static void jacobi0_avx2(void *ctx, size_t k, int tid)
 {
-	struct tr_ctx c = {s, NULL, x1, x0, NULL};
+	(void)tid;
+	jacobi0_body(ctx, (int)k);
+}
 
-	fea_par(s, (size_t)s->lv[0].nz + 1, 1, prolong0_plane, &c);
+static void jacobi0_base(void *ctx, size_t k, int tid)
+{
+	(void)tid;
+	jacobi0_body(ctx, (int)k);
+}
+
+void fea_jacobi0(struct fea_solver *s, double bound)
+{
+	struct k0_ctx c = {s, FEA_OP_AX, NULL, &bound, NULL, NULL};
+
+	fea_par(s, (size_t)s->lv[0].nz + 1, 1, fea_have_avx2() ? jacobi0_avx2 : jacobi0_base, &c);
 }

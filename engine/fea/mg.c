@@ -41,8 +41,26 @@ static void level1_layer(void *vctx, size_t kk, int tid)
 		return;
 	for (int J = 0; J < l->ny; J++)
 		for (int I = 0; I < l->nx; I++) {
-			int any = 0;
+			int any = 0, solid = 1;
+			float w8[8];
 
+			for (int ch = 0; ch < 8 && solid; ch++) {
+				int fi = 2 * I + (ch & 1), fj = 2 * J + ((ch >> 1) & 1),
+				    fk = 2 * K + ((ch >> 2) & 1);
+				w8[ch] = s->w0[fea_n0(s, fi, fj, fk)];
+				solid = w8[ch] > 0 && w8[ch] == w8[0];
+			}
+			for (int ln = 0; ln < 27 && solid; ln++)
+				solid = !(s->mask0[fea_n0(s, 2 * I + ln % 3, 2 * J + (ln / 3) % 3,
+							  2 * K + ln / 9)] &
+					  FEA_NODE_ALL);
+			if (solid) {
+				/* equal weights, nothing fixed: w (sum of the M_c) */
+				for (int x = 0; x < 24 * 24; x++)
+					a[x] = w8[0] * s->msum[x];
+				any = 1;
+				goto scatter;
+			}
 			memset(a, 0, sizeof a);
 			for (int ch = 0; ch < 8; ch++) {
 				int fi = 2 * I + (ch & 1), fj = 2 * J + ((ch >> 1) & 1),
@@ -88,16 +106,18 @@ static void level1_layer(void *vctx, size_t kk, int tid)
 			}
 			if (!any)
 				continue;
+		scatter:
 			for (int L = 0; L < 8; L++) {
 				int lx = L & 1, ly = (L >> 1) & 1, lz = (L >> 2) & 1;
-				float *st = l->st + fea_node(l, I + lx, J + ly, K + lz) * 27 * 9;
+				ptrdiff_t nl = fea_nl(l, I + lx, J + ly, K + lz);
 				for (int M = 0; M < 8; M++) {
 					int d = ((M >> 2) - lz + 1) * 9 + (((M >> 1) & 1) - ly + 1) * 3 +
 						((M & 1) - lx + 1);
-					float *bl = st + d * 9;
+					if (d < 13)
+						continue; /* the neighbour's forward block */
 					for (int r = 0; r < 3; r++)
 						for (int cc = 0; cc < 3; cc++)
-							bl[3 * r + cc] +=
+							*fea_st(l, nl, d - 13, 3 * r + cc) +=
 								(float)a[(3 * L + r) * 24 + 3 * M + cc];
 				}
 			}
@@ -108,7 +128,8 @@ struct gal_ctx {
 	const struct fea_level *f, *c;
 };
 
-/* Coarse node layer K of P^T A P (fine level f with stencils). */
+/* Coarse node layer K of P^T A P (fine level f with stencils), forward
+ * blocks only. */
 static void galerkin_layer(void *vctx, size_t kk, int tid)
 {
 	const struct gal_ctx *g = vctx;
@@ -128,14 +149,14 @@ static void galerkin_layer(void *vctx, size_t kk, int tid)
 						    fk > f->nz)
 							continue;
 						double pw = (ox ? 0.5 : 1) * (oy ? 0.5 : 1) * (oz ? 0.5 : 1);
-						const float *st = f->st + fea_node(f, fi, fj, fk) * 27 * 9;
+						ptrdiff_t fn = fea_nl(f, fi, fj, fk);
 						for (int d = 0; d < 27; d++) {
-							int dx = d % 3 - 1, dy = (d / 3) % 3 - 1, dz = d / 9 - 1;
-							int j3[3] = {fi + dx, fj + dy, fk + dz};
+							int j3[3] = {fi + d % 3 - 1, fj + d / 3 % 3 - 1,
+								     fk + d / 9 - 1};
 							const int lim[3] = {f->nx, f->ny, f->nz};
 							int Jc[3][2], nj[3];
 							double qw[3];
-							const float *bl = st + d * 9;
+							float bl[9];
 							int outside = 0;
 							for (int ax = 0; ax < 3; ax++) {
 								if (j3[ax] < 0 || j3[ax] > lim[ax])
@@ -153,6 +174,7 @@ static void galerkin_layer(void *vctx, size_t kk, int tid)
 							}
 							if (outside)
 								continue;
+							fea_block(f, fn, d, bl);
 							double wq = pw * qw[0] * qw[1] * qw[2];
 							for (int cz = 0; cz < nj[2]; cz++)
 								for (int cy = 0; cy < nj[1]; cy++)
@@ -160,15 +182,18 @@ static void galerkin_layer(void *vctx, size_t kk, int tid)
 										int D = (Jc[2][cz] - K + 1) * 9 +
 											(Jc[1][cy] - J + 1) * 3 +
 											(Jc[0][cx] - I + 1);
+										if (D < 13)
+											continue;
 										double *ad = acc + D * 9;
 										for (int x = 0; x < 9; x++)
 											ad[x] += wq * bl[x];
 									}
 						}
 					}
-			float *out = c->st + fea_node(c, I, J, K) * 27 * 9;
-			for (int x = 0; x < 27 * 9; x++)
-				out[x] = (float)acc[x];
+			ptrdiff_t cn = fea_nl(c, I, J, K);
+			for (int fb = 0; fb < FEA_ST; fb++)
+				for (int x = 0; x < 9; x++)
+					*fea_st(c, cn, fb, x) = (float)acc[(13 + fb) * 9 + x];
 		}
 }
 
@@ -177,7 +202,8 @@ struct diag_ctx {
 	int level;
 };
 
-/* Jacobi weights of one node layer: invd = w_i / a_ii with
+/* Jacobi weights of one node layer of a level >= 1 (level 0:
+ * fea_jacobi0, the same rule): invd = w_i / a_ii with
  * w_i = min(jacobi_w, FEA_JACOBI_BOUND / g_i), g_i = sum_j |a_ij| / a_ii
  * the row's Gershgorin ratio (masked columns excluded).  Then every
  * eigenvalue of W D^-1 A is <= FEA_JACOBI_BOUND < 2, so each sweep
@@ -196,50 +222,27 @@ static void diag_layer(void *vctx, size_t kk, int tid)
 	(void)tid;
 	for (int j = 0; j <= l->ny; j++)
 		for (int i = 0; i <= l->nx; i++) {
-			unsigned mask = 0, nmask[27];
-			size_t n = 0;
-			ptrdiff_t n0 = 0;
+			const ptrdiff_t n0 = fea_nl(l, i, j, k);
 
-			if (c->level == 0) {
-				n0 = fea_n0(s, i, j, k);
-				mask = s->mask0[n0] & FEA_NODE_ALL;
-				memset(blk, 0, sizeof blk);
-				for (int d = 0; d < 27; d++)
-					nmask[d] = s->mask0[n0 + s->k0.xoff[d]] & FEA_NODE_ALL;
-				if (mask != FEA_NODE_ALL)
-					for (int p = 0; p < 8; p++) {
-						double we = s->w0[n0 + s->k0.eoff[p]];
-						if (!(we > 0))
-							continue;
-						for (int b = 0; b < 8; b++) {
-							const double *kb = s->k0.kd[p][b];
-							double *bl = blk + 9 * s->k0.pd[p][b];
-							for (int x = 0; x < 9; x++)
-								bl[x] += we * kb[x];
-						}
-					}
-			} else {
-				n = fea_node(l, i, j, k);
-				const float *st = l->st + n * 27 * 9;
-				for (int x = 0; x < 27 * 9; x++)
-					blk[x] = st[x];
-				for (int d = 0; d < 27; d++)
-					nmask[d] = 0;
+			memset(blk, 0, sizeof blk);
+			for (int d = 0; d < 27; d++) {
+				int ii = i + d % 3 - 1, jj = j + (d / 3) % 3 - 1, kq = k + d / 9 - 1;
+				float bl[9];
+				if (ii < 0 || jj < 0 || kq < 0 || ii > l->nx || jj > l->ny || kq > l->nz)
+					continue;
+				fea_block(l, n0, d, bl);
+				for (int x = 0; x < 9; x++)
+					blk[d * 9 + x] = bl[x];
 			}
 			for (int a = 0; a < 3; a++) {
 				double dg = blk[13 * 9 + 4 * a], g = 0, v = 0;
-				if (!(mask & (1u << a)) && dg > 0) {
-					for (int d = 0; d < 27; d++)
-						for (int cc = 0; cc < 3; cc++)
-							if (!(nmask[d] & (1u << cc)))
-								g += fabs(blk[d * 9 + 3 * a + cc]);
+				if (dg > 0) {
+					for (int x = 0; x < 27 * 3; x++)
+						g += fabs(blk[x / 3 * 9 + 3 * a + x % 3]);
 					g /= dg;
 					v = (w * g < FEA_JACOBI_BOUND ? w : FEA_JACOBI_BOUND / g) / dg;
 				}
-				if (c->level == 0)
-					s->invd0[a * s->cs + n0] = (float)v;
-				else
-					l->invd[3 * n + a] = v;
+				l->invd[a * l->cs + n0] = (float)v;
 			}
 		}
 }
@@ -249,7 +252,7 @@ int fea_mg_build(struct fea_solver *s, struct err *e)
 	for (int lev = 0; lev < s->nlev; lev++) {
 		struct fea_level *l = &s->lv[lev];
 		if (lev == 1) {
-			memset(l->st, 0, l->nn * 27 * 9 * sizeof *l->st);
+			memset(l->st, 0, (size_t)l->cs * FEA_ST * 9 * sizeof *l->st);
 			for (int parity = 0; parity < 2; parity++) {
 				struct l1_ctx c = {s, parity};
 				fea_par(s, (size_t)(l->nz + 1) / 2, 1, level1_layer, &c);
@@ -259,14 +262,17 @@ int fea_mg_build(struct fea_solver *s, struct err *e)
 			fea_par(s, (size_t)l->nz + 1, 1, galerkin_layer, &g);
 		}
 		struct diag_ctx dc = {s, lev};
-		fea_par(s, (size_t)l->nz + 1, 1, diag_layer, &dc);
+		if (lev == 0)
+			fea_jacobi0(s, FEA_JACOBI_BOUND);
+		else
+			fea_par(s, (size_t)l->nz + 1, 1, diag_layer, &dc);
 	}
 	return fea_coarse_factor(s, e);
 }
 
 struct scale_ctx {
-	const double *a, *b;
-	double *y;
+	const float *a, *b;
+	float *y;
 	size_t n;
 };
 
@@ -282,39 +288,38 @@ static void mul_block(void *vctx, size_t blk, int tid)
 		c->y[i] = c->a[i] * c->b[i];
 }
 
-static void swap_xt(struct fea_level *l)
+static void swap(float **a, float **b)
 {
-	double *t = l->x;
+	float *t = *a;
 
-	l->x = l->t;
-	l->t = t;
+	*a = *b;
+	*b = t;
 }
 
 void fea_vcycle(struct fea_solver *s, const double *r)
 {
 	const int L = s->nlev - 1, nu = s->opt.smooth;
-	float *tf;
 
 	/* level 0: b0 = r, x0 = invd0 b0 (the first sweep from 0) */
 	fea_first_sweep0(s, r);
 	if (L == 0) {
-		fea_coarse_solve0(s, s->b0, s->x0);
+		fea_coarse_solve(s, s->b0, s->x0);
 		return;
 	}
 	for (int it = 1; it < nu; it++) {
 		fea_apply0f(s, FEA_OP_JAC, s->x0, s->b0, s->t0);
-		tf = s->x0, s->x0 = s->t0, s->t0 = tf;
+		swap(&s->x0, &s->t0);
 	}
 	fea_apply0f(s, FEA_OP_RES, s->x0, s->b0, s->t0);
-	fea_restrict0(s, s->t0, s->lv[1].b);
+	fea_restrict(s, 0, s->t0, s->lv[1].b);
 	for (int lev = 1; lev < L; lev++) {
 		struct fea_level *l = &s->lv[lev];
-		struct scale_ctx c = {l->invd, l->b, l->x, 3 * l->nn};
+		struct scale_ctx c = {l->invd, l->b, l->x, 3 * (size_t)l->cs};
 
 		fea_par(s, (c.n + SCALE_BLOCK - 1) / SCALE_BLOCK, 1, mul_block, &c);
 		for (int it = 1; it < nu; it++) {
 			fea_apply(s, lev, FEA_OP_JAC, l->x, l->b, l->t);
-			swap_xt(l);
+			swap(&l->x, &l->t);
 		}
 		fea_apply(s, lev, FEA_OP_RES, l->x, l->b, l->t);
 		fea_restrict(s, lev, l->t, s->lv[lev + 1].b);
@@ -325,12 +330,12 @@ void fea_vcycle(struct fea_solver *s, const double *r)
 		fea_prolong_add(s, lev, s->lv[lev + 1].x, l->x);
 		for (int it = 0; it < nu; it++) {
 			fea_apply(s, lev, FEA_OP_JAC, l->x, l->b, l->t);
-			swap_xt(l);
+			swap(&l->x, &l->t);
 		}
 	}
-	fea_prolong0(s, s->lv[1].x, s->x0);
+	fea_prolong_add(s, 0, s->lv[1].x, s->x0);
 	for (int it = 0; it < nu; it++) {
 		fea_apply0f(s, FEA_OP_JAC, s->x0, s->b0, s->t0);
-		tf = s->x0, s->x0 = s->t0, s->t0 = tf;
+		swap(&s->x0, &s->t0);
 	}
 }

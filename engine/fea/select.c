@@ -220,24 +220,36 @@ int fea_select(struct fea_solver *s, const struct fea_grid *g, const struct fea_
 		}
 	}
 
-	/* forces, spread equally over the selected nodes */
+	/* forces, spread over the selected nodes in proportion to the
+	 * stiffness around each (the sum of the rho^p weights of the elements
+	 * touching it): on full voxels a face's nodes then carry the
+	 * consistent loads of a uniform traction (1 : 2 : 4 at corners, edges
+	 * and inside), and a node touching only a sliver of material (a voxel
+	 * a few percent full) a matching sliver of the load instead of an
+	 * equal share it could only hold by moving far. */
 	memset(s->f_user, 0, 3 * s->un_nodes * sizeof *s->f_user);
 	for (size_t f = 0; f < l->nforces; f++) {
 		const struct fea_force *fo = &l->forces[f];
 		struct range r[3];
 		size_t hit = 0, clash = 0;
 		int clash_axis = 0;
+		double wsum = 0;
 
 		place_ranges(g, fo->at, fo->box_mm, r);
 		for (int pass = 0; pass < 2; pass++)
 			for (int k = r[2].lo; k <= r[2].hi; k++)
 				for (int j = r[1].lo; j <= r[1].hi; j++)
 					for (int i = r[0].lo; i <= r[0].hi; i++) {
-						uint8_t *mk = &m[fea_n0(s, i, j, k)];
+						ptrdiff_t n0 = fea_n0(s, i, j, k);
+						uint8_t *mk = &m[n0];
+						double w = 0;
 						if (*mk & FEA_NODE_ABSENT)
 							continue;
+						for (int p = 0; p < 8; p++)
+							w += s->w0[n0 + s->k0.eoff[p]];
 						if (pass == 0) {
 							hit++;
+							wsum += w;
 							for (int a = 0; a < 3; a++)
 								if (fo->force_n[a] != 0 && (*mk & (1u << a)))
 									clash++, clash_axis = a;
@@ -245,7 +257,7 @@ int fea_select(struct fea_solver *s, const struct fea_grid *g, const struct fea_
 						}
 						double *fu = &s->f_user[3 * user_node(s, i, j, k)];
 						for (int a = 0; a < 3; a++)
-							fu[a] += fo->force_n[a] / (double)hit;
+							fu[a] += fo->force_n[a] * (w / wsum);
 						if (fo->force_n[0] != 0 || fo->force_n[1] != 0 ||
 						    fo->force_n[2] != 0)
 							*mk |= FEA_NODE_FORCE;

@@ -107,11 +107,11 @@ void fea_solver_free(struct fea_solver *s)
 	if (!s)
 		return;
 	for (int l = 0; l < FEA_MAX_LEVELS; l++) {
-		mem_free(s->lv[l].st);
-		mem_free(s->lv[l].invd);
-		mem_free(s->lv[l].b);
-		mem_free(s->lv[l].x);
-		mem_free(s->lv[l].t);
+		free0(s->lv[l].st);
+		free0(s->lv[l].invd);
+		free0(s->lv[l].b);
+		free0(s->lv[l].x);
+		free0(s->lv[l].t);
 	}
 	free0(s->w0);
 	free0(s->mask0);
@@ -234,14 +234,21 @@ int fea_solver_new(const struct fea_grid *g, const struct fea_loads *l, const st
 	n[2] = g->nz;
 	nlev = pick_levels(n, o->levels);
 
-	/* memory estimate before allocating (ERR_LIMIT beyond physical memory) */
+	/* memory estimate before allocating (ERR_LIMIT beyond physical memory):
+	 * level 0 per node (halo included): 4 double and 4 float vectors of
+	 * 3, weights, mask; the caller's f and u; level 1 and below (1/7 of
+	 * it) per node: half stencils and 4 double vectors */
 	{
 		int m = 1 << (nlev - 1);
-		double nn0 = 1;
-		for (int a = 0; a < 3; a++)
-			nn0 *= ceil_div(n[a], m) * m + 1;
-		est = nn0 * (8 * 3 * 7 + 1 + 4) + 2 * 24.0 * (g->nx + 1.0) * (g->ny + 1.0) * (g->nz + 1.0);
-		est += nn0 / 8 * (27 * 9 * 4 + 4 * 24) * 8 / 7;
+		double nn0 = 1, nn1 = 1;
+		for (int a = 0; a < 3; a++) {
+			nn0 *= ceil_div(n[a], m) * m + 3;
+			nn1 *= ceil_div(n[a], m) * m / 2 + 1;
+		}
+		est = nn0 * (4 * 24 + 4 * 12 + 5) +
+		      48.0 * (g->nx + 1.0) * (g->ny + 1.0) * (g->nz + 1.0);
+		if (nlev > 1)
+			est += nn1 * (FEA_ST * 9 * 4 + 4 * 24) * 8 / 7;
 		phys = (double)sysconf(_SC_PHYS_PAGES) * (double)sysconf(_SC_PAGE_SIZE);
 		if (phys > 0 && est > phys)
 			return ERR_SET(e, ERR_LIMIT,
@@ -267,28 +274,34 @@ int fea_solver_new(const struct fea_grid *g, const struct fea_loads *l, const st
 	for (int lev = 0; lev < nlev; lev++) {
 		struct fea_level *lv = &s->lv[lev];
 		int m = 1 << (nlev - 1);
+		size_t cs;
 		lv->nx = ceil_div(g->nx, m) * m >> lev;
 		lv->ny = ceil_div(g->ny, m) * m >> lev;
 		lv->nz = ceil_div(g->nz, m) * m >> lev;
-		lv->nn = (size_t)(lv->nx + 1) * (size_t)(lv->ny + 1) * (size_t)(lv->nz + 1);
-		size_t v = 3 * lv->nn;
+		/* the layout of fea_int.h; + one row: the last plane's last row
+		 * reads the next row */
+		lv->sx = (lv->nx + 2 + 7) / 8 * 8;
+		lv->sy = lv->ny + 2;
+		lv->sz = lv->nz + 3;
+		lv->cs = (lv->sx * lv->sy * lv->sz + lv->sx + 15) / 16 * 16;
+		cs = (size_t)lv->cs;
 		if (lev == 0)
 			continue;
-		lv->invd = alloc_count(s, v, sizeof(double));
-		lv->x = alloc_count(s, v, sizeof(double));
-		lv->t = alloc_count(s, v, sizeof(double));
-		lv->b = alloc_count(s, v, sizeof(double));
-		lv->st = alloc_count(s, lv->nn * 27 * 9, sizeof(float));
+		lv->invd = alloc0(s, 3 * cs, sizeof(float));
+		lv->x = alloc0(s, 3 * cs, sizeof(float));
+		lv->t = alloc0(s, 3 * cs, sizeof(float));
+		lv->b = alloc0(s, 3 * cs, sizeof(float));
+		lv->st = alloc0(s, cs * FEA_ST * 9, sizeof(float));
 		if (!lv->invd || !lv->x || !lv->t || !lv->b || !lv->st)
 			goto nomem;
 	}
 	{
 		const struct fea_level *L0 = &s->lv[0];
 		size_t cs, v;
-		s->sx = (L0->nx + 2 + 7) / 8 * 8;
-		s->sy = L0->ny + 2;
-		s->sz = L0->nz + 3;
-		s->cs = (s->sx * s->sy * s->sz + 15) / 16 * 16;
+		s->sx = L0->sx;
+		s->sy = L0->sy;
+		s->sz = L0->sz;
+		s->cs = L0->cs;
 		cs = (size_t)s->cs;
 		v = 3 * cs;
 		s->w0 = alloc0(s, cs, sizeof(float));
@@ -328,6 +341,7 @@ int fea_solver_new(const struct fea_grid *g, const struct fea_loads *l, const st
 				for (int x = 0; x < 24; x++)
 					sum += s->pc[c][x * 24 + r] * t[x * 24 + cc];
 				s->mc[c][r * 24 + cc] = sum;
+				s->msum[r * 24 + cc] += sum;
 			}
 	}
 	if ((rc = fill_weights(s, g->rho, 0, e)))
@@ -453,7 +467,7 @@ static void sub_block(void *vctx, size_t blk, int tid)
 int fea_solve(struct fea_solver *s, struct fea_result *res, struct err *e)
 {
 	const size_t nv = 3 * (size_t)s->cs, nb = (nv + VBLOCK - 1) / VBLOCK;
-	double t0 = now_s(), fnorm, rr, rz, rel = 0;
+	double t0 = now_s(), fnorm, rr, rz, rel = 0, true_rel = 0;
 	int it = 0, converged = 0;
 	struct fea_result R;
 
@@ -465,7 +479,7 @@ int fea_solve(struct fea_solver *s, struct fea_result *res, struct err *e)
 		memset(s->u, 0, nv * sizeof *s->u);
 		converged = 1;
 	}
-	for (int restart = 0; !converged && restart < 50; restart++) {
+	for (int restart = 0, stalls = 0; !converged && stalls < 3; restart++) {
 		/* (re)start from the true residual r = f - A u */
 		struct axpy_ctx sc = {0, s->q, s->r, NULL, NULL, nv, s->dot_part, NULL};
 		int it0 = it;
@@ -479,6 +493,11 @@ int fea_solve(struct fea_solver *s, struct fea_result *res, struct err *e)
 			converged = 1;
 			break;
 		}
+		/* a restart that gains less than a factor 2: the tolerance is
+		 * below what rounding in A u allows (about 1e-16 times the
+		 * stiffness contrast) */
+		stalls = restart > 0 && rel > 0.5 * true_rel ? stalls + 1 : 0;
+		true_rel = rel;
 		if (it >= s->opt.max_iter)
 			break;
 		fea_vcycle(s, s->r);
@@ -486,7 +505,7 @@ int fea_solve(struct fea_solver *s, struct fea_result *res, struct err *e)
 			s->p[i] = s->x0[i];
 		rz = fea_dot_df(s, s->r, s->x0, nv);
 		while (it < s->opt.max_iter && rz > 0) {
-			double pq, alpha, beta, rz_new;
+			double pq, alpha, beta, rz_new, rz_old;
 			struct axpy_ctx uc;
 
 			fea_apply0d(s, s->p, s->q);
@@ -503,9 +522,12 @@ int fea_solve(struct fea_solver *s, struct fea_result *res, struct err *e)
 			rel = sqrt(rr) / fnorm;
 			if (rel <= s->opt.tol)
 				break; /* confirmed on the true residual at the restart */
+			/* flexible (Polak-Ribiere) beta: the float V-cycle is not
+			 * exactly linear, so keep r_new . z_old out of beta */
+			rz_old = fea_dot_df(s, s->r, s->x0, nv);
 			fea_vcycle(s, s->r);
 			rz_new = fea_dot_df(s, s->r, s->x0, nv);
-			beta = rz_new / rz;
+			beta = (rz_new - rz_old) / rz;
 			rz = rz_new;
 			uc = (struct axpy_ctx){beta, NULL, s->p, NULL, NULL, nv, NULL, s->x0};
 			fea_par(s, nb, 1, pupdate_block, &uc);
@@ -517,7 +539,7 @@ int fea_solve(struct fea_solver *s, struct fea_result *res, struct err *e)
 		return ERR_SET(e, ERR_GEOMETRY,
 			       "the solver did not converge: relative residual %.3g after %d CG "
 			       "iterations (tolerance %g)",
-			       rel, it, s->opt.tol);
+			       true_rel > 0 ? true_rel : rel, it, s->opt.tol);
 	padded_to_user(s, s->u, s->u_user);
 	{
 		double c = 0, mx = 0;

@@ -274,6 +274,62 @@ static void test_solver_checks(void)
 	fea_grid_fini(&g);
 }
 
+/* Two 2 x 2 x 2 blocks joined only along an edge (the line x = 2, z = 2):
+ * a hinge.  The rigid-motion check passes (the fixed nodes hold the
+ * part), the stiffness is singular: the coarsest factor says so. */
+static void test_hinge(void)
+{
+	struct fea_grid g;
+	struct fea_solver *s = NULL;
+	struct err e;
+
+	memset(&g, 0, sizeof g);
+	g.nx = 4;
+	g.ny = 2;
+	g.nz = 4;
+	g.h_mm = 1;
+	g.part_hi_mm = (struct vec3){4, 2, 4};
+	g.rho = mem_calloc(32, sizeof *g.rho);
+	for (int k = 0; k < 4; k++)
+		for (int j = 0; j < 2; j++)
+			for (int i = 0; i < 4; i++)
+				if ((i < 2 && k < 2) || (i >= 2 && k >= 2))
+					g.rho[(k * 2 + j) * 4 + i] = 1;
+	CHECK_EQ_INT(new_solver(&g, "fixed plate; force box=2,0,4,4,2,4 n=1,0,-1", &s, &e),
+		     ERR_GEOMETRY);
+	CHECK_CONTAINS(e.msg, "the stiffness is singular");
+	CHECK_CONTAINS(e.msg, "joined only along an edge or at a corner");
+	fea_solver_free(s);
+	fea_grid_fini(&g);
+}
+
+/* A grid far beyond memory is refused before anything is allocated;
+ * a load case without force solves to u = 0. */
+static void test_limits(void)
+{
+	struct fea_grid g;
+	struct fea_solver *s = NULL;
+	struct fea_result r;
+	struct err e;
+	float one = 1;
+
+	memset(&g, 0, sizeof g);
+	g.nx = g.ny = g.nz = 20000;
+	g.h_mm = 0.01;
+	g.rho = &one; /* not read: the estimate fails first */
+	CHECK_EQ_INT(new_solver(&g, "", &s, &e), ERR_LIMIT);
+	CHECK_CONTAINS(e.msg, "more than the");
+	two_blocks(&g);
+	REQUIRE_OK(new_solver(&g, "fixed plate", &s, &e), &e);
+	REQUIRE_OK(fea_solve(s, &r, &e), &e);
+	CHECK_NUM(r.compliance_nmm, ==, 0);
+	CHECK_NUM(r.max_displacement_mm, ==, 0);
+	CHECK_EQ_INT(r.iterations, 0);
+	CHECK_EQ_INT(r.held_nodes, 150); /* B: no force, no fixed node */
+	fea_solver_free(s);
+	fea_grid_fini(&g);
+}
+
 int main(void)
 {
 	RUN(test_default);
@@ -281,5 +337,7 @@ int main(void)
 	RUN(test_errors);
 	RUN(test_round_trip);
 	RUN(test_solver_checks);
+	RUN(test_hinge);
+	RUN(test_limits);
 	return harness_report();
 }

@@ -335,7 +335,7 @@ static void test_symmetry(void)
  * F = 1 N down spread over the tip face.  Timoshenko: F L^3 / (3 E I) +
  * F L / (kappa G A), kappa = 10 (1 + nu) / (12 + 11 nu).  Tip deflection:
  * the mean u_z of the tip face. */
-static double cantilever_error(int m, int *levels, int *iters)
+static double cantilever_error(int m, int *levels, int *iters, double *tip_mm)
 {
 	struct fea_grid g;
 	struct fea_opts o;
@@ -351,7 +351,7 @@ static double cantilever_error(int m, int *levels, int *iters)
 	err_clear(&e);
 	grid_box(&g, 10 * m, m, m, d / m);
 	fea_opts_default(&o);
-	o.tol = 1e-10;
+	o.tol = 1e-9;
 	if (solve_text(&g, "fixed box=0,0,0,0,4,4; force box=40,0,0,40,4,4 n=0,0,-1", &o, &s, &r,
 		       &e)) {
 		fprintf(stderr, "cantilever m=%d: %s\n", m, e.msg);
@@ -365,6 +365,17 @@ static double cantilever_error(int m, int *levels, int *iters)
 			cnt++;
 		}
 	tip = -tip / cnt;
+	*tip_mm = tip;
+	/* compliance = f . u over the loaded nodes (the load is spread by
+	 * stiffness: 1 : 2 : 4 at the end face's corners, edges and inside) */
+	{
+		const double *f = fea_solver_force(s);
+		double fu = 0;
+		size_t nn = (size_t)(10 * m + 1) * (m + 1) * (m + 1);
+		for (size_t q = 0; q < 3 * nn; q++)
+			fu += f[q] * u[q];
+		CHECK_REL(r.compliance_nmm, fu, 1e-9);
+	}
 	*levels = r.levels;
 	*iters = r.iterations;
 	fea_solver_free(s);
@@ -374,21 +385,24 @@ static double cantilever_error(int m, int *levels, int *iters)
 
 static void test_cantilever(void)
 {
-	const int ms[] = {2, 3, 4, 6, 8};
-	double errs[5];
+	const int ms[] = {2, 3, 4, 6, 8, 12, 16};
+	double errs[7];
 
-	for (int i = 0; i < 5; i++) {
+	for (int i = 0; i < 7; i++) {
 		int lev = 0, it = 0;
-		errs[i] = cantilever_error(ms[i], &lev, &it);
+		double tip = 0;
+		errs[i] = cantilever_error(ms[i], &lev, &it, &tip);
 		if (getenv("HARNESS_VERBOSE"))
-			fprintf(stderr, "cantilever %d elements through the depth: error %+.2f %% "
-					"(levels %d, %d iterations)\n",
-				ms[i], 100 * errs[i], lev, it);
+			fprintf(stderr, "cantilever %d elements through the depth (h %.4g mm): tip %.5f mm "
+					"= compliance %.5f N mm, error %+.2f %% (levels %d, %d "
+					"iterations)\n",
+				ms[i], 4.0 / ms[i], tip, tip, 100 * errs[i], lev, it);
 	}
 	CHECK_NUM(fabs(errs[2]), <=, 0.05);
-	for (int i = 1; i < 5; i++)
+	for (int i = 1; i < 7; i++)
 		CHECK_NUM(fabs(errs[i]), <, fabs(errs[i - 1]));
 	CHECK_NUM(fabs(errs[4]), <=, 0.02);
+	CHECK_NUM(fabs(errs[6]), <=, 0.012);
 }
 
 /* Walls 2 voxels thick every 10 voxels in x, y and z, the rest rho_min:
@@ -447,6 +461,9 @@ static void test_set_rho(void)
 	REQUIRE_OK(fea_solver_set_rho(s, g.rho, &e), &e);
 	REQUIRE_OK(fea_solve(s, &r, &e), &e);
 	REQUIRE_OK(fea_solver_new(&g, &l, &o, &s2, &e), &e);
+	/* the same nodal loads (a fresh solver spreads them by the new densities) */
+	memcpy(fea_solver_force(s2), fea_solver_force(s),
+	       3 * (size_t)(n + 1) * (n + 1) * (n + 1) * sizeof(double));
 	REQUIRE_OK(fea_solve(s2, &r2, &e), &e);
 	CHECK_REL(r.compliance_nmm, r2.compliance_nmm, 1e-7);
 	CHECK_INT(r.iterations, <, r2.iterations);
@@ -485,8 +502,75 @@ static void test_threads(void)
 	fea_grid_fini(&g);
 }
 
+/* A long bar (rows of more than 256 coarse nodes: several chunks of the
+ * prolongation) solved with 1, 2 and 3 levels: the same answer. */
+static void test_long_bar(void)
+{
+	struct fea_grid g;
+	struct fea_opts o;
+	struct fea_solver *s = NULL;
+	struct fea_result r;
+	struct err e;
+	double c[3];
+
+	err_clear(&e);
+	grid_box(&g, 1100, 2, 4, 0.25);
+	fea_opts_default(&o);
+	o.tol = 1e-9;
+	o.threads = 2;
+	for (int lev = 1; lev <= 3; lev++) {
+		o.levels = lev;
+		REQUIRE_OK(solve_text(&g, "fixed box=0,0,0,0,1,1; force box=275,0,0,275,1,1 n=1,0,0",
+				      &o, &s, &r, &e),
+			   &e);
+		c[lev - 1] = r.compliance_nmm;
+		CHECK_EQ_INT(r.levels, lev);
+		fea_solver_free(s);
+	}
+	/* axial: F^2 L / (E A) = 275 / (1000 * 0.5) */
+	CHECK_REL(c[0], 275 / (1000 * 0.5), 0.01);
+	CHECK_REL(c[1], c[0], 1e-7);
+	CHECK_REL(c[2], c[0], 1e-7);
+	fea_grid_fini(&g);
+}
+
+/* A force is spread by the stiffness around each node: on a full 4 x 4
+ * face the 25 nodes carry 1 : 2 : 4 (corners, edges, inside; weights sum
+ * to 64), and a node that touches only a 1 % voxel carries 1 % of a full
+ * node's share. */
+static void test_force_spread(void)
+{
+	struct fea_grid g;
+	struct fea_opts o;
+	struct fea_loads l;
+	struct fea_solver *s = NULL;
+	struct err e;
+
+	err_clear(&e);
+	grid_box(&g, 4, 4, 4, 1);
+	fea_opts_default(&o);
+	REQUIRE_OK(fea_loads_parse("fixed plate; force box=0,0,4,4,4,4 n=0,0,-64", MAT, &l, &e), &e);
+	REQUIRE_OK(fea_solver_new(&g, &l, &o, &s, &e), &e);
+	const double *f = fea_solver_force(s);
+	CHECK_REL(f[3 * node_of(&g, 0, 0, 4) + 2], -1.0, 1e-12);
+	CHECK_REL(f[3 * node_of(&g, 2, 0, 4) + 2], -2.0, 1e-12);
+	CHECK_REL(f[3 * node_of(&g, 2, 2, 4) + 2], -4.0, 1e-12);
+	fea_solver_free(s);
+	/* the top corner element 1 % full: rho^p = 1e-6 */
+	g.rho[(3 * 4 + 3) * 4 + 3] = 0.01f;
+	REQUIRE_OK(fea_solver_new(&g, &l, &o, &s, &e), &e);
+	f = fea_solver_force(s);
+	double wsum = 64 - 4 * (1 - 1e-6);
+	CHECK_REL(f[3 * node_of(&g, 4, 4, 4) + 2], -64 * 1e-6 / wsum, 1e-4);
+	CHECK_REL(f[3 * node_of(&g, 0, 0, 4) + 2], -64 / wsum, 1e-6);
+	fea_solver_free(s);
+	fea_loads_fini(&l);
+	fea_grid_fini(&g);
+}
+
 int main(void)
 {
+	RUN(test_force_spread);
 	RUN(test_dense_direct);
 	RUN(test_patch);
 	RUN(test_symmetry);
@@ -494,5 +578,6 @@ int main(void)
 	RUN(test_lattice);
 	RUN(test_set_rho);
 	RUN(test_threads);
+	RUN(test_long_bar);
 	return harness_report();
 }
