@@ -301,13 +301,14 @@ static int cmp_desc(const void *pa, const void *pb)
 	return a->idx < b->idx ? -1 : a->idx > b->idx;
 }
 
-/* Eq. 10-13 for every leaf: G_C = (p/2) rho_min^(p-1) sum_e d_e E_e /
- * sum_e d_e, the elements of S_C taken at rho_min (binary densities). */
+/* Eq. 10-13 for every leaf: G_C = (p/2) sum_e d_e rho_e^(p-1) E_e /
+ * sum_e d_e, E_e = u_e^T K0 u_e, d_e the fraction of e the split fills;
+ * rho_e the element's density (eq. 10 at the current design), or rho_min
+ * for every element (o->binary: the paper's S_C of cavity elements). */
 static int rank_leaves(struct stiff *st, struct leaf_key **keys, size_t *cap, size_t *nk,
 		       struct err *e)
 {
-	const double pe = st->o->penal;
-	const double scale = pe / 2 * pow(st->o->rho_min, pe - 1);
+	const double pe = st->o->penal, wmin = pow(st->o->rho_min, pe - 1);
 	struct rh_tree *t = st->t;
 	int rc;
 
@@ -324,10 +325,11 @@ static int rank_leaves(struct stiff *st, struct leaf_key **keys, size_t *cap, si
 			return rc;
 		for (int32_t q = 0; q < st->clen[i]; q++) {
 			size_t p = (size_t)st->cstart[i] + (size_t)q;
-			num += st->pd[p] * st->energy[st->pe[p]];
+			double w = st->o->binary ? wmin : pow(st->g.rho[st->pe[p]], pe - 1);
+			num += st->pd[p] * w * st->energy[st->pe[p]];
 			den += st->pd[p];
 		}
-		(*keys)[*nk].g = den > 0 ? scale * num / den : 0;
+		(*keys)[*nk].g = den > 0 ? pe / 2 * num / den : 0;
 		(*keys)[(*nk)++].idx = (int32_t)i;
 	}
 	qsort(*keys, *nk, sizeof **keys, cmp_desc);

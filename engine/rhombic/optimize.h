@@ -59,6 +59,8 @@ struct rh_stiff_opts {
 	int supersample;      /* cavity sample points per element axis */
 	double penal;         /* SIMP exponent of the element densities (fea_opts.penal) */
 	double rho_min;       /* density of the cavities' elements (fea_opts.rho_min) */
+	int binary;           /* eq. 10 at rho_min for every element of S_C (the paper's
+				 binary densities) instead of at each element's density */
 	size_t max_elements;
 	int threads;
 	struct progress *progress; /* may be NULL */
@@ -92,7 +94,7 @@ void rh_stiff_report_fini(struct rh_stiff_report *r);
 /* Section 5.1: voxelise the part (fea_voxelize_mesh), densities rho_e =
  * max(part_fraction - cavity_fraction, rho_min) (cavity fraction by
  * supersampling), then, with o->adaptive, iterate: solve (eq. 6), rank
- * the leaves by G_C (eq. 10-13: the mean element energy over the
+ * the leaves by G_C (eq. 10-13: the energy sensitivity per volume of the
  * material S_C their split adds), split the top split_pct % one by one,
  * stop as soon as the next split would pass o->target.  Ends with the
  * solid part's solve.  Errors of the FEA core (ERR_PARAM "loads" for a

@@ -50,11 +50,13 @@ struct rh_params {
 	int max_iterations;
 	double penal;
 	double rho_min;
+	int sensitivity;
 	char loads[4096];
 };
 
 static const char *const objectives[] = {"stiffness", "stability", NULL};
 static const char *const refines[] = {"adaptive", "uniform", NULL};
+static const char *const sensitivities[] = {"density", "binary", NULL};
 
 #define P(f) offsetof(struct rh_params, f)
 static const struct param_desc rh_desc[] = {
@@ -93,7 +95,7 @@ static const struct param_desc rh_desc[] = {
 	 .help = "Voxel edge of the cell classification grid; 0 = wall_mm / 4, coarsened until "
 		 "the part's box holds at most 8M voxels."},
 	{.name = "max_iterations", .type = PARAM_INT, .offset = P(max_iterations), .min = 1,
-	 .max = 10000, .def = 300, .unit = "",
+	 .max = 100000, .def = 2000, .unit = "",
 	 .help = "Most stiffness iterations (each one FEA solve)."},
 	{.name = "penal", .type = PARAM_NUM, .offset = P(penal), .min = 1, .max = 5,
 	 .def = FEA_PENAL, .unit = "",
@@ -104,6 +106,11 @@ static const struct param_desc rh_desc[] = {
 	 .def = RH_RHO_MIN, .unit = "",
 	 .help = "Density of the cavities' elements in the stiffness analysis: their stiffness "
 		 "is rho_min^penal of the solid's (default 0.1^3 = 1e-3; paper: 0.001^3)."},
+	{.name = "sensitivity", .type = PARAM_ENUM, .offset = P(sensitivity), .def = 0,
+	 .choices = sensitivities, .unit = "",
+	 .help = "Eq. 10 over the material a split adds: density = at each element's own density "
+		 "(elements are partly filled walls); binary = at rho_min for all of them (the "
+		 "paper's all-or-nothing elements)."},
 	{.name = "loads", .type = PARAM_STR, .offset = P(loads), .max = 4095, .str_cap = 4096,
 	 .unit = "",
 	 .help = "Load case of the stiffness objective in the FEA text form (docs/fea.md), e.g. "
@@ -182,6 +189,7 @@ static int run_stiffness(struct rh_job *s, const struct engine_ctx *ctx, int ada
 	o.supersample = RH_FEA_SUPERSAMPLE;
 	o.penal = s->p.penal;
 	o.rho_min = s->p.rho_min;
+	o.binary = s->p.sensitivity == 1;
 	o.max_elements = RH_FEA_MAX;
 	o.threads = ctx->threads;
 	o.progress = ctx->progress;

@@ -209,8 +209,9 @@ class RhombicCli(unittest.TestCase):
         """Fig. 12: uniform refinement to about 0.6, then the stiffness
         optimisation at the uniform result's fraction.  Paper: normalised
         compliance 1.94 (uniform) vs 1.25 (adaptive), ratio 1.55.  Measured
-        here (1 mm elements): 1.99 vs 1.74, ratio 1.14, max displacement
-        0.048 vs 0.040 mm (docs/rhombic.md, "Figures")."""
+        here (1 mm elements, split_pct 5 to keep the test short): 2.00 vs
+        1.60, ratio 1.25, max displacement 0.047 vs 0.035 mm; at the default
+        2 %: 1.57, ratio 1.27 (docs/rhombic.md section 8)."""
         beam = self.path("beam.stl")
         write_box_stl(beam, 100, 6.25, 50)
         u = self.job(beam, self.path("beam_u.stl"), *BEAM, "--set", "refine=uniform",
@@ -218,7 +219,7 @@ class RhombicCli(unittest.TestCase):
         vf = u["volume_fraction"]
         self.assertGreaterEqual(vf, 0.6)
         self.assertLess(vf, 0.65)
-        a = self.job(beam, self.path("beam_a.stl"), *BEAM,
+        a = self.job(beam, self.path("beam_a.stl"), *BEAM, "--set", "split_pct=5",
                      "--set", f"volume_fraction={vf!r}")["rhombic"]
         ratio = u["compliance_normalized"] / a["compliance_normalized"]
         print(f"beam: initial {u['volume_fraction_initial']:.3f}; uniform {vf:.4f} "
@@ -231,8 +232,8 @@ class RhombicCli(unittest.TestCase):
         self.assertGreater(a["volume_fraction"], vf - 0.01)
         self.assertEqual(a["volume_fraction_initial"], u["volume_fraction_initial"])
         self.assertGreater(a["iterations"], 3)
-        self.assertGreaterEqual(ratio, 1.10)
-        self.assertLess(a["max_displacement_mm"], 0.9 * u["max_displacement_mm"])
+        self.assertGreaterEqual(ratio, 1.2)
+        self.assertLess(a["max_displacement_mm"], 0.8 * u["max_displacement_mm"])
         # the compliance falls with every refinement (the history's last
         # entry is the solid part's solve)
         hist = [tuple(map(float, h.split())) for h in a["history"]]
