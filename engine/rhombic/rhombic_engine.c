@@ -78,7 +78,8 @@ static const struct param_desc rh_desc[] = {
 		 "and no cell is split below twice it (eq. 2)."},
 	{.name = "skin_mm", .type = PARAM_NUM, .offset = P(skin_mm), .min = 0, .max = 100,
 	 .def = 1.0, .unit = "mm",
-	 .help = "Least solid skin between a cell and the part's surface (t_bnd, >= wall_mm)."},
+	 .help = "Least solid skin between a cell and the part's surface (t_bnd, >= wall_mm); a "
+		 "common shell_mm > 0 replaces it."},
 	{.name = "orient_deg", .type = PARAM_NUM, .offset = P(orient_deg), .min = -1, .max = 180,
 	 .def = -1, .flags = PARAM_F_MAX_EXCL, .unit = "deg",
 	 .help = "Direction of the rhombi's plane about z (u axis from +x); -1 = try 0, 15, ..., "
@@ -210,7 +211,12 @@ static int rh_validate(const void *params, const struct common_params *common,
 				 "the rhombic engine needs alpha_deg in [5, 85] (rhombi of aspect "
 				 "h/w = tan(90 - alpha)); %g is outside",
 				 common->alpha_deg);
-	if (p->skin_mm < p->wall_mm)
+	if (common->shell_mm > 0 && common->shell_mm < p->wall_mm)
+		return ERR_FIELD(e, "shell_mm",
+				 "shell_mm (%g), the rhombic engine's skin, must be at least wall_mm "
+				 "(%g): the skin is a wall too",
+				 common->shell_mm, p->wall_mm);
+	if (!(common->shell_mm > 0) && p->skin_mm < p->wall_mm)
 		return ERR_FIELD(e, "skin_mm",
 				 "skin_mm (%g) must be at least wall_mm (%g): the skin is a wall too",
 				 p->skin_mm, p->wall_mm);
@@ -297,6 +303,9 @@ static int rh_prepare(const struct engine_ctx *ctx, const void *params, void **o
 	s->vox_mm = s->p.voxel_mm > 0 ? s->p.voxel_mm
 				      : fmax(s->p.wall_mm / 4,
 					     cbrt((sz.x + 1) * (sz.y + 1) * (sz.z + 1) / RH_VOX_TARGET));
+	/* a common shell_mm > 0 is the skin, as for the lattice engine */
+	if (ctx->common->shell_mm > 0)
+		s->p.skin_mm = ctx->common->shell_mm;
 	s->tau_mm = s->p.skin_mm + sqrt(3) / 2 * s->vox_mm;
 	if ((rc = rh_vox_build(ctx->mesh, s->vox_mm, s->tau_mm, RH_VOX_MAX, &vx, e)) != 0) {
 		if (rc == ERR_LIMIT)
