@@ -147,3 +147,26 @@ int edt_nearest_sq(const uint8_t *seed, size_t stride, int w, int h, double px_m
 	}
 	return 0;
 }
+
+int edt3_sq(const uint8_t *seed, int w, int h, int d, double vox_mm, float *out, struct err *e)
+{
+	struct edt_scratch s;
+	size_t plane = (size_t)w * (size_t)h;
+	int rc = 0;
+
+	edt_scratch_init(&s);
+	for (int z = 0; z < d && !rc; z++)
+		rc = edt_sq(seed + z * plane, (size_t)w, w, h, vox_mm, vox_mm, out + z * plane, &s,
+			    e);
+	if (!rc)
+		rc = scratch_need(&s, (size_t)d, e);
+	for (size_t c = 0; c < plane && !rc; c++) {
+		for (int z = 0; z < d; z++)
+			s.f[z] = out[z * plane + c];
+		edt_1d(s.f, s.d, d, vox_mm, s.v, s.z, NULL);
+		for (int z = 0; z < d; z++)
+			out[z * plane + c] = s.d[z];
+	}
+	edt_scratch_fini(&s);
+	return rc;
+}

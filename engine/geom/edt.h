@@ -40,4 +40,13 @@ int edt_sq(const uint8_t *seed, size_t stride, int w, int h, double px_mm, doubl
 int edt_nearest_sq(const uint8_t *seed, size_t stride, int w, int h, double px_mm,
 		   double py_mm, float *out, int32_t *near, struct edt_scratch *s, struct err *e);
 
+/* 3D: out[(z * h + y) * w + x] = squared distance (mm^2) from voxel
+ * (x, y, z)'s centre to the nearest voxel centre with
+ * seed[(z * h + y) * w + x] != 0 (0 on seeds, INFINITY without any seed);
+ * isotropic pitch vox_mm.  Each z slice by edt_sq, then the lower
+ * envelope along z for every (x, y) column: exact, O(w h d).  Used by
+ * the rhombic engine's cell classification (distance of every voxel of
+ * the part to the nearest outside voxel).  0 or ERR_NOMEM. */
+int edt3_sq(const uint8_t *seed, int w, int h, int d, double vox_mm, float *out, struct err *e);
+
 #endif

@@ -3,6 +3,7 @@
 #include "engine/engine.h"
 #include "engine/hollow/hollow.h"
 #include "engine/lattice/lattice_engine.h"
+#include "engine/rhombic/rhombic_engine.h"
 #include "engine/solid/solid.h"
 
 #include <string.h>
@@ -11,6 +12,7 @@ static const struct engine_ops *const engines[] = {
 	&solid_engine,
 	&lattice_engine,
 	&hollow_engine,
+	&rhombic_engine,
 	NULL,
 };
 

@@ -119,9 +119,56 @@ static void test_shapes(void)
 	edt_scratch_fini(&s);
 }
 
+/* edt3_sq against brute force on random 3D grids (the rhombic engine's
+ * classification distance), with no seed and one seed. */
+static void test_3d(void)
+{
+	static const int size[][3] = {{1, 1, 1}, {7, 5, 9}, {12, 10, 11}, {1, 16, 3}};
+	static const int permille[] = {0, 2, 40, 500};
+	struct err e;
+
+	err_clear(&e);
+	for (size_t k = 0; k < sizeof size / sizeof size[0]; k++)
+		for (size_t p = 0; p < sizeof permille / sizeof permille[0]; p++) {
+			int w = size[k][0], h = size[k][1], d = size[k][2], bad = 0;
+			size_t n = (size_t)w * (size_t)h * (size_t)d;
+			uint8_t *seed = mem_calloc(n, 1);
+			float *out = mem_alloc(n * sizeof *out);
+			REQUIRE(seed && out);
+			for (size_t i = 0; i < n; i++)
+				seed[i] = (int)(xs() % 1000) < permille[p];
+			if (p == 1)
+				seed[n / 2] = 1;
+			REQUIRE_OK(edt3_sq(seed, w, h, d, 0.25, out, &e), &e);
+			for (int z = 0; z < d && bad < 5; z++)
+				for (int y = 0; y < h && bad < 5; y++)
+					for (int x = 0; x < w && bad < 5; x++) {
+						double best = INFINITY;
+						for (size_t i = 0; i < n; i++)
+							if (seed[i]) {
+								double dx = ((int)(i % (size_t)w) - x) * 0.25;
+								double dy = ((int)(i / (size_t)w % (size_t)h) - y) * 0.25;
+								double dz = ((int)(i / ((size_t)w * (size_t)h)) - z) * 0.25;
+								best = fmin(best, dx * dx + dy * dy + dz * dz);
+							}
+						float got = out[((size_t)z * (size_t)h + (size_t)y) * (size_t)w + (size_t)x];
+						if (!isfinite(best)) {
+							CHECK(!isfinite(got));
+							bad += isfinite(got);
+						} else if (fabs(got - best) > 1e-6 * best + 1e-12) {
+							CHECK_NEAR(got, best, 1e-6 * best + 1e-12);
+							bad++;
+						}
+					}
+			mem_free(seed);
+			mem_free(out);
+		}
+}
+
 int main(void)
 {
 	RUN(test_random_images);
 	RUN(test_shapes);
+	RUN(test_3d);
 	return harness_report();
 }

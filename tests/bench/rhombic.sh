@@ -1,0 +1,98 @@
+#!/usr/bin/env bash
+# rhombic.sh BUILD [normal|large] - the rhombic engine (paper 001) on the
+# paper's beam (Fig. 12: 100 x 50 x 6.25 mm, three-point bending, 62 N):
+# uniform refinement to about 0.6, then the stiffness optimisation at the
+# uniform result's fraction; normalised compliances, their ratio (paper:
+# 1.94 / 1.25 = 1.55), max displacements, iterations, time, peak RSS.
+# normal: 1 mm elements; large: also 0.5 mm (260k elements, ~3 min).
+# Then the shared meshes at 50 mm (initial structure, SL1, time) and the
+# letter P standing (Fig. 13).
+set -uo pipefail
+BUILD=${1:?usage: rhombic.sh BUILD [normal|large]}
+MODE=${2:-normal}
+BIN=${INFILLD_BIN:-$BUILD/infilld}
+SHARED=${INFILLD_SHARED:-../shared}
+TMP=${BENCH_TMP:-$BUILD/bench}/rhombic
+mkdir -p "$TMP"
+[ -x "$BIN" ] || { echo "rhombic.sh: $BIN not built (make build)" >&2; exit 1; }
+
+python3 - "$TMP/beam.stl" <<'PY'
+import struct, sys
+x, y, z = 100, 6.25, 50
+v = [(i * x, j * y, k * z) for k in (0, 1) for j in (0, 1) for i in (0, 1)]
+f = [(0, 2, 1), (1, 2, 3), (4, 5, 6), (5, 7, 6), (0, 1, 4), (1, 5, 4),
+     (2, 6, 3), (3, 6, 7), (0, 4, 2), (2, 4, 6), (1, 3, 5), (3, 7, 5)]
+with open(sys.argv[1], "wb") as o:
+    o.write(b"\0" * 80 + struct.pack("<I", len(f)))
+    for t in f:
+        o.write(struct.pack("<3f", 0, 0, 0))
+        for i in t:
+            o.write(struct.pack("<3f", *v[i]))
+        o.write(b"\0\0")
+PY
+LOADS="fixed box=0,0,-0.5,2,6.25,0.5 axes=xyz; fixed box=98,0,-0.5,100,6.25,0.5 axes=z; force box=48,0,49.5,52,6.25,50.5 n=0,0,-62"
+COMMON=(--engine rhombic --printer generic-fdm --set orient_deg=0 --set wall_mm=0.5
+	--set skin_mm=0.5 --threads 2 --quiet)
+
+beam() { # element edge (mm)
+	local h=$1 u="$TMP/beam_u_$1" a="$TMP/beam_a_$1" vf
+	/usr/bin/time -f '%e %M' -o "$u.time" "$BIN" run "$TMP/beam.stl" -o "$u.stl" "${COMMON[@]}" \
+		--set fea_voxel_mm="$h" --set "loads=$LOADS" --set refine=uniform \
+		--set volume_fraction=0.6 --metrics "$u.json" || return 1
+	vf=$(python3 -c "import json,sys; print(repr(json.load(open(sys.argv[1]))['rhombic']['volume_fraction']))" "$u.json")
+	/usr/bin/time -f '%e %M' -o "$a.time" "$BIN" run "$TMP/beam.stl" -o "$a.stl" "${COMMON[@]}" \
+		--set fea_voxel_mm="$h" --set "loads=$LOADS" --set volume_fraction="$vf" \
+		--metrics "$a.json" || return 1
+	python3 - "$h" "$u" "$a" <<'PY'
+import json, sys
+h, u, a = sys.argv[1:]
+U, A = (json.load(open(p + ".json"))["rhombic"] for p in (u, a))
+tu, ta = (open(p + ".time").read().split() for p in (u, a))
+print(f"beam h={h} mm ({A['fea_elements']} elements): initial {U['volume_fraction_initial']:.3f}; "
+      f"uniform {U['volume_fraction']:.4f}: C/C_solid {U['compliance_normalized']:.3f}, "
+      f"max |u| {U['max_displacement_mm']:.4f} mm, {tu[0]} s; adaptive "
+      f"{A['volume_fraction']:.4f}: C/C_solid {A['compliance_normalized']:.3f}, max |u| "
+      f"{A['max_displacement_mm']:.4f} mm, {A['iterations']} iterations, "
+      f"{A['fea_solve_s']:.1f} s of solves, {ta[0]} s, {int(ta[1]) // 1024} MB; "
+      f"ratio {U['compliance_normalized'] / A['compliance_normalized']:.3f} (paper 1.55), "
+      f"displacement ratio {U['max_displacement_mm'] / A['max_displacement_mm']:.3f} "
+      f"(paper physical 4.08 / 2.11 = 1.93)")
+PY
+}
+
+status=0
+beam 1 || status=1
+[ "$MODE" = large ] && { beam 0.5 || status=1; }
+
+for spec in femur:z camel:y armadillo:z; do
+	name=${spec%%:*} up=${spec##*:} out="$TMP/$name"
+	/usr/bin/time -f '%e %M' -o "$out.time" "$BIN" run "$SHARED/meshes/$name.off" -o "$out.sl1" \
+		--engine rhombic --set height_mm=50 --set up="$up" --set wall_mm=0.5 --set skin_mm=0.5 \
+		--set objective=stability --set refine=uniform --set volume_fraction=0.1 --threads 2 \
+		--quiet --metrics "$out.json" || { status=1; continue; }
+	python3 - "$name" "$out" <<'PY'
+import json, sys
+name, out = sys.argv[1:]
+m = json.load(open(out + ".json")); r = m["rhombic"]; t = open(out + ".time").read().split()
+print(f"{name:10s} 50 mm initial structure: orientation {r['orientation_deg']:.0f} of "
+      f"{r['orientations_tried']}, {r['leaves']} cavities, {r['levels']} levels, fraction "
+      f"{r['volume_fraction_initial']:.3f}; voxels {r['seconds']['voxels']:.2f} s, trees "
+      f"{r['seconds']['initial']:.2f} s, {m['layers']} SL1 layers {m['seconds']['layers']:.2f} s; "
+      f"{t[0]} s, {int(t[1]) // 1024} MB")
+PY
+done
+
+out="$TMP/P"
+/usr/bin/time -f '%e %M' -o "$out.time" "$BIN" run "$SHARED/meshes/P.off" -o "$out.sl1" \
+	--engine rhombic --set up=y --set height_mm=100 --set wall_mm=0.6 --set skin_mm=0.6 \
+	--set objective=stability --threads 2 --quiet --metrics "$out.json" || status=1
+python3 - "$out" <<'PY'
+import json, sys
+out = sys.argv[1]
+r = json.load(open(out + ".json"))["rhombic"]; t = open(out + ".time").read().split()
+print(f"P 100 mm stability: solid centre {r['com_before_mm']}, inside {r['com_solid_inside_hull']}; "
+      f"after {r['com_after_mm']} inside {r['com_inside_hull']} ({r['com_hull_distance_mm']:.3f} mm); "
+      f"fraction {r['volume_fraction_initial']:.3f} -> {r['volume_fraction']:.3f}, "
+      f"{r['stability_splits']} splits; {t[0]} s")
+PY
+exit $status
