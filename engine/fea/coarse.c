@@ -4,8 +4,10 @@
  * 3 (n0 n1 + n0 + 1) + 2 for node counts n0 <= n1 <= n2.  A one-level
  * solver (no multigrid) factors the finest level's element matrices
  * directly.  Unknowns with no free fine unknown under them get an
- * identity row.  A zero or relatively tiny pivot means the operator is
- * singular: ERR_GEOMETRY.  docs/fea.md, "Coarsest level".
+ * identity row.  A zero or relatively tiny pivot: on a one-level solver
+ * the operator is singular (ERR_GEOMETRY); below the finest level the
+ * Galerkin operator is refactored with its diagonal raised by
+ * FEA_COARSE_SHIFT (relative).  docs/fea.md, "Coarsest level".
  */
 #include "engine/fea/fea_int.h"
 
@@ -25,6 +27,11 @@ void dpbtrs_(const char *uplo, const int *n, const int *kd, const int *nrhs, con
 /* Largest band factor we build, bytes (the automatic levels keep it
  * near 20 MB; an explicit `levels` can ask for more). */
 #define COARSE_MAX_BYTES ((size_t)2 << 30)
+
+/* Relative diagonal shift of a semidefinite coarsest Galerkin operator. */
+#ifndef FEA_COARSE_SHIFT
+#define FEA_COARSE_SHIFT 1e-4
+#endif
 
 void fea_coarse_fini(struct fea_coarse *c)
 {
@@ -53,7 +60,7 @@ int fea_coarse_factor(struct fea_solver *s, struct err *e)
 	struct fea_coarse *c = &s->co;
 	const struct fea_level *l = &s->lv[s->nlev - 1];
 	const int n3[3] = {l->nx + 1, l->ny + 1, l->nz + 1};
-	double *diag = NULL;
+	double *diag = NULL, *keep = NULL;
 	int info = 0, rc = 0, ldab;
 	size_t bytes;
 
@@ -149,17 +156,41 @@ int fea_coarse_factor(struct fea_solver *s, struct err *e)
 			*d = 1;
 		diag[u] = *d;
 	}
-	dpbtrf_("L", &c->n, &c->kd, c->ab, &ldab, &info, 1);
-	if (info == 0) {
-		/* a pivot tiny against its own diagonal: singular up to rounding */
-		for (int u = 0; u < c->n; u++) {
-			double piv = c->ab[(size_t)u * (size_t)ldab];
-			if (piv * piv < 1e-10 * diag[u]) {
-				info = u + 1;
-				break;
+	/* Below the finest level the Galerkin operator P^T A P is only
+	 * semidefinite where two coarse unknowns see the same few free fine
+	 * unknowns (thin walls, a part a voxel or two thick, masked supports):
+	 * its null directions are prolonged to zero, so a relative shift of
+	 * the diagonal keeps the preconditioner exact elsewhere.  The
+	 * model's own rigid motions were refused by fea_select; a one-level
+	 * solver factors the true operator, where a tiny pivot is a real
+	 * singularity. */
+	if (s->nlev > 1 && !(keep = mem_alloc(bytes))) {
+		mem_free(diag);
+		return ERR_SET(e, ERR_NOMEM, "out of memory for the coarsest level");
+	}
+	if (keep)
+		memcpy(keep, c->ab, bytes);
+	for (int attempt = 0; attempt < 2; attempt++) {
+		info = 0;
+		dpbtrf_("L", &c->n, &c->kd, c->ab, &ldab, &info, 1);
+		if (info == 0) {
+			/* a pivot tiny against its own diagonal: singular up to rounding */
+			for (int u = 0; u < c->n; u++) {
+				double piv = c->ab[(size_t)u * (size_t)ldab];
+				if (piv * piv < 1e-10 * diag[u]) {
+					info = u + 1;
+					break;
+				}
 			}
 		}
+		if (info <= 0 || !keep || attempt)
+			break;
+		memcpy(c->ab, keep, bytes);
+		for (int u = 0; u < c->n; u++)
+			c->ab[(size_t)u * (size_t)ldab] += FEA_COARSE_SHIFT * diag[u];
+		c->shifted = 1;
 	}
+	mem_free(keep);
 	if (info > 0) {
 		int u = info - 1, b = u / 3, x[3], rest = b;
 		x[c->perm[0]] = rest % n3[c->perm[0]];

@@ -79,6 +79,7 @@ struct fea_coarse {
 	int perm[3];     /* axes from fastest to slowest in the band order */
 	double *ab;      /* (kd + 1) * n, LAPACK lower band storage, owned */
 	double *rhs;     /* n, owned */
+	int shifted;     /* the last factor needed the diagonal shift (coarse.c) */
 };
 
 /* Tables of the finest level's kernels (kernel0.c), offsets in the
