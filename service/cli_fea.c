@@ -111,19 +111,6 @@ static int parse(int argc, char **argv, struct fea_cli *o)
 	return 0;
 }
 
-/* The run's warnings (small part...), one line each on stderr. */
-static void print_warnings(const struct metrics *m)
-{
-	const struct metric *w = metrics_get(m, "warnings");
-	const char *p = w && w->type == METRIC_STRS && w->str ? w->str : NULL;
-
-	for (long long i = 0; p && i < w->ival; i++) {
-		size_t n = strcspn(p, "\n");
-		fprintf(stderr, "infilld: warning: %.*s\n", (int)n, p);
-		p += n + (p[n] == '\n');
-	}
-}
-
 int cmd_fea(int argc, char **argv)
 {
 	struct fea_cli o;
@@ -161,7 +148,7 @@ int cmd_fea(int argc, char **argv)
 		rc = engine_fea(&js, &fp, loads, o.vtk, &m, &e);
 	}
 	if (!rc && !o.quiet)
-		print_warnings(&m);
+		cmd_print_warnings(&m);
 	if (!rc) {
 		j = api_metrics_json(&m);
 		if (!j) {

@@ -206,8 +206,7 @@ static int write_json_file(const char *path, json_t *j, struct err *e)
 	return 0;
 }
 
-/* The run's "warnings" list (docs/metrics.md), one line each on stderr. */
-static void print_warnings(const struct metrics *m)
+void cmd_print_warnings(const struct metrics *m)
 {
 	const struct metric *w = metrics_get(m, "warnings");
 	const char *p = w && w->type == METRIC_STRS && w->str ? w->str : NULL;
@@ -306,7 +305,7 @@ int cmd_run(int argc, char **argv)
 		json_decref(j);
 	}
 	if (!rc && !o.quiet)
-		print_warnings(&m); /* --quiet: in the metrics only */
+		cmd_print_warnings(&m); /* --quiet: in the metrics only */
 	if (!rc && !o.quiet && !to_stdout) {
 		const struct metric *mv = metrics_get(&m, "material_volume_mm3");
 		const struct metric *el = metrics_get(&m, "elapsed_s");
@@ -342,7 +341,7 @@ int cmd_analyze(int argc, char **argv)
 		rc = engine_analyze(&js, &m, &e);
 	}
 	if (!rc)
-		print_warnings(&m);
+		cmd_print_warnings(&m);
 	if (!rc) {
 		j = api_metrics_json(&m);
 		if (!j)

@@ -23,4 +23,9 @@ struct err;
  * name in the message.  cli_fea.c; `infilld fea` and `infilld run`. */
 int cmd_loads_read(const char *path, char **text, struct err *e);
 
+struct metrics;
+/* A run's "warnings" list (docs/metrics.md), one line each on stderr
+ * (`infilld: warning: ...`).  cli_run.c; `infilld run` and `infilld fea`. */
+void cmd_print_warnings(const struct metrics *m);
+
 #endif
