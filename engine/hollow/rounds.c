@@ -66,45 +66,6 @@ void hl_mesh_mass(const struct mesh *m, double *vol, double com[3])
 		com[i] = V != 0 ? M[i] / V : 0;
 }
 
-int hl_contact_hull(const struct mesh *part, double layer_mm, struct hull_pt **h, size_t *n,
-		    struct err *e)
-{
-	struct slicer *s = NULL;
-	struct paths reg;
-	struct pt2 *pts = NULL;
-	size_t np, k = 0;
-	int rc;
-
-	*h = NULL;
-	*n = 0;
-	paths_init(&reg);
-	rc = slice_new(part, &s, e);
-	if (!rc)
-		rc = slice_at(s, 0.5 * layer_mm, &reg, NULL, e);
-	if (rc)
-		goto out;
-	np = paths_point_count(&reg);
-	pts = mem_alloc((np ? np : 1) * sizeof *pts);
-	if (!pts) {
-		rc = ERR_SET(e, ERR_NOMEM, "hollow: out of memory");
-		goto out;
-	}
-	for (size_t i = 0; i < reg.n; i++)
-		for (size_t j = 0; j < reg.v[i].n; j++)
-			pts[k++] = reg.v[i].pts[j];
-	rc = hull_convex(pts, k, h, n, e);
-	if (!rc && *n < 3) {
-		mem_free(*h);
-		*h = NULL;
-		*n = 0;
-	}
-out:
-	slice_free(s);
-	paths_fini(&reg);
-	mem_free(pts);
-	return rc;
-}
-
 /* ---- strip triangles must keep clear of the current solid's surface ---- */
 
 struct block_ctx {
@@ -712,7 +673,7 @@ int hl_run(const struct mesh *part, const struct hl_config *c, struct progress *
 	if (c->objective == HL_OBJ_STABILITY) {
 		double rho;
 		struct hull_pt q = {com[0], com[1]};
-		rc = hl_contact_hull(part, c->print_layer_mm, &hull, &nhull, e);
+		rc = slice_contact_hull(part, c->print_layer_mm, &hull, &nhull, e);
 		if (rc)
 			goto out;
 		if (nhull < 3) {

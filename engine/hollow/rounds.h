@@ -95,9 +95,5 @@ int hl_run(const struct mesh *part, const struct hl_config *c, struct progress *
  * divergence theorem. */
 void hl_mesh_mass(const struct mesh *m, double *vol, double com[3]);
 
-/* Contact hull of a part: convex hull of its first layer's region
- * (z = layer_mm / 2).  *h (caller frees with mem_free), *n >= 3 or 0. */
-int hl_contact_hull(const struct mesh *part, double layer_mm, struct hull_pt **h, size_t *n,
-		    struct err *e);
 
 #endif

@@ -77,39 +77,6 @@ static int cmp_key(const void *pa, const void *pb)
 	return a->idx < b->idx ? -1 : a->idx > b->idx;
 }
 
-/* The contact region: the part's section in the first layer, its convex
- * hull (CCW, mm) and the hull's area centroid c_h. */
-static int contact_hull(const struct mesh *part, double layer_mm, struct hull_pt **h, size_t *n,
-			struct err *e)
-{
-	struct slicer *s = NULL;
-	struct paths reg;
-	struct pt2 *pts = NULL;
-	size_t np, k = 0;
-	int rc;
-
-	*h = NULL;
-	*n = 0;
-	paths_init(&reg);
-	if ((rc = slice_new(part, &s, e)) != 0 || (rc = slice_at(s, 0.5 * layer_mm, &reg, NULL, e)))
-		goto out;
-	np = paths_point_count(&reg);
-	pts = mem_alloc((np ? np : 1) * sizeof *pts);
-	if (!pts) {
-		rc = ERR_SET(e, ERR_NOMEM, "rhombic: out of memory");
-		goto out;
-	}
-	for (size_t i = 0; i < reg.n; i++)
-		for (size_t j = 0; j < reg.v[i].n; j++)
-			pts[k++] = reg.v[i].pts[j];
-	rc = hull_convex(pts, k, h, n, e);
-out:
-	slice_free(s);
-	paths_fini(&reg);
-	mem_free(pts);
-	return rc;
-}
-
 static struct hull_pt hull_centroid(const struct hull_pt *h, size_t n)
 {
 	double A = 0, cx = 0, cy = 0;
@@ -144,7 +111,7 @@ int rh_stability(struct rh_tree *t, const struct mesh *part, double layer_mm, do
 	if (!(pv > 0))
 		return ERR_SET(e, ERR_GEOMETRY, "rhombic: the part has no volume");
 	r->com_solid = v3_scale(pm, 1 / pv);
-	if ((rc = contact_hull(part, layer_mm, &hull, &nhull, e)) != 0)
+	if ((rc = slice_contact_hull(part, layer_mm, &hull, &nhull, e)) != 0)
 		goto out;
 	if (nhull < 3) {
 		rc = ERR_SET(e, ERR_GEOMETRY,

@@ -83,4 +83,12 @@ int slice_coverage(const struct paths *region, const struct raster_map *map, flo
 int slice_field_contours(const float *field, int w, int h, float iso,
 			 const struct raster_map *map, struct paths *region, struct err *e);
 
+struct hull_pt;
+/* Contact hull of a placed part (bbox min z = 0): convex hull (CCW, mm)
+ * of its section in the first layer (z = layer_mm / 2).  *h (caller
+ * frees with mem_free) with *n >= 3 points, or *n = 0 when the section
+ * has fewer than 3 hull points.  0, or the slicer's error.  contact.c. */
+int slice_contact_hull(const struct mesh *part, double layer_mm, struct hull_pt **h, size_t *n,
+		       struct err *e);
+
 #endif
