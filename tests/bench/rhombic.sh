@@ -95,4 +95,76 @@ print(f"P 100 mm stability: solid centre {r['com_before_mm']}, inside {r['com_so
       f"fraction {r['volume_fraction_initial']:.3f} -> {r['volume_fraction']:.3f}, "
       f"{r['stability_splits']} splits; {t[0]} s")
 PY
+# Fig. 11 (right): compliance against volume fraction, adaptive and
+# uniform refinement from the same initial structure, on one shared mesh
+# at 50 mm under the default load case (plate fixed, 1000 N down on the
+# top 1 mm).  The adaptive run to CURVE_VF records every iteration
+# (rhombic.history: fraction, compliance, max |u|); the uniform curve is
+# one run per refinement step (each run's target just above the last
+# step's fraction).  Also the issue's timing case: this mesh to 0.7.
+# Drawn by plot_xy.py into $TMP/curve.png (docs/rhombic.md shows it).
+CURVE_MESH=${CURVE_MESH:-femur}
+CURVE_VF=${CURVE_VF:-0.9}
+CURVE=(--engine rhombic --set height_mm=50 --set wall_mm=0.5 --set skin_mm=0.5 --threads 2 --quiet)
+out="$TMP/curve_a"
+/usr/bin/time -f '%e %M' -o "$out.time" "$BIN" run "$SHARED/meshes/$CURVE_MESH.off" -o "$out.sl1" \
+	"${CURVE[@]}" --set volume_fraction="$CURVE_VF" --metrics "$out.json" || status=1
+out="$TMP/curve_07"
+/usr/bin/time -f '%e %M' -o "$out.time" "$BIN" run "$SHARED/meshes/$CURVE_MESH.off" -o "$out.sl1" \
+	"${CURVE[@]}" --set volume_fraction=0.7 --metrics "$out.json" || status=1
+vf=0
+for step in 1 2 3 4 5 6; do
+	out="$TMP/curve_u$step"
+	target=$(python3 -c "import sys; print(min(1.0, float(sys.argv[1]) + 1e-3))" "$vf")
+	"$BIN" run "$SHARED/meshes/$CURVE_MESH.off" -o "$out.sl1" "${CURVE[@]}" --set refine=uniform \
+		--set volume_fraction="$target" --metrics "$out.json" || { status=1; break; }
+	vf=$(python3 -c "import json,sys; print(json.load(open(sys.argv[1]))['rhombic']['volume_fraction'])" "$out.json")
+	python3 -c "import sys; sys.exit(0 if float(sys.argv[1]) < 0.999 else 1)" "$vf" || break
+done
+python3 - "$TMP" "$CURVE_MESH" <<'PY'
+import glob, json, os, sys
+tmp, mesh = sys.argv[1:]
+A = json.load(open(os.path.join(tmp, "curve_a.json")))["rhombic"]
+cs = A["compliance_solid_nmm"]
+ad = []
+for h in A["history"]:
+    vf, c = (float(x) for x in h.split()[:2])
+    if vf < 0.999:
+        ad.append((vf, c / cs))
+un = []
+for p in sorted(glob.glob(os.path.join(tmp, "curve_u*.json"))):
+    r = json.load(open(p))["rhombic"]
+    un.append((r["volume_fraction"], r["compliance_normalized"]))
+un = sorted(set(un))
+# the uniform curve starts where the adaptive one does (the same initial structure)
+if ad and (not un or un[0][0] > ad[0][0] + 1e-9):
+    un.insert(0, ad[0])
+with open(os.path.join(tmp, "curve_adaptive.csv"), "w") as f:
+    f.write("volume_fraction,compliance_normalized\n")
+    f.writelines(f"{v:.4f},{c:.4f}\n" for v, c in ad)
+with open(os.path.join(tmp, "curve_uniform.csv"), "w") as f:
+    f.write("volume_fraction,compliance_normalized\n")
+    f.writelines(f"{v:.4f},{c:.4f}\n" for v, c in un)
+def at(curve, v):  # linear interpolation, None outside
+    for (v0, c0), (v1, c1) in zip(curve, curve[1:]):
+        if v0 <= v <= v1 and v1 > v0:
+            return c0 + (c1 - c0) * (v - v0) / (v1 - v0)
+    return None
+worse = [(v, c, at(un, v)) for v, c in ad if at(un, v) is not None and c > at(un, v) + 1e-9]
+t = open(os.path.join(tmp, "curve_a.time")).read().split()
+print(f"{mesh} 50 mm compliance vs volume: adaptive {len(ad)} points "
+      f"{ad[0][0]:.3f}..{ad[-1][0]:.3f} (C/C_solid {ad[0][1]:.3f} -> {ad[-1][1]:.3f}, "
+      f"{A['iterations']} iterations, {A['fea_solve_s']:.0f} s of solves, {t[0]} s, "
+      f"{int(t[1]) // 1024} MB); uniform steps "
+      + ", ".join(f"{v:.3f}: {c:.3f}" for v, c in un)
+      + f"; adaptive above uniform at {len(worse)} of {len(ad)} points")
+S = json.load(open(os.path.join(tmp, "curve_07.json")))["rhombic"]
+t = open(os.path.join(tmp, "curve_07.time")).read().split()
+print(f"{mesh} 50 mm to volume_fraction 0.7: reached {S['volume_fraction']:.3f}, C/C_solid "
+      f"{S['compliance_normalized']:.3f}, {S['iterations']} iterations, {t[0]} s, "
+      f"{int(t[1]) // 1024} MB peak")
+PY
+/usr/bin/python3 tests/bench/plot_xy.py "$TMP/curve.png" "$TMP/curve_adaptive.csv:adaptive" \
+	"$TMP/curve_uniform.csv:uniform" --title "rhombic, $CURVE_MESH 50 mm: compliance vs volume" \
+	--xlabel "V / V_solid" --ylabel "C / C_solid" && echo "plot: $TMP/curve.png" || status=1
 exit $status

@@ -3,8 +3,9 @@
 is 422 with `field` the JSON path of the offending value, whatever the
 engine; a valid one for the solid engine (which has no `loads` parameter)
 is the ordinary unknown-parameter 422; a text form instead of the object is
-refused too.  No job is queued by any of them.  The engines that take
-`loads` (rhombic) test the accepted case."""
+refused too.  No job is queued by any of them.  A rhombic job (the engine
+takes `loads`) with a valid object runs and reports the case it used, in
+the engine's text form.""" 
 import os
 import sys
 
@@ -69,10 +70,27 @@ def test_nothing_queued():
     check(not jobs.get("items", jobs.get("jobs", [])), "no job was queued: %s" % jobs)
 
 
+def test_rhombic_job_uses_the_loads():
+    loads = dict(VALID, fixed=["plate", {"box_mm": [0, 0, 0, 20, 17, 1], "axes": "z"}])
+    r = submit({"height_mm": 50, "loads": loads, "refine": "uniform", "volume_fraction": 0.3,
+                "wall_mm": 1, "skin_mm": 1}, "rhombic")
+    check(r.status == 202, "rhombic job accepted: %s %s" % (r.status, r.body[:300]))
+    j = srv.wait_job(S["key"], r.json()["id"], timeout=300)
+    check(j["state"] == "succeeded", "rhombic job ran: %s" % j)
+    rh = j["metrics"]["rhombic"]
+    check(rh["loads"] == "material E_mpa=2500 nu=0.4; fixed plate axes=xyz; "
+          "fixed box=0,0,0,20,17,1 axes=z; force top n=0,0,-1000", rh["loads"])
+    check(rh["compliance_nmm"] > 0 and rh["compliance_normalized"] >= 1, rh)
+    # the text form is refused for an engine that takes loads too: one format
+    r = submit({"height_mm": 50, "loads": "fixed plate; force top n=0,0,-1"}, "rhombic")
+    p = r.problem(422, "invalid-parameter")
+    check(p.get("field") == "loads", "field loads: %s" % p)
+
+
 if __name__ == "__main__":
     try:
         setup()
         run([test_malformed_loads_name_the_path, test_valid_loads_unknown_to_solid,
-             test_nothing_queued])
+             test_nothing_queued, test_rhombic_job_uses_the_loads])
     finally:
         srv.cleanup()
