@@ -38,10 +38,10 @@ def nice_ticks(lo, hi, n=6):
     mag = 10 ** math.floor(math.log10(raw))
     step = min((s * mag for s in (1, 2, 2.5, 5, 10) if s * mag >= raw), default=10 * mag)
     t = math.floor(lo / step) * step
-    out = []
-    while t <= hi + 1e-9 * step:
-        out.append(t)
+    out = [t]
+    while t < hi - 1e-9 * step:  # the last tick at or above hi: the axis holds every point
         t += step
+        out.append(t)
     return out
 
 
