@@ -245,26 +245,29 @@ static void dot_block(void *vctx, size_t blk, int tid)
 	d->part[blk] = (s0 + s1) + (s2 + s3);
 }
 
-double fea_dot(struct fea_solver *s, const double *a, const double *b, size_t n)
+/* Blocks in parallel, their partial sums added in block order (the same
+ * result on any thread count). */
+static double dot_run(struct fea_solver *s, struct dot_ctx *d)
 {
-	size_t nb = (n + FEA_DOT_BLOCK - 1) / FEA_DOT_BLOCK;
-	struct dot_ctx d = {a, b, NULL, n, s->dot_part};
+	size_t nb = (d->n + FEA_DOT_BLOCK - 1) / FEA_DOT_BLOCK;
 	double sum = 0;
 
-	fea_par(s, nb, 1, dot_block, &d);
+	fea_par(s, nb, 1, dot_block, d);
 	for (size_t i = 0; i < nb; i++)
 		sum += s->dot_part[i];
 	return sum;
 }
 
+double fea_dot(struct fea_solver *s, const double *a, const double *b, size_t n)
+{
+	struct dot_ctx d = {a, b, NULL, n, s->dot_part};
+
+	return dot_run(s, &d);
+}
+
 double fea_dot_df(struct fea_solver *s, const double *a, const float *b, size_t n)
 {
-	size_t nb = (n + FEA_DOT_BLOCK - 1) / FEA_DOT_BLOCK;
 	struct dot_ctx d = {a, NULL, b, n, s->dot_part};
-	double sum = 0;
 
-	fea_par(s, nb, 1, dot_block, &d);
-	for (size_t i = 0; i < nb; i++)
-		sum += s->dot_part[i];
-	return sum;
+	return dot_run(s, &d);
 }
