@@ -49,21 +49,12 @@ void hl_outcome_fini(struct hl_outcome *o)
 
 void hl_mesh_mass(const struct mesh *m, double *vol, double com[3])
 {
-	double V = 0, M[3] = {0, 0, 0};
+	struct vec3 M;
 
-	for (size_t t = 0; t < m->nt; t++) {
-		struct vec3 a = m->v[m->tri[3 * t]], b = m->v[m->tri[3 * t + 1]],
-			    c = m->v[m->tri[3 * t + 2]];
-		/* signed tetrahedron (origin, a, b, c): volume and centroid */
-		double v6 = v3_dot(a, v3_cross(b, c));
-		V += v6 / 6;
-		M[0] += v6 / 6 * (a.x + b.x + c.x) / 4;
-		M[1] += v6 / 6 * (a.y + b.y + c.y) / 4;
-		M[2] += v6 / 6 * (a.z + b.z + c.z) / 4;
-	}
-	*vol = V;
-	for (int i = 0; i < 3; i++)
-		com[i] = V != 0 ? M[i] / V : 0;
+	mesh_mass(m, vol, &M);
+	com[0] = *vol != 0 ? M.x / *vol : 0;
+	com[1] = *vol != 0 ? M.y / *vol : 0;
+	com[2] = *vol != 0 ? M.z / *vol : 0;
 }
 
 /* ---- strip triangles must keep clear of the current solid's surface ---- */

@@ -91,8 +91,8 @@ void hl_outcome_fini(struct hl_outcome *o);
 int hl_run(const struct mesh *part, const struct hl_config *c, struct progress *prog,
 	   struct hl_outcome *o, struct err *e);
 
-/* Volume (mm^3) and centre of mass (mm) of a closed, outward mesh by the
- * divergence theorem. */
+/* Volume (mm^3) and centre of mass (mm) of a closed, outward mesh
+ * (mesh_mass, divided out; 0 for a mesh of no volume). */
 void hl_mesh_mass(const struct mesh *m, double *vol, double com[3]);
 
 

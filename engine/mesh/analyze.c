@@ -36,6 +36,23 @@ static void uf_union(uint32_t *parent, uint32_t a, uint32_t b)
 		parent[a] = b;
 }
 
+void mesh_mass(const struct mesh *m, double *vol_mm3, struct vec3 *moment_mm4)
+{
+	double V = 0;
+	struct vec3 M = v3(0, 0, 0);
+
+	for (size_t t = 0; t < m->nt; t++) {
+		struct vec3 a = m->v[m->tri[3 * t]], b = m->v[m->tri[3 * t + 1]],
+			    c = m->v[m->tri[3 * t + 2]];
+		/* signed tetrahedron (origin, a, b, c): volume, centroid (a+b+c)/4 */
+		double v6 = v3_dot(a, v3_cross(b, c)) / 6;
+		V += v6;
+		M = v3_madd(M, v3_add(v3_add(a, b), c), v6 / 4);
+	}
+	*vol_mm3 = V;
+	*moment_mm4 = M;
+}
+
 int mesh_analyze(const struct mesh *m, struct mesh_report *out, struct err *e)
 {
 	struct mesh_report r;

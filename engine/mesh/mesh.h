@@ -105,6 +105,10 @@ struct mesh_report {
 	size_t reoriented_faces;    /* faces flipped to agree with their component */
 };
 
+/* Volume (mm^3) and first moment (mm^4: volume x centroid) of a closed,
+ * outward mesh by the divergence theorem; centre of mass = moment / vol. */
+void mesh_mass(const struct mesh *m, double *vol_mm3, struct vec3 *moment_mm4);
+
 /* Topology and measure analysis (does not modify m).  O(n log n). */
 int mesh_analyze(const struct mesh *m, struct mesh_report *r, struct err *e);
 

@@ -11,9 +11,6 @@
 struct err;
 struct mesh;
 
-/* Volume and first moment (mm^3, mm^4: volume x centroid) of a closed,
- * outward mesh by the divergence theorem. */
-void rh_mesh_mass(const struct mesh *m, double *vol, struct vec3 *moment);
 /* Solid volume and centre of mass of the part less t's cavities. */
 void rh_tree_mass(const struct rh_tree *t, double part_vol, struct vec3 part_moment, double *vol,
 		  struct vec3 *com);

@@ -18,23 +18,6 @@
 #include <stdlib.h>
 #include <string.h>
 
-void rh_mesh_mass(const struct mesh *m, double *vol, struct vec3 *moment)
-{
-	double V = 0;
-	struct vec3 M = v3(0, 0, 0);
-
-	for (size_t t = 0; t < m->nt; t++) {
-		struct vec3 a = m->v[m->tri[3 * t]], b = m->v[m->tri[3 * t + 1]],
-			    c = m->v[m->tri[3 * t + 2]];
-		/* signed tetrahedron (origin, a, b, c): volume, centroid (a+b+c)/4 */
-		double v6 = v3_dot(a, v3_cross(b, c)) / 6;
-		V += v6;
-		M = v3_madd(M, v3_add(v3_add(a, b), c), v6 / 4);
-	}
-	*vol = V;
-	*moment = M;
-}
-
 /* Cell centre in the printer frame. */
 static struct vec3 cell_center(const struct rh_frame *f, const struct rh_cell *c)
 {
@@ -107,7 +90,7 @@ int rh_stability(struct rh_tree *t, const struct mesh *part, double layer_mm, do
 	int rc;
 
 	memset(r, 0, sizeof *r);
-	rh_mesh_mass(part, &pv, &pm);
+	mesh_mass(part, &pv, &pm);
 	if (!(pv > 0))
 		return ERR_SET(e, ERR_GEOMETRY, "rhombic: the part has no volume");
 	r->com_solid = v3_scale(pm, 1 / pv);

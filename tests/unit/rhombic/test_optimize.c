@@ -79,8 +79,8 @@ static void test_stability_gamma(void)
 	/* the incremental centre of mass = the carved solid's centroid */
 	REQUIRE_OK(rh_carve_init(&cr, &t, &e), &e);
 	REQUIRE_OK(rh_carve_mesh(&cr, m, &carved, &e), &e);
-	rh_mesh_mass(carved, &vol, &mom);
-	rh_mesh_mass(m, &pv, &pm);
+	mesh_mass(carved, &vol, &mom);
+	mesh_mass(m, &pv, &pm);
 	CHECK_NEAR(vol, pv - t.cavity_volume_mm3, 1e-6 * pv);
 	CHECK_NEAR(mom.x / vol, r.com_after.x, 1e-6);
 	CHECK_NEAR(mom.y / vol, r.com_after.y, 1e-6);
