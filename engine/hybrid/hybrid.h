@@ -1,0 +1,167 @@
+/* hybrid.h - internals of the `hybrid` engine: muscle-fibre (MFS) and
+ * tetrahedral-crystal (TCS) interiors split by shape and stress (Mao, Wu,
+ * Yan, Guo, Chen, Chen, paper 003).  The method as built, each step mapped
+ * to the paper's sections, deviations and figures: docs/hybrid.md.
+ *
+ * Frames and units.  Everything is in the printer frame (mm, z up from the
+ * plate) of the placed part.  Pixel images use the raster.h convention
+ * through a struct raster_map; binary images here are one byte per pixel
+ * (0 or 1), row-major, stride = width, unless a comment says otherwise.
+ *
+ * Pipeline (hybrid_engine.c):
+ *   sdf.c        section 4.1  shape diameter function per facet, nsdf
+ *   parts.c      section 4.1  Col / NCol facet components, small ones merged,
+ *                             PCA axis and base of every component
+ *   label.c      section 4.1  volumetric partition: a label for every point
+ *   verify.c     section 4.2  mean stress per component under the paper's
+ *                             1000 N loads (engine/fea), VCol / NCol, merges
+ *   mfs.c        section 5.1  2D porous section, extruded along the axis
+ *   tcs.c        section 5.2  diamond ball-and-stick lattice (capsules)
+ *   transient.c  section 6    transient layer and extended support regions
+ *   stack.c      beyond paper per-layer composition, top-down support rule
+ */
+#ifndef INFILLD_HYBRID_H
+#define INFILLD_HYBRID_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "engine/geom/capsule.h"
+#include "engine/geom/vec.h"
+
+struct err;
+struct mesh;
+struct mesh_bvh;
+struct raster_map;
+
+/* ---- sdf.c: shape diameter function (Shapira, Shamir, Cohen-Or 2008) ---- */
+
+struct hy_sdf_opts {
+	int rays;          /* rays per facet (about 30) */
+	double cone_deg;   /* full opening angle of the cone (120) */
+	int threads;       /* parfor threads */
+	uint64_t seed;     /* ray directions are deterministic for a seed */
+};
+
+/* sdf_mm[f] for every facet f of m (m->nt entries, mm): rays from the
+ * facet's centroid inside a cone around the inward normal, cast on b
+ * (built on m); lengths outside one standard deviation of the median
+ * dropped; the rest averaged with weights 1 / angle from the cone axis.
+ * A facet whose rays all miss gets the mean of the others (or 0).
+ * 0, ERR_PARAM or ERR_NOMEM. */
+int hy_sdf(const struct mesh *m, const struct mesh_bvh *b, const struct hy_sdf_opts *o,
+	   double *sdf_mm, struct err *e);
+
+/* The paper's normalisation (section 4.1):
+ * nsdf = log((sdf - min)/(max - min) * alpha + 1) / log(alpha + 1), in
+ * [0, 1].  All equal: 0 everywhere. */
+void hy_nsdf(const double *sdf_mm, size_t n, double alpha, double *nsdf);
+
+/* ---- parts.c: facet components ---- */
+
+enum hy_class { HY_NCOL = 0, HY_COL = 1, HY_VCOL = 2 };
+
+struct hy_part {
+	int cls;               /* enum hy_class */
+	size_t facets;
+	double area_mm2;
+	struct vec3 centroid_mm;  /* area-weighted facet centroid */
+	struct vec3 axis;         /* unit principal axis (PCA of the facets, area
+				     weighted), pointing from base into the part */
+	double radius_mm;         /* largest distance of the part's boundary loop
+				     points from the axis line (0 when no boundary) */
+	struct vec3 base_mm;      /* mean of the edges shared with other parts
+				     (centroid when there are none) */
+	int neighbour;            /* the part sharing the longest boundary, -1 */
+	double sdf_mean_mm;       /* area-weighted mean SDF */
+};
+
+struct hy_parts {
+	uint32_t *facet_part;   /* m->nt entries: index into p */
+	struct hy_part *p;      /* n parts */
+	size_t n;
+	double *shared_mm;      /* n * n: boundary length shared by parts i, j */
+};
+
+/* Facets with nsdf < threshold are Col, others NCol; edge-connected
+ * components of each class; components below min_area_frac of the
+ * total area merged into the neighbour sharing the longest boundary
+ * (repeated until none is left); then every part's figures.  m must be
+ * welded (shared vertices).  0, ERR_NOMEM. */
+int hy_parts_build(const struct mesh *m, const double *nsdf, double threshold,
+		   double min_area_frac, struct hy_parts *out, struct err *e);
+/* Merge part b into part a (facets, figures recomputed; indices above b
+ * shift down by one). */
+int hy_parts_merge(struct hy_parts *ps, const struct mesh *m, size_t a, size_t b,
+		   struct err *e);
+void hy_parts_fini(struct hy_parts *ps);
+
+/* ---- label.c: volumetric partition ---- */
+
+/* Labels points of the part's interior: every voxel of a grid of edge
+ * vox_mm over the part's box takes the part of its nearest surface facet;
+ * then every Col / VCol part c with a neighbour cuts the volume by the
+ * plane through base_mm across its axis: points of c below the plane
+ * (t = axis . (p - base) < 0) go to the neighbour, points of the
+ * neighbour above it within radius_mm of the axis go to c. */
+struct hy_labeler;
+
+int hy_labeler_new(const struct mesh *m, const struct mesh_bvh *b, const struct hy_parts *ps,
+		   double vox_mm, int threads, struct hy_labeler **out, struct err *e);
+/* Part index at p (nearest voxel, then the plane rule), or -1 outside the
+ * voxel grid.  Thread-safe. */
+int hy_label_at(const struct hy_labeler *l, struct vec3 p);
+/* Re-read the parts' classes and planes after hy_parts_merge (the voxels
+ * keep facet-part indices mapped through remap[old] = new). */
+void hy_labeler_remap(struct hy_labeler *l, const struct hy_parts *ps, const int *remap);
+void hy_labeler_free(struct hy_labeler *l);
+
+/* ---- mfs.c: muscle-fibre section (section 5.1) ---- */
+
+/* A 2D porous pattern in the plane across an axis: walls of thickness
+ * wall_mm along the Voronoi boundaries of a Poisson-disk point set of
+ * spacing cell_mm, or a user's binary template image tiled with pixel
+ * pitch template_mm.  Extrusion along the axis: a 3D point p maps to
+ * (e1 . p, e2 . p) with e1, e2 unit and orthogonal to the axis. */
+struct hy_mfs;
+
+int hy_mfs_new_voronoi(struct vec3 axis, struct vec3 origin_mm, double extent_mm,
+		       double cell_mm, double wall_mm, uint64_t seed, struct hy_mfs **out,
+		       struct err *e);
+/* PNG template (8-bit gray or RGB(A); > 127 = material) of the paper's
+ * kind, tiled; walls thinner than wall_mm thickened to it. */
+int hy_mfs_new_template(struct vec3 axis, struct vec3 origin_mm, const char *png_path,
+			double template_mm, double wall_mm, struct hy_mfs **out,
+			struct err *e);
+/* 1 when p is material of the pattern.  Thread-safe. */
+int hy_mfs_solid(const struct hy_mfs *f, struct vec3 p);
+void hy_mfs_free(struct hy_mfs *f);
+
+/* ---- tcs.c: tetrahedral crystal (diamond) lattice (section 5.2) ---- */
+
+/* Diamond cubic balls (radius ball_mm) and sticks (radius stick_mm / 2
+ * where stick_mm is the stick diameter) of cubic cell cell_mm covering
+ * box [lo, hi], cube axes along x, y, z shifted by shift_mm: every stick
+ * is at acos(1/sqrt 3) = 54.74 deg from the vertical.  *caps owned by
+ * the caller (free()).  steepest_deg: the largest stick angle from the
+ * vertical.  0, ERR_PARAM, ERR_LIMIT (more than max_caps), ERR_NOMEM. */
+int hy_tcs_build(struct vec3 lo, struct vec3 hi, double cell_mm, double ball_mm,
+		 double stick_mm, struct vec3 shift_mm, size_t max_caps,
+		 struct capsule **caps, size_t *n, double *steepest_deg, struct err *e);
+
+/* ---- transient.c: transient structures (section 6) ---- */
+
+/* The transient layer of an interface (section 6.1): us = mfs | tcs over
+ * the mask; regions of us not connected to the largest one are joined to
+ * it by bridges of width bridge_px (the paper's rule: documented in
+ * docs/hybrid.md).  us may alias neither input.  Images w x h.
+ * 0 or ERR_NOMEM. */
+int hy_transient_layer(const uint8_t *mfs, const uint8_t *tcs, const uint8_t *mask, int w,
+		       int h, double bridge_px, uint8_t *us, struct err *e);
+/* The extended-support region (section 6.2): tcs_proj (the TCS projected
+ * on the layer) AND us, regions smaller than min_px pixels dropped; into
+ * out.  0 or ERR_NOMEM. */
+int hy_support_region(const uint8_t *tcs_proj, const uint8_t *us, int w, int h,
+		      size_t min_px, uint8_t *out, struct err *e);
+
+#endif
