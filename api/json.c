@@ -52,6 +52,43 @@ static json_t *strs_json(const struct metric *x)
 	return a;
 }
 
+/* An object whose keys are exactly "0", "1", ... "n-1" (n >= 1, in
+ * insertion order) as an array, recursively: dotted metric keys with a
+ * decimal index segment ("hybrid.components.0.class") make JSON lists of
+ * objects.  Returns v itself when it is not such an object (a new
+ * reference either way; NULL on ERR_NOMEM). */
+static json_t *index_arrays(json_t *v)
+{
+	const char *k;
+	json_t *x, *a;
+	void *tmp;
+	size_t i = 0;
+	int indexed = 1;
+	char want[24];
+
+	if (!json_is_object(v))
+		return json_incref(v);
+	json_object_foreach_safe(v, tmp, k, x) {
+		json_t *y = index_arrays(x);
+		if (!y || json_object_set_new(v, k, y))
+			return NULL;
+		snprintf(want, sizeof want, "%zu", i++);
+		indexed &= strcmp(k, want) == 0;
+	}
+	if (!indexed || i == 0)
+		return json_incref(v);
+	if (!(a = json_array()))
+		return NULL;
+	for (size_t j = 0; j < i; j++) {
+		snprintf(want, sizeof want, "%zu", j);
+		if (json_array_append(a, json_object_get(v, want))) {
+			json_decref(a);
+			return NULL;
+		}
+	}
+	return a;
+}
+
 json_t *api_metrics_json(const struct metrics *m)
 {
 	json_t *root = json_object();
@@ -78,7 +115,11 @@ json_t *api_metrics_json(const struct metrics *m)
 			return NULL;
 		}
 	}
-	return root;
+	{
+		json_t *r = index_arrays(root);
+		json_decref(root);
+		return r;
+	}
 }
 
 static json_t *param_value_json(const struct param_desc *d, const void *base)

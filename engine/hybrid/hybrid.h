@@ -27,11 +27,13 @@
 #include <stdint.h>
 
 #include "engine/geom/capsule.h"
+#include "engine/geom/raster.h"
 #include "engine/geom/vec.h"
 
 struct err;
 struct mesh;
 struct mesh_bvh;
+struct progress;
 struct raster_map;
 
 /* ---- sdf.c: shape diameter function (Shapira, Shamir, Cohen-Or 2008) ---- */
@@ -88,8 +90,8 @@ struct hy_parts {
  * total area merged into the neighbour sharing the longest boundary
  * (repeated until none is left); then every part's figures.  m must be
  * welded (shared vertices).  0, ERR_NOMEM. */
-int hy_parts_build(const struct mesh *m, const double *nsdf, double threshold,
-		   double min_area_frac, struct hy_parts *out, struct err *e);
+int hy_parts_build(const struct mesh *m, const double *nsdf, const double *sdf_mm,
+		   double threshold, double min_area_frac, struct hy_parts *out, struct err *e);
 /* Merge part b into part a (facets, figures recomputed; indices above b
  * shift down by one). */
 int hy_parts_merge(struct hy_parts *ps, const struct mesh *m, size_t a, size_t b,
@@ -115,6 +117,40 @@ int hy_label_at(const struct hy_labeler *l, struct vec3 p);
  * keep facet-part indices mapped through remap[old] = new). */
 void hy_labeler_remap(struct hy_labeler *l, const struct hy_parts *ps, const int *remap);
 void hy_labeler_free(struct hy_labeler *l);
+
+/* ---- verify.c: component verification (section 4.2) ---- */
+
+/* The paper's two loads: load_n on the part's top (FEA_AT_TOP), straight
+ * down and from the top right at 45 degrees between x and z, the plate
+ * fixed.  For each part, the volume-weighted mean stress (MPa) in x, y, z
+ * of the elements whose centre the labeler gives it. */
+struct hy_verify_opts {
+	double load_n;        /* 1000 in the paper */
+	double fea_voxel_mm;  /* element edge, > 0 */
+	double dominance;     /* VCol: the largest |mean stress| at least this times
+				 the second, under both loads */
+	double floor_frac;    /* ... and at least this fraction of the largest such
+				 stress over all Col parts (an unloaded appendage
+				 carries nothing and is no column) */
+	double E_mpa, nu;     /* material */
+	size_t max_elements;
+	int threads;
+};
+
+struct hy_stress {
+	double mean_mpa[2][3]; /* [load: 0 top, 1 at 45 deg][x, y, z] */
+	double ratio[2];       /* largest / second |mean| per load (INFINITY when
+				  the second is 0) */
+	size_t elements;       /* elements of the part */
+};
+
+/* Solve both loads on the solid part (m voxelised at fea_voxel_mm), fill
+ * st[i] for every part and set the class of every HY_COL part to HY_VCOL
+ * when it passes, HY_NCOL otherwise.  *seconds: FEA wall time.  0 or the
+ * solver's errors (ERR_GEOMETRY for an unconstrained part, ERR_LIMIT). */
+int hy_verify(const struct mesh *m, const struct hy_labeler *l, struct hy_parts *ps,
+	      const struct hy_verify_opts *o, struct hy_stress *st, double *seconds,
+	      struct err *e);
 
 /* ---- mfs.c: muscle-fibre section (section 5.1) ---- */
 
@@ -163,5 +199,89 @@ int hy_transient_layer(const uint8_t *mfs, const uint8_t *tcs, const uint8_t *ma
  * out.  0 or ERR_NOMEM. */
 int hy_support_region(const uint8_t *tcs_proj, const uint8_t *us, int w, int h,
 		      size_t min_px, uint8_t *out, struct err *e);
+
+/* ---- stack.c: the designed layer stack ---- */
+
+/* Bit planes of every layer on the design grid (pitch_mm square pixels
+ * over the part's box, the slice/erode.h grid): bit j * w + i of layer k
+ * in words [k * words, (k + 1) * words).  part: pixel centre inside the
+ * part; interior: at least the shell's thickness from the outside (3D);
+ * voids: interior pixels left empty by the design; tcsr: interior pixels
+ * whose structure is the crystal lattice (their support rule uses the
+ * struts' angle).  Material = part & !voids. */
+struct hy_stack {
+	int w, h, layers;
+	struct raster_map map;  /* printer mm -> design-grid pixel coordinates */
+	double pitch_mm, layer_mm;
+	size_t words;           /* uint64_t words per plane of one layer */
+	uint64_t *part, *interior, *voids, *tcsr;
+};
+
+enum hy_structure { HY_STRUCT_HYBRID = 0, HY_STRUCT_TCS, HY_STRUCT_MFS };
+
+/* What stack.c composes: the partition, the structures and the rules. */
+struct hy_design {
+	int structure;                 /* enum hy_structure */
+	const struct hy_labeler *labels; /* HY_STRUCT_HYBRID only */
+	const struct hy_parts *parts;    /* HY_STRUCT_HYBRID only */
+	struct hy_mfs *const *mfs;     /* per part (NULL for non-VCol) in hybrid
+					  mode; mfs[0] for the whole interior in
+					  HY_STRUCT_MFS */
+	struct capsule *caps;          /* TCS balls and sticks (owned by the caller;
+					  the extended support columns are appended
+					  by hy_stack_columns, which may realloc) */
+	size_t ncaps, caps_cap;
+	double transient_mm;           /* thickness of the transient layer across
+					  each VCol part's base plane */
+	double bridge_mm;              /* width of its connecting bridges */
+	double tcs_cell_mm;            /* length of the extended support columns */
+	double column_mm;              /* their diameter */
+	double column_spacing_mm;      /* their Poisson-disk spacing */
+	double r_alpha_mm;             /* h tan(alpha): the support rule, MFS side */
+	double r_tcs_mm;               /* h tan(alpha_tcs): TCS side */
+	int threads;
+	uint64_t seed;
+};
+
+struct hy_stack_report {
+	size_t columns;             /* extended support columns added */
+	size_t transient_px;        /* transient-layer pixels, all layers */
+	size_t filled_px;           /* void pixels filled by the support rule */
+	double overhang_mm2;        /* material of layer k+1 farther than h tan(alpha)
+				       from material of layer k, over the part's
+				       interior (the struts' own angle) */
+	double material_mm3, part_mm3;
+	double seconds_interior, seconds_compose, seconds_support;
+};
+
+/* The part's and interior planes of every layer (mesh sliced and eroded
+ * in 3D by shell_mm on a grid of pitch_mm over box).  0, ERR_LIMIT
+ * (grid too large, field "grid_mm"), ERR_NOMEM, slicing errors. */
+int hy_stack_init(struct hy_stack *st, const struct mesh *m, struct box3 box, double pitch_mm,
+		  double layer_mm, int layers, double shell_mm, struct progress *pg,
+		  struct err *e);
+/* Section 6.2 for every VCol part of a hybrid design: the extended
+ * support columns, appended to d->caps.  Before hy_stack_compose. */
+int hy_stack_columns(const struct hy_stack *st, struct hy_design *d, size_t *ncolumns,
+		     struct err *e);
+/* Sections 5-6: every layer's voids from the structures, then the support
+ * rule top-down (docs/hybrid.md "Printability").  Fills rep. */
+int hy_stack_compose(struct hy_stack *st, const struct hy_design *d, struct progress *pg,
+		     struct hy_stack_report *rep, struct err *e);
+/* 1 when design pixel (i, j) of layer k is material; 0 outside the grid. */
+int hy_stack_material(const struct hy_stack *st, int k, int i, int j);
+/* 1 when it is a void of the design (interior left empty). */
+int hy_stack_void(const struct hy_stack *st, int k, int i, int j);
+/* Element densities for the FEA: the material fraction of every cube of
+ * edge h_mm over the part's box (grid g allocated and filled as
+ * fea_voxelize_mesh would; solid_part != 0: the part itself, no voids). */
+struct fea_grid;
+int hy_stack_fea_grid(const struct hy_stack *st, struct box3 box, double h_mm, int solid_part,
+		      size_t max_elements, struct fea_grid *g, struct err *e);
+/* The material as a closed manifold mesh: block averages of bx x bx
+ * pixels x bz layers, marching tetrahedra at 1/2 (mesh/isosurface.h). */
+int hy_stack_mesh(const struct hy_stack *st, int bx, int bz, size_t max_triangles,
+		  struct mesh **out, struct err *e);
+void hy_stack_fini(struct hy_stack *st);
 
 #endif

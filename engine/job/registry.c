@@ -2,6 +2,7 @@
  * declaring its `const struct engine_ops <name>_engine`. */
 #include "engine/engine.h"
 #include "engine/hollow/hollow.h"
+#include "engine/hybrid/hybrid_engine.h"
 #include "engine/lattice/lattice_engine.h"
 #include "engine/rhombic/rhombic_engine.h"
 #include "engine/solid/solid.h"
@@ -13,6 +14,7 @@ static const struct engine_ops *const engines[] = {
 	&lattice_engine,
 	&hollow_engine,
 	&rhombic_engine,
+	&hybrid_engine,
 	NULL,
 };
 
