@@ -141,10 +141,16 @@ void hy_mfs_free(struct hy_mfs *f);
 
 /* Diamond cubic balls (radius ball_mm) and sticks (radius stick_mm / 2
  * where stick_mm is the stick diameter) of cubic cell cell_mm covering
- * box [lo, hi], cube axes along x, y, z shifted by shift_mm: every stick
- * is at acos(1/sqrt 3) = 54.74 deg from the vertical.  *caps owned by
- * the caller (free()).  steepest_deg: the largest stick angle from the
- * vertical.  0, ERR_PARAM, ERR_LIMIT (more than max_caps), ERR_NOMEM. */
+ * box [lo, hi], cube axes along x, y, z shifted by shift_mm (an atom at
+ * shift_mm): every stick is at acos(1/sqrt 3) = 54.74 deg from the
+ * vertical.  Every atom within one bond length (sqrt 3 / 4 cell) of the
+ * box on each axis, and every bond between two such atoms, once (sticks
+ * with a.z <= b.z), so clipping to the box leaves no gaps.  Balls no
+ * larger than the sticks' radius are left out (inside the sticks' ends).
+ * *caps owned by the caller (mem_free() or free()).  steepest_deg: the
+ * largest stick angle from the vertical.  0, ERR_PARAM (cell not > 0,
+ * stick_mm not in (0, sqrt 3 / 2 cell), ball_mm not in [0, cell / 2),
+ * empty box), ERR_LIMIT (more than max_caps), ERR_NOMEM. */
 int hy_tcs_build(struct vec3 lo, struct vec3 hi, double cell_mm, double ball_mm,
 		 double stick_mm, struct vec3 shift_mm, size_t max_caps,
 		 struct capsule **caps, size_t *n, double *steepest_deg, struct err *e);
