@@ -32,9 +32,21 @@
 /* Slabs of a capsule_zindex at most (the slab height grows to fit). */
 #define ZINDEX_MAX_SLABS (1u << 20)
 
+/* min / max of numbers that are never NaN here: plain comparisons the
+ * compiler inlines (libm's fmin / fmax are calls at -O2); on such inputs
+ * they give the same values. */
+static inline double dmin(double a, double b)
+{
+	return b < a ? b : a;
+}
+static inline double dmax(double a, double b)
+{
+	return b > a ? b : a;
+}
+
 /* Solve A u^2 + B u + C < 0 (A >= 0): interval (lo, hi); 0 if empty.
  * scale2 (the |s|^2 of the row) sets what counts as A = 0. */
-static int quad_below(double A, double B, double C, double scale2, double *lo, double *hi)
+static inline int quad_below(double A, double B, double C, double scale2, double *lo, double *hi)
 {
 	if (A <= 1e-14 * scale2) {
 		/* constant along the row (the row runs parallel to the axis) */
@@ -87,7 +99,7 @@ int capsule_rows_interval(const struct capsule_rows *cr, struct vec3 o, double *
 
 	if (!(S2 > 0)) {
 		/* no step: the row is the point o */
-		double hc = fmin(fmax(h0, 0), l);
+		double hc = dmin(dmax(h0, 0), l);
 		if (W2 - 2 * hc * h0 + hc * hc < R2) {
 			*lo_out = -INFINITY;
 			*hi_out = INFINITY;
@@ -97,14 +109,14 @@ int capsule_rows_interval(const struct capsule_rows *cr, struct vec3 o, double *
 	}
 	/* end balls */
 	if (quad_below(S2, 2 * WS, W2 - R2, S2, &a0, &a1)) {
-		lo = fmin(lo, a0);
-		hi = fmax(hi, a1);
+		lo = dmin(lo, a0);
+		hi = dmax(hi, a1);
 	}
 	if (l > 0) {
 		double Wb2 = W2 - 2 * l * h0 + l * l, WbS = WS - l * hs;
 		if (quad_below(S2, 2 * WbS, Wb2 - R2, S2, &a0, &a1)) {
-			lo = fmin(lo, a0);
-			hi = fmax(hi, a1);
+			lo = dmin(lo, a0);
+			hi = dmax(hi, a1);
 		}
 		/* cylinder part: rho^2 < R^2 and 0 <= h <= l */
 		if (quad_below(cr->acyl, 2 * (WS - h0 * hs), W2 - h0 * h0 - R2, S2, &a0, &a1)) {
@@ -120,11 +132,11 @@ int capsule_rows_interval(const struct capsule_rows *cr, struct vec3 o, double *
 			} else if (!(h0 >= 0 && h0 <= l)) {
 				b0 = INFINITY; /* empty */
 			}
-			b0 = fmax(b0, a0);
-			b1 = fmin(b1, a1);
+			b0 = dmax(b0, a0);
+			b1 = dmin(b1, a1);
 			if (b0 < b1) {
-				lo = fmin(lo, b0);
-				hi = fmax(hi, b1);
+				lo = dmin(lo, b0);
+				hi = dmax(hi, b1);
 			}
 		}
 	}
