@@ -229,7 +229,8 @@ static int build_lists(struct hy_mfs *f, const struct pointgrid *g, struct err *
 				f->start[k + 1] += f->start[k];
 			f->cand = mem_alloc((total ? total : 1) * 2 * sizeof *f->cand);
 			if (!f->cand) {
-				rc = ERR_SET(e, ERR_NOMEM, "out of memory for %zu MFS candidates", total);
+				rc = ERR_SET(e, ERR_NOMEM, "out of memory for %zu MFS candidates",
+					     total);
 				goto out;
 			}
 		}
@@ -256,9 +257,9 @@ static double edge_distance(const struct hy_mfs *f, size_t k, double u, double v
 	}
 	for (size_t q = 0; q < n; q++) {
 		double du = c[2 * q] - u, dv = c[2 * q + 1] - v;
+		double sep = hypot(c[2 * q] - c[2 * best], c[2 * q + 1] - c[2 * best + 1]);
 		if (q != best)
-			m = fmin(m, (du * du + dv * dv - d1) /
-					    (2 * hypot(c[2 * q] - c[2 * best], c[2 * q + 1] - c[2 * best + 1])));
+			m = fmin(m, (du * du + dv * dv - d1) / (2 * sep));
 	}
 	return m;
 }
@@ -329,10 +330,11 @@ int hy_mfs_new_voronoi(struct vec3 axis, struct vec3 origin_mm, double extent_mm
 		struct box3 b = {{0, 0, 0}, {side, side, 0}};
 		if ((rc = pointgrid_init(&g, b, cell_mm, MFS_MAX_QUERY_CELLS, e)) != 0)
 			goto out;
-		for (size_t i = 0; i < f->nsite; i++)
-			if ((rc = pointgrid_insert(&g, v3(f->site[2 * i], f->site[2 * i + 1], 0), e)) !=
-			    0)
+		for (size_t i = 0; i < f->nsite; i++) {
+			struct vec3 s = v3(f->site[2 * i], f->site[2 * i + 1], 0);
+			if ((rc = pointgrid_insert(&g, s, e)) != 0)
 				goto out;
+		}
 	}
 	if ((rc = build_lists(f, &g, e)) != 0 || (rc = classify_cells(f, e)) != 0)
 		goto out;
@@ -418,8 +420,9 @@ static int thicken(struct hy_mfs *f, double wall_mm, struct err *e)
 	ph = f->th + 2 * m;
 	np = (size_t)pw * (size_t)ph;
 	if ((double)pw * ph > MFS_MAX_TEMPLATE_PX)
-		return ERR_SET(e, ERR_LIMIT, "MFS template of %dx%d pixels with a %g mm wall is too "
-			       "large", f->tw, f->th, wall_mm);
+		return ERR_SET(e, ERR_LIMIT,
+			       "MFS template of %dx%d pixels with a %g mm wall is too large", f->tw,
+			       f->th, wall_mm);
 	edt_scratch_init(&es);
 	pad = mem_alloc(np);
 	ridge = mem_calloc(np, 1);

@@ -31,6 +31,41 @@ static int in_grown(const struct tcs_box *b, struct vec3 p)
 	       p.z >= b->lo.z && p.z <= b->hi.z;
 }
 
+/* The A atom pa, its B partner pa + (a/4)(1,1,1) and pa's 4 bonds: stored
+ * from out[n] on when out != NULL; returns the new count. */
+static size_t tcs_site(const struct tcs_box *b, struct vec3 pa, double a, double ball_mm,
+		       double stick_r, int balls, struct capsule *out, size_t n)
+{
+	double q4 = 0.25 * a;
+	struct vec3 pb = v3_add(pa, v3(q4, q4, q4));
+
+	if (balls && in_grown(b, pa)) {
+		if (out)
+			out[n] = (struct capsule){pa, pa, ball_mm};
+		n++;
+	}
+	if (balls && in_grown(b, pb)) {
+		if (out)
+			out[n] = (struct capsule){pb, pb, ball_mm};
+		n++;
+	}
+	if (!in_grown(b, pa))
+		return n;
+	for (int d = 0; d < 4; d++) {
+		struct vec3 q = v3(pa.x + q4 * bond_dir[d][0], pa.y + q4 * bond_dir[d][1],
+				   pa.z + q4 * bond_dir[d][2]);
+		if (!in_grown(b, q))
+			continue;
+		if (out) {
+			/* lower end first: z-sorted users like it */
+			struct vec3 lo = pa.z <= q.z ? pa : q, hi = pa.z <= q.z ? q : pa;
+			out[n] = (struct capsule){lo, hi, stick_r};
+		}
+		n++;
+	}
+	return n;
+}
+
 /* Walk the atoms and bonds; with out != NULL store them (balls when
  * balls != 0).  Returns the count. */
 static size_t tcs_walk(const struct tcs_box *b, const long c0[3], const long c1[3], double a,
@@ -42,38 +77,11 @@ static size_t tcs_walk(const struct tcs_box *b, const long c0[3], const long c1[
 	for (long k = c0[2]; k <= c1[2]; k++)
 		for (long j = c0[1]; j <= c1[1]; j++)
 			for (long i = c0[0]; i <= c1[0]; i++)
-				for (int f = 0; f < 4; f++) {
-					struct vec3 pa = v3(shift.x + a * ((double)i + fcc[f][0]),
-							    shift.y + a * ((double)j + fcc[f][1]),
-							    shift.z + a * ((double)k + fcc[f][2]));
-					struct vec3 pb = v3_add(pa, v3(0.25 * a, 0.25 * a, 0.25 * a));
-					if (balls && in_grown(b, pa)) {
-						if (out)
-							out[n] = (struct capsule){pa, pa, ball_mm};
-						n++;
-					}
-					if (balls && in_grown(b, pb)) {
-						if (out)
-							out[n] = (struct capsule){pb, pb, ball_mm};
-						n++;
-					}
-					if (!in_grown(b, pa))
-						continue;
-					for (int d = 0; d < 4; d++) {
-						struct vec3 q = v3(pa.x + 0.25 * a * bond_dir[d][0],
-								   pa.y + 0.25 * a * bond_dir[d][1],
-								   pa.z + 0.25 * a * bond_dir[d][2]);
-						if (!in_grown(b, q))
-							continue;
-						if (out) {
-							/* lower end first: z-sorted users like it */
-							struct vec3 lo = pa.z <= q.z ? pa : q;
-							struct vec3 hi = pa.z <= q.z ? q : pa;
-							out[n] = (struct capsule){lo, hi, stick_r};
-						}
-						n++;
-					}
-				}
+				for (int f = 0; f < 4; f++)
+					n = tcs_site(b, v3(shift.x + a * ((double)i + fcc[f][0]),
+							   shift.y + a * ((double)j + fcc[f][1]),
+							   shift.z + a * ((double)k + fcc[f][2])),
+						     a, ball_mm, stick_r, balls, out, n);
 	return n;
 }
 
@@ -92,7 +100,8 @@ int hy_tcs_build(struct vec3 lo, struct vec3 hi, double cell_mm, double ball_mm,
 		return ERR_FIELD(e, "cell_mm", "TCS cell must be > 0 mm (got %g)", cell_mm);
 	if (!(stick_mm > 0) || !(stick_r < bond))
 		return ERR_FIELD(e, "stick_mm",
-				 "TCS stick diameter must be in (0, %g) mm for a %g mm cell (got %g)",
+				 "TCS stick diameter must be in (0, %g) mm for a %g mm cell "
+				 "(got %g)",
 				 2 * bond, cell_mm, stick_mm);
 	if (!(ball_mm >= 0) || !(ball_mm < 0.5 * cell_mm))
 		return ERR_FIELD(e, "ball_mm",

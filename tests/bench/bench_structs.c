@@ -69,8 +69,8 @@ int main(int argc, char **argv)
 	}
 	printf("union_raster_ms_per_layer %.3f\nzindex_raster_ms_per_layer %.3f\n", 1e3 * t_plain,
 	       1e3 * t_index);
-	printf("solid_fraction %.4f\nns_per_section_pixel %.2f\n", px_set / ((double)w * h * layers),
-	       1e9 * t_index / (px_set / layers));
+	printf("solid_fraction %.4f\nns_per_section_pixel %.2f\n",
+	       px_set / ((double)w * h * layers), 1e9 * t_index / (px_set / layers));
 	capsule_zindex_free(ix);
 	mem_free(c);
 	{

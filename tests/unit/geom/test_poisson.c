@@ -18,8 +18,10 @@ static double min_pair(const double *xy, size_t n)
 	double best = INFINITY;
 
 	for (size_t i = 0; i < n; i++)
-		for (size_t j = i + 1; j < n; j++)
-			best = fmin(best, hypot(xy[2 * i] - xy[2 * j], xy[2 * i + 1] - xy[2 * j + 1]));
+		for (size_t j = i + 1; j < n; j++) {
+			double d = hypot(xy[2 * i] - xy[2 * j], xy[2 * i + 1] - xy[2 * j + 1]);
+			best = fmin(best, d);
+		}
 	return best;
 }
 
@@ -85,8 +87,10 @@ static double bins_nearest(const struct bins *b, const double *xy, double x, dou
 			if (i < 0 || j < 0 || i >= b->nx || j >= b->ny)
 				continue;
 			c = (size_t)j * b->nx + i;
-			for (size_t k = b->start[c]; k < b->start[c + 1]; k++)
-				d = fmin(d, hypot(x - xy[2 * b->item[k]], y - xy[2 * b->item[k] + 1]));
+			for (size_t k = b->start[c]; k < b->start[c + 1]; k++) {
+				size_t q = b->item[k];
+				d = fmin(d, hypot(x - xy[2 * q], y - xy[2 * q + 1]));
+			}
 		}
 	return d <= 2 * b->r ? d : INFINITY;
 }

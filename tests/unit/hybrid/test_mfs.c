@@ -236,7 +236,8 @@ static void test_voronoi_axis_and_seed(void)
 	CHECK_NEAR(v3_dot(e1, axis), 0, 1e-12);
 	CHECK_NEAR(v3_dot(e2, axis), 0, 1e-12);
 	for (int k = 0; k < 20000; k++) {
-		struct vec3 p = v3_add(origin, v3(20 * uni() - 10, 20 * uni() - 10, 20 * uni() - 10));
+		double dx = 20 * uni() - 10, dy = 20 * uni() - 10, dz = 20 * uni() - 10;
+		struct vec3 p = v3_add(origin, v3(dx, dy, dz));
 		int a = hy_mfs_solid(f, p);
 		/* extruded: constant along the axis */
 		CHECK_EQ_INT(hy_mfs_solid(f, v3_madd(p, axis, 3 * uni() - 1.5)), a);
@@ -355,8 +356,9 @@ static void test_template_roundtrip(void)
 					int want = r->px[(size_t)y * r->stride + x] > 127;
 					int ti = tile == 0 ? 0 : tile == 1 ? 3 : -2;
 					int tj = tile == 0 ? 0 : tile == 1 ? -1 : 5;
-					bad += tpx(f, axis, origin, 0.25, r->w, r->h, x, y, ti, tj) !=
-					       want;
+					int got = tpx(f, axis, origin, 0.25, r->w, r->h, x, y,
+						      ti, tj);
+					bad += got != want;
 				}
 		CHECK_EQ_INT(bad, 0);
 		hy_mfs_free(f);

@@ -64,8 +64,11 @@ static void test_structure(void)
 		CHECK_NEAR(c[i].r_mm, stick / 2, 0);
 		CHECK(c[i].a.z <= c[i].b.z);
 		worst_len = fmax(worst_len, fabs(v3_dist(c[i].a, c[i].b) - L));
-		worst_ang = fmax(worst_ang, fabs(acos((c[i].b.z - c[i].a.z) / v3_dist(c[i].a, c[i].b)) *
-						 180 / M_PI - 54.7356103172));
+		{
+			double len = v3_dist(c[i].a, c[i].b);
+			double deg = acos((c[i].b.z - c[i].a.z) / len) * 180 / M_PI;
+			worst_ang = fmax(worst_ang, fabs(deg - 54.7356103172));
+		}
 		for (size_t j = i + 1; j < n; j++)
 			if ((same(c[i].a, c[j].a) && same(c[i].b, c[j].b)) ||
 			    (same(c[i].a, c[j].b) && same(c[i].b, c[j].a)))
