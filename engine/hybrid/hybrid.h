@@ -158,29 +158,56 @@ int hy_verify(const struct mesh *m, const struct hy_labeler *l, struct hy_parts 
  * wall_mm along the Voronoi boundaries of a Poisson-disk point set of
  * spacing cell_mm, or a user's binary template image tiled with pixel
  * pitch template_mm.  Extrusion along the axis: a 3D point p maps to
- * (e1 . p, e2 . p) with e1, e2 unit and orthogonal to the axis. */
+ * (e1 . p, e2 . p) with e1, e2 unit and orthogonal to the axis
+ * (hy_mfs_basis).  Caller frees with hy_mfs_free(). */
 struct hy_mfs;
 
+/* Sites: poisson2_sample (radius cell_mm, seed) over the square of side
+ * 2 extent_mm centred on origin_mm's projection; material where the
+ * distance to the Voronoi boundary is < wall_mm / 2 (exact: the nearest
+ * site's cell, all its bisectors), and everywhere beyond the square.
+ * hy_mfs_solid is O(1) (a grid of candidate lists, about 3 sites a
+ * cell).  0, ERR_PARAM (axis zero or not finite, cell_mm not > 0,
+ * wall_mm not in [0, cell_mm), extent_mm not > 0), ERR_LIMIT (more than
+ * 2^24 sampling squares), ERR_NOMEM. */
 int hy_mfs_new_voronoi(struct vec3 axis, struct vec3 origin_mm, double extent_mm,
 		       double cell_mm, double wall_mm, uint64_t seed, struct hy_mfs **out,
 		       struct err *e);
-/* PNG template (8-bit gray or RGB(A); > 127 = material) of the paper's
- * kind, tiled; walls thinner than wall_mm thickened to it. */
+/* PNG template (any PNG, read as 8-bit gray; > 127 = material) of the
+ * paper's kind, tiled from origin_mm's projection: pixel column i along
+ * +e1, row 0 at the top (largest e2) of each tile.  Walls thinner than
+ * wall_mm (to within a pixel) thickened to at least it, once at load;
+ * thicker material unchanged.  0, ERR_PARAM, ERR_IO / ERR_PARSE (the
+ * file), ERR_LIMIT (a side beyond 65535, or the padded tile beyond 2^26
+ * pixels), ERR_NOMEM. */
 int hy_mfs_new_template(struct vec3 axis, struct vec3 origin_mm, const char *png_path,
 			double template_mm, double wall_mm, struct hy_mfs **out,
 			struct err *e);
 /* 1 when p is material of the pattern.  Thread-safe. */
 int hy_mfs_solid(const struct hy_mfs *f, struct vec3 p);
 void hy_mfs_free(struct hy_mfs *f);
+/* The section plane's basis: e1 the unit projection of the coordinate
+ * axis least aligned with the axis, e2 = axis x e1 (axis z: x, y). */
+void hy_mfs_basis(const struct hy_mfs *f, struct vec3 *e1, struct vec3 *e2);
+/* Voronoi pattern's sites: *n (u, v) pairs relative to the sampled
+ * square's corner (*u_lo, *v_lo) in plane coordinates (e1 . p, e2 . p);
+ * borrowed from f.  A template has none (*n = 0, NULL). */
+const double *hy_mfs_sites(const struct hy_mfs *f, size_t *n, double *u_lo, double *v_lo);
 
 /* ---- tcs.c: tetrahedral crystal (diamond) lattice (section 5.2) ---- */
 
 /* Diamond cubic balls (radius ball_mm) and sticks (radius stick_mm / 2
  * where stick_mm is the stick diameter) of cubic cell cell_mm covering
- * box [lo, hi], cube axes along x, y, z shifted by shift_mm: every stick
- * is at acos(1/sqrt 3) = 54.74 deg from the vertical.  *caps owned by
- * the caller (free()).  steepest_deg: the largest stick angle from the
- * vertical.  0, ERR_PARAM, ERR_LIMIT (more than max_caps), ERR_NOMEM. */
+ * box [lo, hi], cube axes along x, y, z shifted by shift_mm (an atom at
+ * shift_mm): every stick is at acos(1/sqrt 3) = 54.74 deg from the
+ * vertical.  Every atom within one bond length (sqrt 3 / 4 cell) of the
+ * box on each axis, and every bond between two such atoms, once (sticks
+ * with a.z <= b.z), so clipping to the box leaves no gaps.  Balls no
+ * larger than the sticks' radius are left out (inside the sticks' ends).
+ * *caps owned by the caller (mem_free() or free()).  steepest_deg: the
+ * largest stick angle from the vertical.  0, ERR_PARAM (cell not > 0,
+ * stick_mm not in (0, sqrt 3 / 2 cell), ball_mm not in [0, cell / 2),
+ * empty box), ERR_LIMIT (more than max_caps), ERR_NOMEM. */
 int hy_tcs_build(struct vec3 lo, struct vec3 hi, double cell_mm, double ball_mm,
 		 double stick_mm, struct vec3 shift_mm, size_t max_caps,
 		 struct capsule **caps, size_t *n, double *steepest_deg, struct err *e);

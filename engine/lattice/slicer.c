@@ -7,7 +7,8 @@
  * slab |z' - z| < R, inflate by R); (3) bin struts to bands of rows; (4)
  * threads take bands: for each strut and row, the exact run of pixel
  * centres inside the capsule (union of the cylinder and the two end
- * spheres, convex, so one interval) is accumulated by rowkern.c; then
+ * spheres, convex, so one interval: engine/geom/capsule.c, shared with the
+ * hybrid engine) is accumulated by rowkern.c; then
  * the band is thresholded (binary) or converted to coverage (antialias:
  * signed distance (F - C) / |grad F| from central differences, one halo
  * row above and below the band).
@@ -17,6 +18,7 @@
 #include "engine/lattice/rowkern.h"
 #include "engine/core/err.h"
 #include "engine/core/mem.h"
+#include "engine/geom/capsule.h"
 
 #include <math.h>
 #include <pthread.h>
@@ -212,78 +214,25 @@ static int advance(struct lattice_slicer *s, double z, struct err *e)
 
 /* ---- culling ---- */
 
+/* The strut's capsule of radius R, prepared for rows of the current map. */
+static void strut_rows(const struct lattice_slicer *s, const struct act *a,
+		       struct capsule_rows *cr)
+{
+	capsule_rows_init(cr, v3(a->a[0], a->a[1], a->a[2]), v3(a->t[0], a->t[1], a->t[2]),
+			  a->l, s->R, v3(s->iux, s->iuy, 0));
+}
+
 static void strut_rect(struct lattice_slicer *s, const struct raster_map *m,
 		       const struct act *a, struct rect *r)
 {
-	double t0 = 0, t1 = 1, dz = (double)a->t[2] * a->l, z = s->z, R = s->R;
-	double x0, y0, x1, y1, xmin, xmax, ymin, ymax;
-	double umin = INFINITY, umax = -INFINITY, vmin = INFINITY, vmax = -INFINITY;
+	struct capsule_rows cr;
 
-	if (dz > 0) {
-		t0 = fmax(0, fmin(1, (z - R - a->a[2]) / dz));
-		t1 = fmax(0, fmin(1, (z + R - a->a[2]) / dz));
-	}
-	x0 = a->a[0] + t0 * a->t[0] * a->l;
-	y0 = a->a[1] + t0 * a->t[1] * a->l;
-	x1 = a->a[0] + t1 * a->t[0] * a->l;
-	y1 = a->a[1] + t1 * a->t[1] * a->l;
-	xmin = fmin(x0, x1) - R;
-	xmax = fmax(x0, x1) + R;
-	ymin = fmin(y0, y1) - R;
-	ymax = fmax(y0, y1) + R;
-	for (int c = 0; c < 4; c++) {
-		double u, v;
-		raster_map_apply(m, (c & 1) ? xmax : xmin, (c & 2) ? ymax : ymin, &u, &v);
-		umin = fmin(umin, u);
-		umax = fmax(umax, u);
-		vmin = fmin(vmin, v);
-		vmax = fmax(vmax, v);
-	}
-	/* pixel i's centre i + 0.5 inside [umin, umax] */
-	umin = fmax(ceil(umin - 0.5), 0);
-	umax = fmin(floor(umax - 0.5), s->w - 1);
-	vmin = fmax(ceil(vmin - 0.5), 0);
-	vmax = fmin(floor(vmax - 0.5), s->h - 1);
-	if (!(umin <= umax && vmin <= vmax)) {
+	strut_rows(s, a, &cr);
+	if (!capsule_rows_rect(&cr, s->z, m, s->w, s->h, &r->u0, &r->u1, &r->v0, &r->v1)) {
 		r->u0 = 1;
 		r->u1 = 0;
 		r->v0 = 1;
 		r->v1 = 0;
-		return;
-	}
-	r->u0 = (int)umin;
-	r->u1 = (int)umax;
-	r->v0 = (int)vmin;
-	r->v1 = (int)vmax;
-}
-
-/* Solve A u^2 + B u + C < 0 (A >= 0): interval (lo, hi); 0 if empty. */
-static int quad_below(double A, double B, double C, double scale2, double *lo, double *hi)
-{
-	if (A <= 1e-14 * scale2) {
-		/* constant along the row (the row runs parallel to the axis) */
-		if (C < 0) {
-			*lo = -INFINITY;
-			*hi = INFINITY;
-			return 1;
-		}
-		return 0;
-	}
-	{
-		double disc = B * B - 4 * A * C, sq, q;
-		if (!(disc > 0))
-			return 0;
-		sq = sqrt(disc);
-		/* numerically stable roots */
-		q = -0.5 * (B + (B >= 0 ? sq : -sq));
-		*lo = q / A;
-		*hi = q != 0 ? C / q : -*lo;
-		if (*lo > *hi) {
-			double t = *lo;
-			*lo = *hi;
-			*hi = t;
-		}
-		return 1;
 	}
 }
 
@@ -295,7 +244,7 @@ static void render_band(struct worker *wk, int band)
 	int r0 = band * BAND_ROWS, r1 = r0 + BAND_ROWS, ar0, ar1, w = s->w;
 	uint32_t *acc = wk->acc;
 	const uint32_t one = (uint32_t)LATTICE_FIX_ONE;
-	double sx = s->iux, sy = s->iuy, S2 = sx * sx + sy * sy;
+	double sx = s->iux, sy = s->iuy;
 
 	if (r1 > s->h)
 		r1 = s->h;
@@ -316,64 +265,23 @@ static void render_band(struct worker *wk, int band)
 		const struct act *a = &s->act[s->bin[bi]];
 		const struct rect *rc = &s->rect[s->bin[bi]];
 		int v0 = rc->v0 > ar0 ? rc->v0 : ar0, v1 = rc->v1 < ar1 - 1 ? rc->v1 : ar1 - 1;
-		double t[3] = {a->t[0], a->t[1], a->t[2]}, l = a->l;
-		double hs = sx * t[0] + sy * t[1];
-		double Acyl = S2 - hs * hs;
+		double t[3] = {a->t[0], a->t[1], a->t[2]};
+		struct capsule_rows cr;
+		double hs, Acyl;
 
+		strut_rows(s, a, &cr);
+		hs = cr.hs;
+		Acyl = cr.acyl;
 		for (int v = v0; v <= v1; v++) {
 			/* row line: P(u) = O + u S (mm), z = plane */
 			double ox = s->ix0 + s->ivx * (v + 0.5), oy = s->iy0 + s->ivy * (v + 0.5);
-			double W[3] = {ox - a->a[0], oy - a->a[1], s->z - a->a[2]};
-			double WS = W[0] * sx + W[1] * sy, W2 = W[0] * W[0] + W[1] * W[1] + W[2] * W[2];
-			double h0 = W[0] * t[0] + W[1] * t[1] + W[2] * t[2];
-			double lo = INFINITY, hi = -INFINITY, a0, a1;
-			double Wb2 = W2 - 2 * l * h0 + l * l, WbS = WS - l * hs;
 			int i0, i1;
 
-			/* end spheres */
-			if (quad_below(S2, 2 * WS, W2 - s->R2, S2, &a0, &a1)) {
-				lo = fmin(lo, a0);
-				hi = fmax(hi, a1);
-			}
-			if (quad_below(S2, 2 * WbS, Wb2 - s->R2, S2, &a0, &a1)) {
-				lo = fmin(lo, a0);
-				hi = fmax(hi, a1);
-			}
-			/* cylinder part: rho^2 < R^2 and 0 <= h <= l */
-			if (quad_below(Acyl, 2 * (WS - h0 * hs), W2 - h0 * h0 - s->R2, S2, &a0,
-				       &a1)) {
-				double b0 = -INFINITY, b1 = INFINITY;
-				if (fabs(hs) > 1e-12) {
-					b0 = -h0 / hs;
-					b1 = (l - h0) / hs;
-					if (b0 > b1) {
-						double tt = b0;
-						b0 = b1;
-						b1 = tt;
-					}
-				} else if (!(h0 >= 0 && h0 <= l)) {
-					b0 = INFINITY; /* empty */
-				}
-				b0 = fmax(b0, a0);
-				b1 = fmin(b1, a1);
-				if (b0 < b1) {
-					lo = fmin(lo, b0);
-					hi = fmax(hi, b1);
-				}
-			}
-			if (!(lo < hi))
+			/* the exact run of pixel centres inside the capsule of radius R */
+			if (!capsule_rows_run(&cr, v3(ox, oy, s->z), rc->u0, rc->u1, &i0, &i1))
 				continue;
-			lo = ceil(lo - 0.5);
-			hi = floor(hi - 0.5);
-			if (lo < rc->u0)
-				lo = rc->u0;
-			if (hi > rc->u1)
-				hi = rc->u1;
-			if (!(lo <= hi))
-				continue;
-			i0 = (int)lo;
-			i1 = (int)hi;
 			{
+				double W[3] = {ox - a->a[0], oy - a->a[1], s->z - a->a[2]};
 				/* coefficients relative to the run's first pixel centre */
 				double uref = i0 + 0.5;
 				double Wr[3] = {W[0] + uref * sx, W[1] + uref * sy, W[2]};

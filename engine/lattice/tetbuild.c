@@ -4,7 +4,8 @@
  * TetGen; a dense input surface must not force tiny tetrahedra.  Here the
  * graded spacing comes from sampling instead (docs/lattice.md 4.2): nodes
  * are a graded Poisson-disk sample (surface points first, then interior
- * points) with radius beta * L(p), L from the Appendix I estimate, drawn
+ * points; the accepted ones in the hash grid of engine/geom/pointgrid.h)
+ * with radius beta * L(p), L from the Appendix I estimate, drawn
  * in the space compressed by 1/k along z (SO, section 5.2.1); TetGen's
  * Delaunay tetrahedra of the samples are kept where their centroid lies
  * inside the part, then the nodes are stretched back by k.  This works on
@@ -19,6 +20,7 @@
 #include "engine/core/parfor.h"
 #include "engine/core/progress.h"
 #include "engine/core/rng.h"
+#include "engine/geom/pointgrid.h"
 #include "engine/mesh/mesh.h"
 #include "engine/mesh/tetra.h"
 
@@ -40,12 +42,8 @@ struct sampler {
 	double k;
 	struct box3 cb; /* compressed box (slightly inflated) */
 	double dmin, dmax;
-	/* hash grid of accepted points, cell = dmin */
-	double gcell;
-	int gn[3];
-	int32_t *head, *next;
-	struct vec3 *pts; /* compressed coordinates */
-	size_t n, cap;
+	/* accepted points (compressed coordinates) in a hash grid of cell dmin */
+	struct pointgrid g;
 	/* classification grid */
 	double ccell;
 	int cn[3];
@@ -61,38 +59,6 @@ static double delta_at(const struct sampler *s, struct vec3 c)
 {
 	double rho = lattice_density_at(s->o->density, decompress(s, c));
 	return POISSON_BETA * lattice_spacing_for_density(rho, s->o->r_mm);
-}
-
-static int cell_index(const double *lo, double cell, const int *n, struct vec3 p, int *ijk)
-{
-	double q[3] = {p.x - lo[0], p.y - lo[1], p.z - lo[2]};
-
-	for (int a = 0; a < 3; a++) {
-		double f = floor(q[a] / cell);
-		if (f < 0)
-			f = 0;
-		if (f > n[a] - 1)
-			f = n[a] - 1;
-		ijk[a] = (int)f;
-	}
-	return 0;
-}
-
-static int grid_dims(struct box3 b, double *cell, int *n)
-{
-	struct vec3 s = box3_size(b);
-
-	for (;;) {
-		double c = *cell;
-		double nx = ceil(s.x / c) + 1, ny = ceil(s.y / c) + 1, nz = ceil(s.z / c) + 1;
-		if (nx * ny * nz <= MAX_CELLS) {
-			n[0] = (int)nx;
-			n[1] = (int)ny;
-			n[2] = (int)nz;
-			return 0;
-		}
-		*cell *= 1.25;
-	}
 }
 
 /* ---- classification ---- */
@@ -125,10 +91,9 @@ static void classify_one(void *ctx, size_t idx, int tid)
 
 static int cls_at(const struct sampler *s, struct vec3 c)
 {
-	double lo[3] = {s->cb.lo.x, s->cb.lo.y, s->cb.lo.z};
 	int ijk[3];
 
-	cell_index(lo, s->ccell, s->cn, c, ijk);
+	pointgrid_cell(s->cb.lo, s->ccell, s->cn, c, ijk);
 	return s->cls[((size_t)ijk[2] * s->cn[1] + ijk[1]) * s->cn[0] + ijk[0]];
 }
 
@@ -136,61 +101,17 @@ static int cls_at(const struct sampler *s, struct vec3 c)
 
 static int far_from_all(const struct sampler *s, struct vec3 c, double delta)
 {
-	double lo[3] = {s->cb.lo.x, s->cb.lo.y, s->cb.lo.z};
-	int ijk[3], r = (int)ceil(delta / s->gcell);
-	double d2 = delta * delta;
-
-	cell_index(lo, s->gcell, s->gn, c, ijk);
-	for (int k = ijk[2] - r; k <= ijk[2] + r; k++) {
-		if (k < 0 || k >= s->gn[2])
-			continue;
-		for (int j = ijk[1] - r; j <= ijk[1] + r; j++) {
-			if (j < 0 || j >= s->gn[1])
-				continue;
-			for (int i = ijk[0] - r; i <= ijk[0] + r; i++) {
-				if (i < 0 || i >= s->gn[0])
-					continue;
-				for (int32_t q = s->head[((size_t)k * s->gn[1] + j) * s->gn[0] + i];
-				     q >= 0; q = s->next[q])
-					if (v3_len2(v3_sub(s->pts[q], c)) < d2)
-						return 0;
-			}
-		}
-	}
-	return 1;
+	return pointgrid_far_from_all(&s->g, c, delta);
 }
 
 static int accept_point(struct sampler *s, struct vec3 c, struct err *e)
 {
-	double lo[3] = {s->cb.lo.x, s->cb.lo.y, s->cb.lo.z};
-	int ijk[3];
-	size_t g;
-
-	if (s->n >= s->o->max_nodes || s->n >= INT32_MAX)
+	if (s->g.np >= s->o->max_nodes || s->g.np >= INT32_MAX)
 		return ERR_SET(e, ERR_LIMIT,
 			       "the lattice would need more than %zu nodes; lower the density or "
 			       "raise min_radius_mm",
 			       s->o->max_nodes);
-	if (s->n == s->cap) {
-		size_t nc = s->cap ? 2 * s->cap : 4096;
-		struct vec3 *np = mem_realloc_array(s->pts, nc, sizeof *np);
-		int32_t *nn;
-		if (!np)
-			return ERR_SET(e, ERR_NOMEM, "out of memory for samples");
-		s->pts = np;
-		nn = mem_realloc_array(s->next, nc, sizeof *nn);
-		if (!nn)
-			return ERR_SET(e, ERR_NOMEM, "out of memory for samples");
-		s->next = nn;
-		s->cap = nc;
-	}
-	cell_index(lo, s->gcell, s->gn, c, ijk);
-	g = ((size_t)ijk[2] * s->gn[1] + ijk[1]) * s->gn[0] + ijk[0];
-	s->pts[s->n] = c;
-	s->next[s->n] = s->head[g];
-	s->head[g] = (int32_t)s->n;
-	s->n++;
-	return 0;
+	return pointgrid_insert(&s->g, c, e);
 }
 
 /* ---- surface samples ---- */
@@ -520,20 +441,17 @@ int lattice_build_tetmesh(const struct lattice_domain *d, const struct lattice_b
 	s.cb = box3_inflate(s.cb, 1e-6 * (1 + v3_len(box3_size(s.cb))));
 
 	/* hash grid for accepted samples and the classification grid */
-	s.gcell = s.dmin;
-	grid_dims(s.cb, &s.gcell, s.gn);
+	if ((rc = pointgrid_init(&s.g, s.cb, s.dmin, MAX_CELLS, e)) != 0)
+		goto out;
 	s.ccell = s.dmin;
-	grid_dims(s.cb, &s.ccell, s.cn);
+	pointgrid_dims(s.cb, MAX_CELLS, &s.ccell, s.cn);
 	{
-		size_t ng = (size_t)s.gn[0] * s.gn[1] * s.gn[2];
 		size_t ncl = (size_t)s.cn[0] * s.cn[1] * s.cn[2];
-		s.head = mem_alloc(ng * sizeof *s.head);
 		s.cls = mem_alloc(ncl);
-		if (!s.head || !s.cls) {
+		if (!s.cls) {
 			rc = ERR_SET(e, ERR_NOMEM, "out of memory for the sampling grids");
 			goto out;
 		}
-		memset(s.head, 0xff, ng * sizeof *s.head);
 		{
 			struct classify_ctx cx = {&s};
 			parfor_run(ncl, d->threads, 256, classify_one, &cx);
@@ -543,27 +461,27 @@ int lattice_build_tetmesh(const struct lattice_domain *d, const struct lattice_b
 		goto out;
 	if ((rc = sample_surface(&s, &rg, e)) != 0)
 		goto out;
-	nsurf = s.n;
+	nsurf = s.g.np;
 	if ((rc = sample_interior(&s, &rg, e)) != 0)
 		goto out;
 	st->surface_nodes = nsurf;
-	st->interior_nodes = s.n - nsurf;
+	st->interior_nodes = s.g.np - nsurf;
 	t1 = progress_now_s();
 	st->seconds_sample = t1 - t0;
 
 	/* Delaunay in the compressed space */
-	xyz = mem_alloc((s.n ? s.n : 1) * 3 * sizeof *xyz);
+	xyz = mem_alloc((s.g.np ? s.g.np : 1) * 3 * sizeof *xyz);
 	if (!xyz) {
 		rc = ERR_SET(e, ERR_NOMEM, "out of memory");
 		goto out;
 	}
-	for (size_t i = 0; i < s.n; i++) {
-		xyz[3 * i] = s.pts[i].x;
-		xyz[3 * i + 1] = s.pts[i].y;
-		xyz[3 * i + 2] = s.pts[i].z;
+	for (size_t i = 0; i < s.g.np; i++) {
+		xyz[3 * i] = s.g.pts[i].x;
+		xyz[3 * i + 1] = s.g.pts[i].y;
+		xyz[3 * i + 2] = s.g.pts[i].z;
 	}
-	if ((rc = tetra_delaunay(xyz, s.n, &tm, e)) != 0) {
-		err_prefix(e, "meshing %zu lattice nodes", s.n);
+	if ((rc = tetra_delaunay(xyz, s.g.np, &tm, e)) != 0) {
+		err_prefix(e, "meshing %zu lattice nodes", s.g.np);
 		goto out;
 	}
 	st->delaunay_tets = tm.ntets;
@@ -637,9 +555,7 @@ out:
 	mem_free(keep);
 	mem_free(remap);
 	mem_free(xyz);
-	mem_free(s.pts);
-	mem_free(s.next);
-	mem_free(s.head);
+	pointgrid_fini(&s.g);
 	mem_free(s.cls);
 	return rc;
 }

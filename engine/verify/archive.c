@@ -1,5 +1,6 @@
 /* archive.c - verify_archive(): the layer checker on a written SL1/SL1S or
- * plain zip of PNG layers, read back with libarchive and libpng.
+ * plain zip of PNG layers, read back with libarchive and
+ * engine/output/image/png_decode.h.
  *
  * Entries are read once in archive order: config.ini and prusaslicer.ini
  * are parsed, layer PNGs (every *.png outside thumbnail/) kept compressed
@@ -14,12 +15,12 @@
 #include <archive.h>
 #include <archive_entry.h>
 #include <math.h>
-#include <png.h>
 #include <stdlib.h>
 #include <string.h>
 
 #include "engine/core/err.h"
 #include "engine/core/mem.h"
+#include "engine/output/image/png_decode.h"
 #include "engine/output/printer/printer.h"
 
 #define VA_MAX_ENTRY (64u << 20)  /* largest entry read (bytes) */
@@ -320,32 +321,11 @@ out:
  * for distinct img may run at once. */
 static int decode_png(const struct png_ent *ent, struct raster **img, struct err *e)
 {
-	png_image pi;
+	int rc = out_png_decode_gray(ent->data, ent->len, img, e);
 
-	memset(&pi, 0, sizeof pi);
-	pi.version = PNG_IMAGE_VERSION;
-	if (!png_image_begin_read_from_memory(&pi, ent->data, ent->len))
-		return ERR_SET(e, ERR_PARSE, "verify: %s: %s", ent->name, pi.message);
-	pi.format = PNG_FORMAT_GRAY;
-	if (pi.width < 1 || pi.height < 1 || pi.width > 65535 || pi.height > 65535) {
-		png_image_free(&pi);
-		return ERR_SET(e, ERR_LIMIT, "verify: %s is %ux%u pixels", ent->name, pi.width,
-			       pi.height);
-	}
-	if (!*img || (*img)->w != (int)pi.width || (*img)->h != (int)pi.height) {
-		raster_free(*img);
-		*img = raster_new((int)pi.width, (int)pi.height);
-		if (!*img) {
-			png_image_free(&pi);
-			return ERR_SET(e, ERR_NOMEM, "verify: out of memory");
-		}
-	}
-	if (!png_image_finish_read(&pi, NULL, (*img)->px, (png_int_32)(*img)->stride, NULL)) {
-		int rc = ERR_SET(e, ERR_PARSE, "verify: %s: %s", ent->name, pi.message);
-		png_image_free(&pi);
-		return rc;
-	}
-	return 0;
+	if (rc)
+		err_prefix(e, "verify: %s", ent->name);
+	return rc;
 }
 
 /* decode_png, then drop ent's compressed copy early. */
@@ -437,7 +417,6 @@ int verify_stack_open(const char *path, struct verify_stack_reader **out, struct
 	struct verify_stack_reader *r = mem_calloc(1, sizeof *r);
 	const struct ini_vals *iv;
 	struct verify_stack info;
-	png_image pi;
 	int rc;
 
 	if (!r)
@@ -469,15 +448,11 @@ int verify_stack_open(const char *path, struct verify_stack_reader **out, struct
 		info.has_map = 1;
 	}
 	/* the image size from the first layer's header */
-	memset(&pi, 0, sizeof pi);
-	pi.version = PNG_IMAGE_VERSION;
-	if (!png_image_begin_read_from_memory(&pi, r->ls.L[0].data, r->ls.L[0].len)) {
-		rc = ERR_SET(e, ERR_PARSE, "verify: %s: %s", r->ls.L[0].name, pi.message);
+	if ((rc = out_png_size(r->ls.L[0].data, r->ls.L[0].len, &info.width, &info.height, e)) !=
+	    0) {
+		err_prefix(e, "verify: %s", r->ls.L[0].name);
 		goto out;
 	}
-	info.width = (int)pi.width;
-	info.height = (int)pi.height;
-	png_image_free(&pi);
 out:
 	if (rc) {
 		verify_stack_close(r);
