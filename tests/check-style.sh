@@ -30,6 +30,7 @@ declare -A PREFIX=(
 	[engine/fea]="fea_"
 	[engine/geom]="clip_ delaunay_ edt_ edt3_ geom_ hull_ path_ paths_ polytri_ polytope_ raster_ v3_ box3_"
 	[engine/hollow]="hollow_ hl_"
+	[engine/hybrid]="hy_ hybrid_"
 	[engine/job]="common_ engine_ job_"
 	[engine/lattice]="lattice_ latbin_ strut_"
 	[engine/mesh]="mesh_ tetra_"
