@@ -1,4 +1,5 @@
-/* edges.c - undirected edge table of a triangle mesh, and the degeneracy test.
+/* edges.c - undirected edge table of a triangle mesh, facet adjacency across
+ * edges (mesh_facet_neighbours), and the degeneracy test.
  *
  * Counting sort of the 3 nt directed edges by their smaller vertex (CSR),
  * then each vertex's short list is sorted by the larger vertex: O(n) for
@@ -86,6 +87,34 @@ void mesh_edges_fini(struct mesh_edges *ed)
 	mem_free(ed->off);
 	mem_free(ed->rec);
 	memset(ed, 0, sizeof *ed);
+}
+
+int mesh_facet_neighbours(const struct mesh *m, uint32_t *nb, struct err *e)
+{
+	struct mesh_edges ed;
+	size_t v, i;
+	int rc;
+
+	if ((rc = mesh_edges_build(m, &ed, e)))
+		return rc;
+	for (i = 0; i < 3 * m->nt; i++)
+		nb[i] = MESH_NO_FACET;
+	for (v = 0; v < ed.nv; v++) {
+		size_t a = ed.off[v], end = ed.off[v + 1], b;
+		for (; a < end; a = b) {
+			/* a vertex's records are sorted by the other end first */
+			for (b = a; b < end && MESH_EDGE_OTHER(ed.rec[b]) == MESH_EDGE_OTHER(ed.rec[a]);
+			     b++)
+				;
+			if (b - a == 2) {
+				size_t c0 = MESH_EDGE_CORNER(ed.rec[a]), c1 = MESH_EDGE_CORNER(ed.rec[a + 1]);
+				nb[c0] = (uint32_t)(c1 / 3);
+				nb[c1] = (uint32_t)(c0 / 3);
+			}
+		}
+	}
+	mesh_edges_fini(&ed);
+	return 0;
 }
 
 int mesh_tri_degenerate(const struct mesh *m, size_t t)

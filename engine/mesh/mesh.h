@@ -109,6 +109,15 @@ struct mesh_report {
  * outward mesh by the divergence theorem; centre of mass = moment / vol. */
 void mesh_mass(const struct mesh *m, double *vol_mm3, struct vec3 *moment_mm4);
 
+/* Facet adjacency across edges: nb[3 t + k] = the triangle sharing edge
+ * k of triangle t (corner k -> corner k + 1 mod 3), or MESH_NO_FACET when
+ * that edge is a border, non-manifold (used by more than two triangles)
+ * or has equal ends.  Edges are matched by vertex index, so m must be
+ * welded.  nb: 3 * m->nt entries, caller's storage.  O(n) plus the sort
+ * of each vertex's fan.  0, ERR_LIMIT or ERR_NOMEM (nb undefined). */
+#define MESH_NO_FACET UINT32_MAX
+int mesh_facet_neighbours(const struct mesh *m, uint32_t *nb, struct err *e);
+
 /* Topology and measure analysis (does not modify m).  O(n log n). */
 int mesh_analyze(const struct mesh *m, struct mesh_report *r, struct err *e);
 
