@@ -327,19 +327,24 @@ static void unpack(const uint64_t *bits, size_t n, uint8_t *out)
 
 /* The structures of layer k into im (mat, istcs, trans, mfs_img), with
  * the transient layers joined (section 6.1). */
-static int compose_layer(const struct hy_stack *st, const struct hy_design *d, int k,
-			 struct images *im, size_t *transient_px, struct err *e)
+static int compose_layer(const struct hy_stack *st, const struct hy_design *d,
+			 const struct capsule_zindex *ix, int k, struct images *im,
+			 size_t *transient_px, struct err *e)
 {
 	struct compose_ctx c;
-	int w = st->w, h = st->h, rc;
+	int w = st->w, h = st->h, rc = 0;
 	size_t n = im->n;
 	double z = (k + 0.5) * st->layer_mm;
 
 	unpack(plane(st->interior, st, k), n, im->interior);
 	if (d->structure != HY_STRUCT_MFS) {
 		memset(im->tcs, 0, n);
-		if (d->ncaps && (rc = capsule_union_raster(d->caps, d->ncaps, z, &st->map, w, h,
-							   im->tcs, d->threads, e)) != 0)
+		if (ix)
+			rc = capsule_zindex_raster(ix, z, &st->map, w, h, im->tcs, d->threads, e);
+		else if (d->ncaps)
+			rc = capsule_union_raster(d->caps, d->ncaps, z, &st->map, w, h, im->tcs,
+						  d->threads, e);
+		if (rc)
 			return rc;
 	}
 	c.st = st;
@@ -455,7 +460,7 @@ int hy_stack_columns(const struct hy_stack *st, struct hy_design *d, size_t *nco
 		    kb >= st->layers)
 			continue;
 		/* the transient layer at the base plane */
-		if ((rc = compose_layer(st, d, kb, &im, &tpx, e)) != 0)
+		if ((rc = compose_layer(st, d, NULL, kb, &im, &tpx, e)) != 0)
 			break;
 		for (size_t i = 0; i < n; i++)
 			im.us[i] = im.trans[i] == p + 1 ? im.mat[i] : 0;
@@ -525,20 +530,25 @@ int hy_stack_compose(struct hy_stack *st, const struct hy_design *d, struct prog
 	double t0 = progress_now_s(), px_area = st->pitch_mm * st->pitch_mm;
 	double ra2 = d->r_alpha_mm * d->r_alpha_mm, rt2 = d->r_tcs_mm * d->r_tcs_mm;
 	uint8_t *above = NULL;
+	struct capsule_zindex *ix = NULL;
 	size_t over_px = 0;
 	int rc;
 
 	memset(rep, 0, sizeof *rep);
 	edt_scratch_init(&es);
-	if ((rc = images_init(&im, n, e)) != 0)
+	if (d->ncaps && (rc = capsule_zindex_new(d->caps, d->ncaps, 0, &ix, e)) != 0)
 		return rc;
+	if ((rc = images_init(&im, n, e)) != 0) {
+		capsule_zindex_free(ix);
+		return rc;
+	}
 	if (!(above = mem_alloc(n))) {
 		rc = ERR_SET(e, ERR_NOMEM, "out of memory for a layer image");
 		goto out;
 	}
 	for (int k = 0; k < st->layers; k++) {
 		uint64_t *pv = plane_w(st->voids, st, k), *pt = plane_w(st->tcsr, st, k);
-		if ((rc = compose_layer(st, d, k, &im, &rep->transient_px, e)) != 0)
+		if ((rc = compose_layer(st, d, ix, k, &im, &rep->transient_px, e)) != 0)
 			goto out;
 		memset(pv, 0, st->words * sizeof *pv);
 		memset(pt, 0, st->words * sizeof *pt);
@@ -606,6 +616,7 @@ int hy_stack_compose(struct hy_stack *st, const struct hy_design *d, struct prog
 	rep->overhang_mm2 = (double)over_px * px_area;
 	rep->seconds_support = progress_now_s() - t0;
 out:
+	capsule_zindex_free(ix);
 	mem_free(above);
 	edt_scratch_fini(&es);
 	images_fini(&im);
