@@ -22,11 +22,15 @@ struct err;
 struct mesh;
 
 /* field[(k * ny + j) * nx + i] is the sample at lo + (i sx, j sy, k sz)
- * (mm); inside is f >= iso; samples beyond the grid count as outside, so
- * the surface closes.  *out: a new welded mesh (shared vertices, every
- * edge in exactly two triangles, CCW seen from outside), caller frees
- * (mesh_free).  max_triangles caps the output (ERR_LIMIT).  0, ERR_PARAM
- * (sizes, steps), ERR_LIMIT, ERR_NOMEM. */
+ * (mm); inside is f >= iso (NaN is outside); samples beyond the grid count
+ * as outside, so the surface closes (an edge from an inside sample to one
+ * beyond the grid crosses at its midpoint, half a step out).  *out: a new
+ * welded mesh (shared vertices, every edge in exactly two triangles, CCW
+ * seen from outside; empty when no sample is inside), caller frees
+ * (mesh_free).  Memory besides the output: about 42 bytes per sample of
+ * one (nx + 2) x (ny + 2) plane, whatever nz.  max_triangles caps the
+ * output (ERR_LIMIT).  0, ERR_PARAM (sizes, steps, NaN iso), ERR_LIMIT,
+ * ERR_NOMEM. */
 int mesh_isosurface(const float *field, int nx, int ny, int nz, struct vec3 lo_mm,
 		    struct vec3 step_mm, float iso, size_t max_triangles, struct mesh **out,
 		    struct err *e);
