@@ -11,6 +11,7 @@
 
 #include "engine/core/err.h"
 #include "engine/core/mem.h"
+#include "engine/geom/label.h"
 #include "engine/hollow/grid.h"
 
 void hl_win_fini(struct hl_win *s)
@@ -283,7 +284,7 @@ int hl_step_vertical_walls(struct hl_win *s, int ww, int wh, const struct hl_geo
 
 	for (size_t i = 0; i < np; i++)
 		s->seed[i] = s->v[i] && !s->vw[i] && s->lv[i] >= k + 2 && s->lv[i] <= k + g->mv;
-	rc = hl_grid_label(s->seed, ww, wh, s->lab, &count, e);
+	rc = label_components8(s->seed, ww, wh, s->lab, &count, e);
 	if (rc)
 		return rc;
 	area = mem_calloc((size_t)count + 1, sizeof *area);
@@ -366,7 +367,7 @@ int hl_step_born(struct hl_win *s, int ww, int wh, const struct hl_geo *g, int k
 		return rc;
 	/* occupied components of C(k) (holding a void of layer k) take new
 	 * voids only beyond lone: closer, their own voids get there first */
-	rc = hl_grid_label(s->cm, ww, wh, s->lab, &nc, e);
+	rc = label_components8(s->cm, ww, wh, s->lab, &nc, e);
 	if (rc)
 		return rc;
 	occ = mem_calloc((size_t)nc + 1, 1);
@@ -430,7 +431,7 @@ int hl_step_keep_apart(struct hl_win *s, int ww, int wh, const struct hl_geo *g,
 		return hl_step_keep_apart_lean(s, ww, wh, g, e);
 	int anyb = 0, rc;
 
-	rc = hl_grid_label(s->vw, ww, wh, s->lab, &count, e);
+	rc = label_components8(s->vw, ww, wh, s->lab, &count, e);
 	if (!rc)
 		rc = hl_grid_nearest(s->lab, ww, wh, g->px, g->py, s->d1, s->near, e);
 	if (rc)
@@ -478,7 +479,7 @@ int hl_step_islands(struct hl_win *s, int ww, int wh, struct err *e)
 
 	for (size_t i = 0; i < np; i++)
 		s->seed[i] = !s->vw[i];
-	rc = hl_grid_label(s->seed, ww, wh, s->lab, &count, e);
+	rc = label_components8(s->seed, ww, wh, s->lab, &count, e);
 	if (rc)
 		return rc;
 	held = mem_calloc((size_t)count + 1, 1);

@@ -12,6 +12,7 @@
 
 #include "engine/core/err.h"
 #include "engine/core/mem.h"
+#include "engine/geom/label.h"
 #include "engine/hollow/grid.h"
 
 /*
@@ -45,7 +46,7 @@ int hl_step_keep_apart_lean(struct hl_win *s, int ww, int wh, const struct hl_ge
 	size_t *area = NULL;
 	int anyb = 0, rc;
 
-	rc = hl_grid_label(s->vw, ww, wh, s->lab, &count, e);
+	rc = label_components8(s->vw, ww, wh, s->lab, &count, e);
 	if (!rc)
 		rc = hl_grid_nearest(s->lab, ww, wh, g->px, g->py, s->d1, s->near, e);
 	if (rc)

@@ -1,6 +1,7 @@
 /* grid.h - pixel-grid helpers of the top-down fill (topdown.c): row runs
  * of binary masks and the nearest-seed label transform (exact Euclidean,
- * labels of the feature transform of geom/edt.h).
+ * labels of the feature transform of geom/edt.h).  Components are
+ * labelled by engine/geom/label.h.
  */
 #ifndef INFILLD_HOLLOW_GRID_H
 #define INFILLD_HOLLOW_GRID_H
@@ -33,10 +34,5 @@ void hl_grid_paint(uint8_t *mask, int w, const struct hl_run *runs, size_t n, ui
  * ERR_NOMEM. */
 int hl_grid_nearest(const int32_t *lab, int w, int h, double px_mm, double py_mm, float *d2,
 		    int32_t *near, struct err *e);
-
-/* Label the 8-connected components of mask (nonzero) on a w x h window,
- * 1..count, into lab (0 off the mask); *count set.  O(w h). */
-int hl_grid_label(const uint8_t *mask, int w, int h, int32_t *lab, int32_t *count,
-		  struct err *e);
 
 #endif
