@@ -266,16 +266,24 @@ int hy_tcs_build(struct vec3 lo, struct vec3 hi, double cell_mm, double ball_mm,
 
 /* ---- transient.c: transient structures (section 6) ---- */
 
-/* The transient layer of an interface (section 6.1): us = mfs | tcs over
- * the mask; regions of us not connected to the largest one are joined to
- * it by bridges of width bridge_px (the paper's rule: documented in
- * docs/hybrid.md).  us may alias neither input.  Images w x h.
- * 0 or ERR_NOMEM. */
+/* The transient layer of an interface (section 6.1): us = (mfs | tcs) &
+ * mask (nonzero = set, us gets 0/1); the 8-connected regions of us other
+ * than the largest (the paper's R_1^1; the first in raster order on ties)
+ * are joined to it by bridges of width bridge_px (pixels): every pixel of
+ * a bridge's centre line is the centre of a painted disc of diameter
+ * bridge_px wherever the mask allows.  Nothing is painted off the mask; a
+ * region that no path inside the mask reaches stays as it is.  How this
+ * realises the paper's bounding-box rule and where it deviates:
+ * docs/hybrid.md.  us may alias neither input; undefined on failure.
+ * Images w x h, row stride w.  O(w h) plus O(length x bridge_px^2) per
+ * bridge.  0, ERR_PARAM (sizes, NULL images, bridge_px not > 0) or
+ * ERR_NOMEM. */
 int hy_transient_layer(const uint8_t *mfs, const uint8_t *tcs, const uint8_t *mask, int w,
 		       int h, double bridge_px, uint8_t *us, struct err *e);
 /* The extended-support region (section 6.2): tcs_proj (the TCS projected
- * on the layer) AND us, regions smaller than min_px pixels dropped; into
- * out.  0 or ERR_NOMEM. */
+ * on the layer) AND us, 8-connected regions of fewer than min_px pixels
+ * dropped; into out (0/1; may alias either input; undefined on failure).
+ * 0, ERR_PARAM (sizes, NULL images) or ERR_NOMEM. */
 int hy_support_region(const uint8_t *tcs_proj, const uint8_t *us, int w, int h,
 		      size_t min_px, uint8_t *out, struct err *e);
 
