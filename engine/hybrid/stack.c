@@ -23,6 +23,7 @@
 #include "engine/core/progress.h"
 #include "engine/fea/fea.h"
 #include "engine/geom/edt.h"
+#include "engine/geom/label.h"
 #include "engine/geom/poisson.h"
 #include "engine/mesh/isosurface.h"
 #include "engine/mesh/mesh.h"
@@ -521,6 +522,42 @@ out:
 
 /* ---- compose and the support rule ---- */
 
+struct edt_job {
+	const uint8_t *seed;
+	const struct hy_stack *st;
+	float *out;
+	struct edt_scratch *scratch;
+	int rc;
+};
+
+static void edt_one(void *ctx, size_t i, int tid)
+{
+	struct edt_job *j = (struct edt_job *)ctx + i;
+	struct err e;
+
+	(void)tid;
+	j->rc = edt_sq(j->seed, (size_t)j->st->w, j->st->w, j->st->h, j->st->pitch_mm,
+		       j->st->pitch_mm, j->out, j->scratch, &e);
+}
+
+/* Pixel i is a ridge of the clearance field d (squared mm): inside (> 0)
+ * and at least as far from the outside as each of its 8 neighbours. */
+static int ridge(const float *d, int w, int h, size_t i)
+{
+	int x = (int)(i % w), y = (int)(i / w);
+
+	if (!(d[i] > 0))
+		return 0;
+	for (int dy = -1; dy <= 1; dy++)
+		for (int dx = -1; dx <= 1; dx++) {
+			int xx = x + dx, yy = y + dy;
+			if ((dx || dy) && xx >= 0 && yy >= 0 && xx < w && yy < h &&
+			    d[(size_t)yy * w + xx] > d[i])
+				return 0;
+		}
+	return 1;
+}
+
 int hy_stack_compose(struct hy_stack *st, const struct hy_design *d, struct progress *pg,
 		     struct hy_stack_report *rep, struct err *e)
 {
@@ -529,20 +566,24 @@ int hy_stack_compose(struct hy_stack *st, const struct hy_design *d, struct prog
 	size_t n = (size_t)st->w * st->h;
 	double t0 = progress_now_s(), px_area = st->pitch_mm * st->pitch_mm;
 	double ra2 = d->r_alpha_mm * d->r_alpha_mm, rt2 = d->r_tcs_mm * d->r_tcs_mm;
-	uint8_t *above = NULL;
+	uint8_t *above = NULL, *vabove = NULL;
+	int32_t *lab = NULL;
+	struct edt_scratch es2;
 	struct capsule_zindex *ix = NULL;
 	size_t over_px = 0;
 	int rc;
 
 	memset(rep, 0, sizeof *rep);
 	edt_scratch_init(&es);
+	edt_scratch_init(&es2);
 	if (d->ncaps && (rc = capsule_zindex_new(d->caps, d->ncaps, 0, &ix, e)) != 0)
 		return rc;
 	if ((rc = images_init(&im, n, e)) != 0) {
 		capsule_zindex_free(ix);
 		return rc;
 	}
-	if (!(above = mem_alloc(n))) {
+	if (!(above = mem_alloc(n)) || !(vabove = mem_alloc(n)) ||
+	    !(lab = mem_alloc(n * sizeof *lab))) {
 		rc = ERR_SET(e, ERR_NOMEM, "out of memory for a layer image");
 		goto out;
 	}
@@ -563,29 +604,45 @@ int hy_stack_compose(struct hy_stack *st, const struct hy_design *d, struct prog
 	}
 	rep->seconds_compose = progress_now_s() - t0;
 	t0 = progress_now_s();
-	/* top-down support rule; above = material of layer k + 1 */
+	/* top-down support rule; above = material of layer k + 1, vabove its voids */
+	memset(vabove, 0, n);
 	for (int k = st->layers - 1; k >= 0; k--) {
 		uint64_t *pv = plane_w(st->voids, st, k);
 		const uint64_t *pp = plane(st->part, st, k), *pt = plane(st->tcsr, st, k);
-		uint8_t *cur = im.mat;
-		for (size_t i = 0; i < n; i++)
-			cur[i] = (uint8_t)(bit_get(pp, i) && !bit_get(pv, i));
+		uint8_t *cur = im.mat, *cand = im.mask;
+		for (size_t i = 0; i < n; i++) {
+			cand[i] = (uint8_t)bit_get(pv, i);
+			cur[i] = (uint8_t)(bit_get(pp, i) && !cand[i]);
+		}
 		if (k + 1 < st->layers) {
-			/* d1: distance from each pixel to the nearest non-material of k + 1 */
+			struct edt_job jobs[2] = {
+				{NULL, st, im.d1, &es, 0},   /* d1: clearance inside the candidates */
+				{vabove, st, im.d2, &es2, 0}, /* d2: distance to the voids above */
+			};
+			/* the candidates' complement is exactly cur | outside: seeds !cand */
 			for (size_t i = 0; i < n; i++)
-				im.tmp[i] = !above[i];
-			if ((rc = edt_sq(im.tmp, (size_t)st->w, st->w, st->h, st->pitch_mm,
-					 st->pitch_mm, im.d1, &es, e)) != 0)
+				im.tmp[i] = !cand[i];
+			jobs[0].seed = im.tmp;
+			parfor_run(2, d->threads, 1, edt_one, jobs);
+			if (jobs[0].rc || jobs[1].rc) {
+				rc = ERR_SET(e, ERR_NOMEM, "out of memory for distance transforms");
 				goto out;
+			}
+			/* a candidate stays void within r of a void above (the cavity
+			 * grows down by r per layer) or on its own ridge (a local
+			 * maximum of the clearance: where a cavity may start under a
+			 * roof, one pixel wide) */
 			for (size_t i = 0; i < n; i++) {
 				double r2 = bit_get(pt, i) ? rt2 : ra2;
-				if (!cur[i] && bit_get(pv, i) && im.d1[i] > r2) {
-					cur[i] = 1;
-					bit_set(pv, i, 0);
-					rep->filled_px++;
-				}
+				if (!cand[i] || im.d2[i] <= r2 || ridge(im.d1, st->w, st->h, i))
+					continue;
+				cand[i] = 0;
+				cur[i] = 1;
+				bit_set(pv, i, 0);
+				rep->filled_px++;
 			}
-			/* d2: distance to the material of k; support what still lacks it */
+			/* every material pixel of k + 1 within r of material of k, else
+			 * filled below itself */
 			if ((rc = edt_sq(cur, (size_t)st->w, st->w, st->h, st->pitch_mm, st->pitch_mm,
 					 im.d2, &es, e)) != 0)
 				goto out;
@@ -593,7 +650,8 @@ int hy_stack_compose(struct hy_stack *st, const struct hy_design *d, struct prog
 				double r2 = bit_get(pt, i) ? rt2 : ra2;
 				if (!above[i] || !bit_get(pp, i))
 					continue;
-				if (im.d2[i] > r2 && bit_get(pv, i)) {
+				if (im.d2[i] > r2 && cand[i]) {
+					cand[i] = 0;
 					cur[i] = 1;
 					bit_set(pv, i, 0);
 					rep->filled_px++;
@@ -602,6 +660,32 @@ int hy_stack_compose(struct hy_stack *st, const struct hy_design *d, struct prog
 				}
 			}
 		}
+		/* every 8-connected region of k + 1 rests on material of k; one that
+		 * does not (a fragment cut loose by the voids) is copied below */
+		if (k + 1 < st->layers) {
+			int32_t count = 0;
+			if ((rc = label_components8(above, st->w, st->h, lab, &count, e)) != 0)
+				goto out;
+			if (count > 0) {
+				uint8_t *rests = mem_calloc((size_t)count + 1, 1);
+				if (!rests) {
+					rc = ERR_SET(e, ERR_NOMEM, "out of memory for %d regions", count);
+					goto out;
+				}
+				for (size_t i = 0; i < n; i++)
+					if (lab[i] && cur[i])
+						rests[lab[i]] = 1;
+				for (size_t i = 0; i < n; i++)
+					if (lab[i] && !rests[lab[i]] && cand[i]) {
+						cand[i] = 0;
+						cur[i] = 1;
+						bit_set(pv, i, 0);
+						rep->filled_px++;
+					}
+				mem_free(rests);
+			}
+		}
+		memcpy(vabove, cand, n);
 		for (size_t i = 0; i < n; i++) {
 			if (bit_get(pp, i)) {
 				rep->part_mm3 += px_area * st->layer_mm;
@@ -618,7 +702,10 @@ int hy_stack_compose(struct hy_stack *st, const struct hy_design *d, struct prog
 out:
 	capsule_zindex_free(ix);
 	mem_free(above);
+	mem_free(vabove);
+	mem_free(lab);
 	edt_scratch_fini(&es);
+	edt_scratch_fini(&es2);
 	images_fini(&im);
 	return rc;
 }
@@ -632,10 +719,13 @@ int hy_stack_fea_grid(const struct hy_stack *st, struct box3 box, double h_mm, i
 	size_t ne;
 	uint32_t *cnt = NULL;
 	uint32_t per;
+	int *exs = NULL, *eys = NULL;
 
 	memset(g, 0, sizeof *g);
 	if (!(h_mm > 0))
 		return ERR_FIELD(e, "fea_voxel_mm", "fea_voxel_mm must be > 0, not %g", h_mm);
+	if (st->map.a[0][1] != 0 || st->map.a[1][0] != 0)
+		return ERR_SET(e, ERR_INTERNAL, "hybrid: the design grid is not axis-aligned");
 	g->h_mm = h_mm;
 	g->nx = (int)ceil(sz.x / h_mm) + 2;
 	g->ny = (int)ceil(sz.y / h_mm) + 2;
@@ -655,29 +745,49 @@ int hy_stack_fea_grid(const struct hy_stack *st, struct box3 box, double h_mm, i
 		fea_grid_fini(g);
 		return ERR_SET(e, ERR_NOMEM, "out of memory for %zu elements", ne);
 	}
-	/* samples per element: design pixels x layers whose centres fall in it */
+	/* samples per element: design pixels x layers whose centres fall in it
+	 * (the design grid is axis-aligned: x by column, y by row) */
+	if (!(exs = mem_alloc((size_t)st->w * sizeof *exs)) ||
+	    !(eys = mem_alloc((size_t)st->h * sizeof *eys))) {
+		mem_free(exs);
+		mem_free(cnt);
+		fea_grid_fini(g);
+		return ERR_SET(e, ERR_NOMEM, "out of memory for element indices");
+	}
+	for (int i = 0; i < st->w; i++) {
+		double x, y;
+		pixel_xy(st, i, 0, &x, &y);
+		exs[i] = (int)floor((x - g->lo_mm.x) / h_mm);
+	}
+	for (int j = 0; j < st->h; j++) {
+		double x, y;
+		pixel_xy(st, 0, j, &x, &y);
+		eys[j] = (int)floor((y - g->lo_mm.y) / h_mm);
+	}
 	for (int k = 0; k < st->layers; k++) {
 		double z = (k + 0.5) * st->layer_mm;
 		int ez = (int)floor((z - g->lo_mm.z) / h_mm);
 		const uint64_t *pp = plane(st->part, st, k), *pv = plane(st->voids, st, k);
 		if (ez < 0 || ez >= g->nz)
 			continue;
-		for (int j = 0; j < st->h; j++)
+		for (int j = 0; j < st->h; j++) {
+			int ey = eys[j];
+			if (ey < 0 || ey >= g->ny)
+				continue;
 			for (int i = 0; i < st->w; i++) {
-				double x, y;
-				int ex, ey;
+				int ex = exs[i];
 				size_t b = (size_t)j * st->w + i, id;
-				pixel_xy(st, i, j, &x, &y);
-				ex = (int)floor((x - g->lo_mm.x) / h_mm);
-				ey = (int)floor((y - g->lo_mm.y) / h_mm);
-				if (ex < 0 || ey < 0 || ex >= g->nx || ey >= g->ny)
+				if (ex < 0 || ex >= g->nx)
 					continue;
 				id = ((size_t)ez * g->ny + ey) * g->nx + ex;
 				cnt[id]++;
 				if (bit_get(pp, b) && (solid_part || !bit_get(pv, b)))
 					g->rho[id] += 1;
 			}
+		}
 	}
+	mem_free(exs);
+	mem_free(eys);
 	per = 0;
 	for (size_t i = 0; i < ne; i++)
 		per = cnt[i] > per ? cnt[i] : per;
