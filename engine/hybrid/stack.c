@@ -95,10 +95,14 @@ int hy_stack_init(struct hy_stack *st, const struct mesh *m, struct box3 box, do
 	struct slice_erode_info info;
 	struct slice_eroder *er = NULL;
 	struct src_ctx sc = {NULL, layer_mm};
+	struct slicer *own = NULL;
+	struct raster *img = NULL;
+	struct paths region;
 	size_t bytes;
 	int rc;
 
 	memset(st, 0, sizeof *st);
+	paths_init(&region);
 	if ((rc = slice_new(m, &sc.slicer, e)) != 0)
 		return rc;
 	memset(&ep, 0, sizeof ep);
@@ -142,22 +146,39 @@ int hy_stack_init(struct hy_stack *st, const struct mesh *m, struct box3 box, do
 			     4 * bytes >> 20);
 		goto out;
 	}
+	/* the part: pixel centres inside the exact slice (its own slicer: the
+	 * eroder's runs ahead); the interior: the eroder's clearance >= 0 */
+	if ((rc = slice_new(m, &own, e)) != 0)
+		goto out;
+	if (!(img = raster_new(st->w, st->h))) {
+		rc = ERR_SET(e, ERR_NOMEM, "out of memory for a %d x %d layer", st->w, st->h);
+		goto out;
+	}
 	for (int k = 0; k < layers; k++) {
 		const float *f;
 		uint64_t *pp = plane_w(st->part, st, k), *pi = plane_w(st->interior, st, k);
-		float part_min = (float)(-shell_mm + 0.25 * pitch_mm);
-		if ((rc = slice_erode_field(er, k, &f, e)) != 0)
+		if ((rc = slice_erode_field(er, k, &f, e)) != 0 ||
+		    (rc = slice_at(own, (k + 0.5) * layer_mm, &region, NULL, e)) != 0)
 			goto out;
-		for (size_t i = 0, n = (size_t)st->w * st->h; i < n; i++) {
-			if (f[i] > part_min)
-				bit_set(pp, i, 1);
-			if (f[i] >= 0)
-				bit_set(pi, i, 1);
-		}
+		raster_clear(img);
+		if ((rc = slice_rasterize(&region, &st->map, 0, img, e)) != 0)
+			goto out;
+		for (int j = 0; j < st->h; j++)
+			for (int i = 0; i < st->w; i++) {
+				size_t b = (size_t)j * st->w + i;
+				int in = img->px[(size_t)j * img->stride + i] != 0;
+				if (in)
+					bit_set(pp, b, 1);
+				if (in && f[b] >= 0)
+					bit_set(pi, b, 1);
+			}
 		if ((k & 31) == 0 && (rc = tick(pg, 0.15, 0.3, (k + 1.0) / layers, e)) != 0)
 			goto out;
 	}
 out:
+	paths_fini(&region);
+	raster_free(img);
+	slice_free(own);
 	slice_erode_free(er);
 	slice_free(sc.slicer);
 	if (rc)
