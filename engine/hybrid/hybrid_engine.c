@@ -69,9 +69,10 @@ static const struct param_desc hy_desc[] = {
 	 .def = 4, .flags = PARAM_F_MIN_EXCL, .unit = "",
 	 .help = "alpha of the shape diameter's log normalisation (section 4.1; paper: 4)."},
 	{.name = "sdf_threshold", .type = PARAM_NUM, .offset = P(sdf_threshold), .min = 0,
-	 .max = 1, .def = 0.26, .unit = "",
+	 .max = 1, .def = 0.5, .unit = "",
 	 .help = "Facets whose normalised shape diameter is below this are column candidates "
-		 "(section 4.1; paper: 0.26)."},
+		 "(section 4.1; paper: 0.26, which keeps stout legs such as an elephant's or a "
+		 "camel's in the body: docs/hybrid.md)."},
 	{.name = "sdf_rays", .type = PARAM_INT, .offset = P(sdf_rays), .min = 3, .max = 512,
 	 .def = 30, .unit = "", .help = "Rays per facet of the shape diameter function."},
 	{.name = "sdf_cone_deg", .type = PARAM_NUM, .offset = P(sdf_cone_deg), .min = 1, .max = 179,
