@@ -173,8 +173,8 @@ void hy_labeler_free(struct hy_labeler *l);
 /* ---- verify.c: component verification (section 4.2) ---- */
 
 /* The paper's two loads: load_n on the part's top (FEA_AT_TOP), straight
- * down and from the top right at 45 degrees between x and z, the plate
- * fixed.  For each part, the volume-weighted mean stress (MPa) in x, y, z
+ * down and from the top right at 45 degrees between x and z, the nodes
+ * within contact_mm of the plate fixed.  For each part, the volume-weighted mean stress (MPa) in x, y, z
  * of the elements whose centre the labeler gives it. */
 struct hy_verify_opts {
 	double load_n;        /* 1000 in the paper */
@@ -185,6 +185,8 @@ struct hy_verify_opts {
 				 stress over all Col parts (an unloaded appendage
 				 carries nothing and is no column) */
 	double E_mpa, nu;     /* material */
+	double contact_mm;    /* nodes this close to the plate are fixed (>= half an
+				 element): where the part stands */
 	size_t max_elements;
 	int threads;
 };

@@ -36,6 +36,7 @@ struct hy_params {
 	double dominance;
 	double stress_floor;
 	double load_n;
+	double contact_pct;
 	double wall_mm;
 	double mfs_cell_mm;
 	char mfs_template[1024];
@@ -94,6 +95,10 @@ static const struct param_desc hy_desc[] = {
 	 .def = 1000, .flags = PARAM_F_MIN_EXCL, .unit = "N",
 	 .help = "Force of the verification loads on the part's top (paper: 1000 N, straight "
 		 "down and at 45 degrees)."},
+	{.name = "contact_pct", .type = PARAM_NUM, .offset = P(contact_pct), .min = 0, .max = 50,
+	 .def = 3, .unit = "%",
+	 .help = "The verification fixes what lies within this share of the part's height above "
+		 "the plate (feet modelled a little apart all stand; at least half an element)."},
 	{.name = "wall_mm", .type = PARAM_NUM, .offset = P(wall_mm), .min = 0, .max = 100,
 	 .def = 0.8, .flags = PARAM_F_MIN_EXCL, .unit = "mm",
 	 .help = "Wall thickness of the muscle-fibre cells (and the least a template's walls are "
@@ -303,6 +308,7 @@ static int partition(struct hy_job *s, const struct engine_ctx *ctx, struct err 
 	vo.floor_frac = s->p.stress_floor;
 	vo.E_mpa = mat.E_mpa;
 	vo.nu = mat.nu;
+	vo.contact_mm = s->p.contact_pct / 100 * height;
 	vo.max_elements = HY_FEA_MAX;
 	vo.threads = ctx->threads;
 	if ((rc = hy_verify(m, s->labels, &s->parts, &vo, s->stress, &vs, e)) != 0)

@@ -93,7 +93,7 @@ int hy_verify(const struct mesh *m, const struct hy_labeler *l, struct hy_parts 
 	struct fea_grid g;
 	uint8_t *owner = NULL;
 	double t0 = progress_now_s(), smax = 0;
-	char text[2][160];
+	char text[2][256];
 	size_t ne;
 	int rc;
 
@@ -122,10 +122,18 @@ int hy_verify(const struct mesh *m, const struct hy_labeler *l, struct hy_parts 
 				p = hy_label_at(l, c);
 				owner[id] = p >= 0 ? (uint8_t)(p + 1) : 0;
 			}
-	snprintf(text[0], sizeof text[0], "fixed plate axes=xyz; force top n=0,0,%.17g",
-		 -o->load_n);
-	snprintf(text[1], sizeof text[1], "fixed plate axes=xyz; force top n=%.17g,0,%.17g",
-		 -o->load_n / sqrt(2), -o->load_n / sqrt(2));
+	{
+		/* the part stands on what reaches within contact_mm of the plate
+		 * (feet modelled a little apart stand together), ends free */
+		struct vec3 sz = box3_size((struct box3){g.part_lo_mm, g.part_hi_mm});
+		double t = fmax(o->contact_mm, g.h_mm / 2);
+		char fix[96];
+		snprintf(fix, sizeof fix, "fixed box=-1,-1,-1,%.6f,%.6f,%.6f axes=xyz", sz.x + 1,
+			 sz.y + 1, t);
+		snprintf(text[0], sizeof text[0], "%s; force top n=0,0,%.17g", fix, -o->load_n);
+		snprintf(text[1], sizeof text[1], "%s; force top n=%.17g,0,%.17g", fix,
+			 -o->load_n / sqrt(2), -o->load_n / sqrt(2));
+	}
 	for (int c = 0; c < 2 && rc == 0; c++)
 		rc = solve_case(&g, text[c], o, owner, ps->n, st, c, e);
 	if (rc)

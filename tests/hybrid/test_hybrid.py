@@ -103,6 +103,26 @@ class HybridCli(unittest.TestCase):
             self.assertGreater(c["dominance"], 2)
             self.assertGreater(sz, 1, "a leg carries the load axially")
 
+    def test_elephant_partition(self):
+        # This elephant rears on its two hind feet (the two feet within 5 %
+        # of the height of the plate); its raised front legs carry nothing
+        # under a load on its top, so section 4.2 makes them NCol.
+        out = self.path("elephant.sl1")
+        m = self.job(os.path.join(MESHES, "elephant.off"), out, "--set", "height_mm=60",
+                     "--set", "up=y", "--set", "layer_mm=0.2", "--set", "compliance=false")
+        comps = m["hybrid"]["components"]
+        for c in comps:
+            print(f"elephant: {c['class']} {c['area_mm2']:.0f} mm2, axis {c['axis']}, base "
+                  f"{c['base_mm']}, mean stress {c['mean_stress_mpa']} MPa, dominance "
+                  f"{c['dominance']:.2f} / {c['dominance_45']:.2f}")
+        self.assertEqual(len([c for c in comps if c["class"] == "NCol"]), 1)
+        self.assertEqual(max(comps, key=lambda c: c["area_mm2"])["class"], "NCol")
+        standing = [c for c in comps if c["class"] == "VCol"
+                    and float(c["axis"].split(",")[2]) < -math.cos(math.radians(30))
+                    and float(c["base_mm"].split(",")[2]) < 20]
+        self.assertEqual(len(standing), 2, comps)
+        self.assertLess(m["hybrid"]["weight_fraction"], 0.6)
+
     def test_cow_weight_and_islands(self):
         h = self.cow_metrics["hybrid"]
         print(f"cow: weight fraction {h['weight_fraction']:.4f}, filled by the support rule "
