@@ -19,6 +19,9 @@
  *   tcs.c        section 5.2  diamond ball-and-stick lattice (capsules)
  *   transient.c  section 6    transient layer and extended support regions
  *   stack.c      beyond paper per-layer composition, top-down support rule
+ *
+ * This header: the partition (sdf, parts, label, verify).  The structures
+ * (mfs, tcs, transient): structure.h.  The layer stack: stack.h.
  */
 #ifndef INFILLD_HYBRID_H
 #define INFILLD_HYBRID_H
@@ -26,8 +29,6 @@
 #include <stddef.h>
 #include <stdint.h>
 
-#include "engine/geom/capsule.h"
-#include "engine/geom/raster.h"
 #include "engine/geom/vec.h"
 
 struct err;
@@ -205,172 +206,5 @@ struct hy_stress {
 int hy_verify(const struct mesh *m, const struct hy_labeler *l, struct hy_parts *ps,
 	      const struct hy_verify_opts *o, struct hy_stress *st, double *seconds,
 	      struct err *e);
-
-/* ---- mfs.c: muscle-fibre section (section 5.1) ---- */
-
-/* A 2D porous pattern in the plane across an axis: walls of thickness
- * wall_mm along the Voronoi boundaries of a Poisson-disk point set of
- * spacing cell_mm, or a user's binary template image tiled with pixel
- * pitch template_mm.  Extrusion along the axis: a 3D point p maps to
- * (e1 . p, e2 . p) with e1, e2 unit and orthogonal to the axis
- * (hy_mfs_basis).  Caller frees with hy_mfs_free(). */
-struct hy_mfs;
-
-/* Sites: poisson2_sample (radius cell_mm, seed) over the square of side
- * 2 extent_mm centred on origin_mm's projection; material where the
- * distance to the Voronoi boundary is < wall_mm / 2 (exact: the nearest
- * site's cell, all its bisectors), and everywhere beyond the square.
- * hy_mfs_solid is O(1) (a grid of candidate lists, about 3 sites a
- * cell).  0, ERR_PARAM (axis zero or not finite, cell_mm not > 0,
- * wall_mm not in [0, cell_mm), extent_mm not > 0), ERR_LIMIT (more than
- * 2^24 sampling squares), ERR_NOMEM. */
-int hy_mfs_new_voronoi(struct vec3 axis, struct vec3 origin_mm, double extent_mm,
-		       double cell_mm, double wall_mm, uint64_t seed, struct hy_mfs **out,
-		       struct err *e);
-/* PNG template (any PNG, read as 8-bit gray; > 127 = material) of the
- * paper's kind, tiled from origin_mm's projection: pixel column i along
- * +e1, row 0 at the top (largest e2) of each tile.  Walls thinner than
- * wall_mm (to within a pixel) thickened to at least it, once at load;
- * thicker material unchanged.  0, ERR_PARAM, ERR_IO / ERR_PARSE (the
- * file), ERR_LIMIT (a side beyond 65535, or the padded tile beyond 2^26
- * pixels), ERR_NOMEM. */
-int hy_mfs_new_template(struct vec3 axis, struct vec3 origin_mm, const char *png_path,
-			double template_mm, double wall_mm, struct hy_mfs **out,
-			struct err *e);
-/* 1 when p is material of the pattern.  Thread-safe. */
-int hy_mfs_solid(const struct hy_mfs *f, struct vec3 p);
-void hy_mfs_free(struct hy_mfs *f);
-/* The section plane's basis: e1 the unit projection of the coordinate
- * axis least aligned with the axis, e2 = axis x e1 (axis z: x, y). */
-void hy_mfs_basis(const struct hy_mfs *f, struct vec3 *e1, struct vec3 *e2);
-/* Voronoi pattern's sites: *n (u, v) pairs relative to the sampled
- * square's corner (*u_lo, *v_lo) in plane coordinates (e1 . p, e2 . p);
- * borrowed from f.  A template has none (*n = 0, NULL). */
-const double *hy_mfs_sites(const struct hy_mfs *f, size_t *n, double *u_lo, double *v_lo);
-
-/* ---- tcs.c: tetrahedral crystal (diamond) lattice (section 5.2) ---- */
-
-/* Diamond cubic balls (radius ball_mm) and sticks (radius stick_mm / 2
- * where stick_mm is the stick diameter) of cubic cell cell_mm covering
- * box [lo, hi], cube axes along x, y, z shifted by shift_mm (an atom at
- * shift_mm): every stick is at acos(1/sqrt 3) = 54.74 deg from the
- * vertical.  Every atom within one bond length (sqrt 3 / 4 cell) of the
- * box on each axis, and every bond between two such atoms, once (sticks
- * with a.z <= b.z), so clipping to the box leaves no gaps.  Balls no
- * larger than the sticks' radius are left out (inside the sticks' ends).
- * *caps owned by the caller (mem_free() or free()).  steepest_deg: the
- * largest stick angle from the vertical.  0, ERR_PARAM (cell not > 0,
- * stick_mm not in (0, sqrt 3 / 2 cell), ball_mm not in [0, cell / 2),
- * empty box), ERR_LIMIT (more than max_caps), ERR_NOMEM. */
-int hy_tcs_build(struct vec3 lo, struct vec3 hi, double cell_mm, double ball_mm,
-		 double stick_mm, struct vec3 shift_mm, size_t max_caps,
-		 struct capsule **caps, size_t *n, double *steepest_deg, struct err *e);
-
-/* ---- transient.c: transient structures (section 6) ---- */
-
-/* The transient layer of an interface (section 6.1): us = (mfs | tcs) &
- * mask (nonzero = set, us gets 0/1); the 8-connected regions of us other
- * than the largest (the paper's R_1^1; the first in raster order on ties)
- * are joined to it by bridges of width bridge_px (pixels): every pixel of
- * a bridge's centre line is the centre of a painted disc of diameter
- * bridge_px wherever the mask allows.  Nothing is painted off the mask; a
- * region that no path inside the mask reaches stays as it is.  How this
- * realises the paper's bounding-box rule and where it deviates:
- * docs/hybrid.md.  us may alias neither input; undefined on failure.
- * Images w x h, row stride w.  O(w h) plus O(length x bridge_px^2) per
- * bridge.  0, ERR_PARAM (sizes, NULL images, bridge_px not > 0) or
- * ERR_NOMEM. */
-int hy_transient_layer(const uint8_t *mfs, const uint8_t *tcs, const uint8_t *mask, int w,
-		       int h, double bridge_px, uint8_t *us, struct err *e);
-/* The extended-support region (section 6.2): tcs_proj (the TCS projected
- * on the layer) AND us, 8-connected regions of fewer than min_px pixels
- * dropped; into out (0/1; may alias either input; undefined on failure).
- * 0, ERR_PARAM (sizes, NULL images) or ERR_NOMEM. */
-int hy_support_region(const uint8_t *tcs_proj, const uint8_t *us, int w, int h,
-		      size_t min_px, uint8_t *out, struct err *e);
-
-/* ---- stack.c: the designed layer stack ---- */
-
-/* Bit planes of every layer on the design grid (pitch_mm square pixels
- * over the part's box, the slice/erode.h grid): bit j * w + i of layer k
- * in words [k * words, (k + 1) * words).  part: pixel centre inside the
- * part; interior: at least the shell's thickness from the outside (3D);
- * voids: interior pixels left empty by the design; tcsr: interior pixels
- * whose structure is the crystal lattice (their support rule uses the
- * struts' angle).  Material = part & !voids. */
-struct hy_stack {
-	int w, h, layers;
-	struct raster_map map;  /* printer mm -> design-grid pixel coordinates */
-	double pitch_mm, layer_mm;
-	size_t words;           /* uint64_t words per plane of one layer */
-	uint64_t *part, *interior, *voids, *tcsr;
-};
-
-enum hy_structure { HY_STRUCT_HYBRID = 0, HY_STRUCT_TCS, HY_STRUCT_MFS };
-
-/* What stack.c composes: the partition, the structures and the rules. */
-struct hy_design {
-	int structure;                 /* enum hy_structure */
-	const struct hy_labeler *labels; /* HY_STRUCT_HYBRID only */
-	const struct hy_parts *parts;    /* HY_STRUCT_HYBRID only */
-	struct hy_mfs *const *mfs;     /* per part (NULL for non-VCol) in hybrid
-					  mode; mfs[0] for the whole interior in
-					  HY_STRUCT_MFS */
-	struct capsule *caps;          /* TCS balls and sticks (owned by the caller;
-					  the extended support columns are appended
-					  by hy_stack_columns, which may realloc) */
-	size_t ncaps, caps_cap;
-	double transient_mm;           /* thickness of the transient layer across
-					  each VCol part's base plane */
-	double bridge_mm;              /* width of its connecting bridges */
-	double tcs_cell_mm;            /* length of the extended support columns */
-	double column_mm;              /* their diameter */
-	double column_spacing_mm;      /* their Poisson-disk spacing */
-	double r_alpha_mm;             /* h tan(alpha): the support rule, MFS side */
-	double r_tcs_mm;               /* h tan(alpha_tcs): TCS side */
-	int threads;
-	uint64_t seed;
-};
-
-struct hy_stack_report {
-	size_t columns;             /* extended support columns added */
-	size_t transient_px;        /* transient-layer pixels, all layers */
-	size_t filled_px;           /* void pixels filled by the support rule */
-	double overhang_mm2;        /* material of layer k+1 farther than h tan(alpha)
-				       from material of layer k, over the part's
-				       interior (the struts' own angle) */
-	double material_mm3, part_mm3;
-	double seconds_interior, seconds_compose, seconds_support;
-};
-
-/* The part's and interior planes of every layer (mesh sliced and eroded
- * in 3D by shell_mm on a grid of pitch_mm over box).  0, ERR_LIMIT
- * (grid too large, field "grid_mm"), ERR_NOMEM, slicing errors. */
-int hy_stack_init(struct hy_stack *st, const struct mesh *m, struct box3 box, double pitch_mm,
-		  double layer_mm, int layers, double shell_mm, struct progress *pg,
-		  struct err *e);
-/* Section 6.2 for every VCol part of a hybrid design: the extended
- * support columns, appended to d->caps.  Before hy_stack_compose. */
-int hy_stack_columns(const struct hy_stack *st, struct hy_design *d, size_t *ncolumns,
-		     struct err *e);
-/* Sections 5-6: every layer's voids from the structures, then the support
- * rule top-down (docs/hybrid.md "Printability").  Fills rep. */
-int hy_stack_compose(struct hy_stack *st, const struct hy_design *d, struct progress *pg,
-		     struct hy_stack_report *rep, struct err *e);
-/* 1 when design pixel (i, j) of layer k is material; 0 outside the grid. */
-int hy_stack_material(const struct hy_stack *st, int k, int i, int j);
-/* 1 when it is a void of the design (interior left empty). */
-int hy_stack_void(const struct hy_stack *st, int k, int i, int j);
-/* Element densities for the FEA: the material fraction of every cube of
- * edge h_mm over the part's box (grid g allocated and filled as
- * fea_voxelize_mesh would; solid_part != 0: the part itself, no voids). */
-struct fea_grid;
-int hy_stack_fea_grid(const struct hy_stack *st, struct box3 box, double h_mm, int solid_part,
-		      size_t max_elements, struct fea_grid *g, struct err *e);
-/* The material as a closed manifold mesh: block averages of bx x bx
- * pixels x bz layers, marching tetrahedra at 1/2 (mesh/isosurface.h). */
-int hy_stack_mesh(const struct hy_stack *st, int bx, int bz, size_t max_triangles,
-		  struct mesh **out, struct err *e);
-void hy_stack_fini(struct hy_stack *st);
 
 #endif

@@ -4,7 +4,7 @@
  * figures: docs/hybrid.md.
  */
 #include "engine/hybrid/hybrid_engine.h"
-#include "engine/hybrid/hybrid.h"
+#include "engine/hybrid/stack.h"
 #include "engine/core/mem.h"
 #include "engine/fea/fea.h"
 #include "engine/geom/clip.h"

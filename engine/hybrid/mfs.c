@@ -30,7 +30,7 @@
  * thicker walls are left as they are.  Both distance maps are
  * engine/geom/edt.h's, on the tile padded periodically.
  */
-#include "engine/hybrid/hybrid.h"
+#include "engine/hybrid/structure.h"
 #include "engine/core/err.h"
 #include "engine/core/mem.h"
 #include "engine/geom/edt.h"

@@ -16,7 +16,7 @@
  * h tan(alpha_tcs) on the crystal's, whose sticks lean 54.74 deg.
  * Distances are exact Euclidean between pixel centres (geom/edt.h).
  */
-#include "engine/hybrid/hybrid.h"
+#include "engine/hybrid/stack.h"
 #include "engine/core/err.h"
 #include "engine/core/mem.h"
 #include "engine/core/parfor.h"

@@ -11,7 +11,7 @@
  * 54.7356 deg from the vertical.  The paper clips the lattice by a 3D
  * boolean; here the caller clips the capsules' union by its own mask.
  */
-#include "engine/hybrid/hybrid.h"
+#include "engine/hybrid/structure.h"
 #include "engine/core/err.h"
 #include "engine/core/mem.h"
 

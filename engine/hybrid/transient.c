@@ -9,7 +9,7 @@
  * pixel's centre is at (x, y) in pixel units, distances are between
  * centres.  Connectivity is 8-connected throughout (geom/label.h).
  */
-#include "engine/hybrid/hybrid.h"
+#include "engine/hybrid/structure.h"
 
 #include <math.h>
 #include <stdlib.h>

@@ -17,7 +17,7 @@
 #include "engine/core/mem.h"
 #include "engine/geom/capsule.h"
 #include "engine/geom/raster.h"
-#include "engine/hybrid/hybrid.h"
+#include "engine/hybrid/structure.h"
 
 static double now_s(void)
 {

@@ -87,10 +87,30 @@ def test_rhombic_job_uses_the_loads():
     check(p.get("field") == "loads", "field loads: %s" % p)
 
 
+def test_hybrid_job():
+    """The hybrid engine through the API: its components come back as a
+    JSON list of objects, its compliance under the given loads; a local
+    template path is the CLI's only."""
+    r = submit({"height_mm": 50, "layer_mm": 0.2, "loads": VALID}, "hybrid")
+    check(r.status == 202, "hybrid job accepted: %s %s" % (r.status, r.body[:300]))
+    j = srv.wait_job(S["key"], r.json()["id"], timeout=400)
+    check(j["state"] == "succeeded", "hybrid job ran: %s" % j)
+    hy = j["metrics"]["hybrid"]
+    check(isinstance(hy["components"], list) and hy["components"], hy)
+    for c in hy["components"]:
+        check(c["class"] in ("VCol", "NCol") and c["facets"] > 0 and c["area_mm2"] > 0, c)
+    check(hy["loads"].startswith("material E_mpa=2500 nu=0.4; fixed plate axes=xyz"), hy)
+    check(0 < hy["weight_fraction"] < 1 and hy["compliance_nmm"] >= hy["compliance_solid_nmm"],
+          hy)
+    r = submit({"height_mm": 50, "mfs_template": "/etc/passwd"}, "hybrid")
+    p = r.problem(422, "invalid-parameter")
+    check(p.get("field") == "mfs_template", "field mfs_template: %s" % p)
+
+
 if __name__ == "__main__":
     try:
         setup()
         run([test_malformed_loads_name_the_path, test_valid_loads_unknown_to_solid,
-             test_nothing_queued, test_rhombic_job_uses_the_loads])
+             test_nothing_queued, test_rhombic_job_uses_the_loads, test_hybrid_job])
     finally:
         srv.cleanup()

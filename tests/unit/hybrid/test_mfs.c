@@ -20,7 +20,7 @@
 #include "engine/core/mem.h"
 #include "engine/core/sink.h"
 #include "engine/geom/raster.h"
-#include "engine/hybrid/hybrid.h"
+#include "engine/hybrid/structure.h"
 #include "engine/output/image/png_encode.h"
 
 static uint64_t rng = 0x853c49e6748fea9bULL;

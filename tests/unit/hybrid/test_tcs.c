@@ -13,7 +13,7 @@
 #include "engine/core/err.h"
 #include "engine/core/mem.h"
 #include "engine/geom/raster.h"
-#include "engine/hybrid/hybrid.h"
+#include "engine/hybrid/structure.h"
 
 static int same(struct vec3 p, struct vec3 q)
 {

@@ -15,7 +15,7 @@
 
 #include "engine/core/err.h"
 #include "engine/core/mem.h"
-#include "engine/hybrid/hybrid.h"
+#include "engine/hybrid/structure.h"
 
 #define W 96
 #define H 72
