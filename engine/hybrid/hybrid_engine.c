@@ -148,7 +148,7 @@ static const struct param_desc hy_desc[] = {
 	{.name = "fea_voxel_mm", .type = PARAM_NUM, .offset = P(fea_voxel_mm), .min = 0, .max = 100,
 	 .def = 0, .flags = PARAM_F_AUTO, .unit = "mm",
 	 .help = "Element edge of the verification and compliance analyses; 0 = the part's "
-		 "height / 60."},
+		 "height / 60, at least two layers."},
 	{.name = "mesh_voxel_mm", .type = PARAM_NUM, .offset = P(mesh_voxel_mm), .min = 0,
 	 .max = 10, .def = 0, .flags = PARAM_F_AUTO, .unit = "mm",
 	 .help = "Sample spacing of the mesh output (marching tetrahedra); 0 = 0.25 mm."},
@@ -458,8 +458,9 @@ static int hy_prepare(const struct engine_ctx *ctx, const void *params, void **o
 	s->box = ctx->report->bbox;
 	s->shell_mm = ctx->common->shell_mm > 0 ? ctx->common->shell_mm : s->p.skin_mm;
 	s->antialias = ctx->printer->kind == PRINTER_RESIN ? ctx->printer->resin.antialias : 0;
-	s->fea_voxel_mm = s->p.fea_voxel_mm > 0 ? s->p.fea_voxel_mm
-						: box3_size(s->box).z / HY_FEA_DIV;
+	s->fea_voxel_mm = s->p.fea_voxel_mm > 0
+				  ? s->p.fea_voxel_mm
+				  : fmax(box3_size(s->box).z / HY_FEA_DIV, 2 * ctx->layer_mm);
 	s->pitch_mm = s->p.grid_mm > 0			   ? s->p.grid_mm
 		      : ctx->want_raster && ctx->map ? sqrt(raster_map_pixel_area_mm2(ctx->map))
 						     : 0.1;

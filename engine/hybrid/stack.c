@@ -785,37 +785,49 @@ int hy_stack_fea_grid(const struct hy_stack *st, struct box3 box, double h_mm, i
 		pixel_xy(st, 0, j, &x, &y);
 		eys[j] = (int)floor((y - g->lo_mm.y) / h_mm);
 	}
-	for (int k = 0; k < st->layers; k++) {
-		double z = (k + 0.5) * st->layer_mm;
-		int ez = (int)floor((z - g->lo_mm.z) / h_mm);
-		const uint64_t *pp = plane(st->part, st, k), *pv = plane(st->voids, st, k);
-		if (ez < 0 || ez >= g->nz)
-			continue;
-		for (int j = 0; j < st->h; j++) {
-			int ey = eys[j];
-			if (ey < 0 || ey >= g->ny)
-				continue;
-			for (int i = 0; i < st->w; i++) {
-				int ex = exs[i];
-				size_t b = (size_t)j * st->w + i, id;
-				if (ex < 0 || ex >= g->nx)
+	/* an element takes the layers whose middle lies in its z range, or the
+	 * layer through its own middle when it is thinner than a layer */
+	for (int ez = 0; ez < g->nz; ez++) {
+		double z0 = g->lo_mm.z + ez * h_mm, z1 = z0 + h_mm;
+		int k0 = (int)ceil(z0 / st->layer_mm - 0.5), k1 = (int)ceil(z1 / st->layer_mm - 0.5);
+		if (k1 <= k0) {
+			k0 = (int)floor((z0 + z1) / 2 / st->layer_mm);
+			k1 = k0 + 1;
+		}
+		k0 = k0 < 0 ? 0 : k0;
+		k1 = k1 > st->layers ? st->layers : k1;
+		for (int k = k0; k < k1; k++) {
+			const uint64_t *pp = plane(st->part, st, k), *pv = plane(st->voids, st, k);
+			for (int j = 0; j < st->h; j++) {
+				int ey = eys[j];
+				if (ey < 0 || ey >= g->ny)
 					continue;
-				id = ((size_t)ez * g->ny + ey) * g->nx + ex;
-				cnt[id]++;
-				if (bit_get(pp, b) && (solid_part || !bit_get(pv, b)))
-					g->rho[id] += 1;
+				for (int i = 0; i < st->w; i++) {
+					int ex = exs[i];
+					size_t b = (size_t)j * st->w + i, id;
+					if (ex < 0 || ex >= g->nx)
+						continue;
+					id = ((size_t)ez * g->ny + ey) * g->nx + ex;
+					cnt[id]++;
+					if (bit_get(pp, b) && (solid_part || !bit_get(pv, b)))
+						g->rho[id] += 1;
+				}
 			}
 		}
 	}
 	mem_free(exs);
 	mem_free(eys);
-	per = 0;
-	for (size_t i = 0; i < ne; i++)
-		per = cnt[i] > per ? cnt[i] : per;
-	for (size_t i = 0; i < ne; i++) {
-		/* border elements see fewer samples: normalise by the full count */
-		float r = per ? g->rho[i] / (float)per : 0;
-		g->rho[i] = r > 1 ? 1 : r;
+	/* border elements see fewer samples: normalise by the full count of
+	 * their slab (slabs may hold different numbers of layers) */
+	for (int ez = 0; ez < g->nz; ez++) {
+		size_t s0 = (size_t)ez * g->nx * g->ny, s1 = s0 + (size_t)g->nx * g->ny;
+		per = 0;
+		for (size_t i = s0; i < s1; i++)
+			per = cnt[i] > per ? cnt[i] : per;
+		for (size_t i = s0; i < s1; i++) {
+			float r = per ? g->rho[i] / (float)per : 0;
+			g->rho[i] = r > 1 ? 1 : r;
+		}
 	}
 	mem_free(cnt);
 	return 0;
