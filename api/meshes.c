@@ -369,6 +369,7 @@ void api_upload_complete(struct api_req *r)
 	struct db *db;
 	enum problem p = PROB_INTERNAL;
 	char detail[700] = "";
+	int rc;
 
 	err_clear(&e);
 	if (u->bytes == 0) {
@@ -422,10 +423,26 @@ void api_upload_complete(struct api_req *r)
 	}
 	u->tmp[0] = '\0'; /* published: nothing to clean up */
 	db = db_pool_get(s->pool);
-	if (db_mesh_add(db, &m, &e)) {
+	/* The quota is checked and charged here, in the transaction that
+	 * records the mesh; the checks before and while reading the body only
+	 * refuse early, from the usage as of the request's start. */
+	if ((rc = db_mesh_add(db, &m, &e))) {
+		struct tenant now;
+		struct err e2;
+		if (rc == ERR_LIMIT && db_tenant_get_id(db, r->tenant.id, &now, &e2) == 0)
+			r->tenant = now; /* the refusal shows the usage that refused it */
 		db_pool_put(s->pool, db);
 		unlink(final_path);
 		free(m.analysis);
+		if (rc == ERR_LIMIT) {
+			p = PROB_QUOTA;
+			snprintf(detail, sizeof detail,
+				 "the upload (%lld bytes) would take the tenant past its storage "
+				 "quota of %lld bytes (%lld in use)",
+				 (long long)m.size_bytes, (long long)r->tenant.quota_bytes,
+				 (long long)r->tenant.used_bytes);
+			goto fail;
+		}
 		log_msg(LOG_ERROR, "upload", "recording mesh: %s", e.msg);
 		p = PROB_UNAVAILABLE;
 		snprintf(detail, sizeof detail, "cannot record the mesh");
@@ -447,7 +464,8 @@ void api_upload_complete(struct api_req *r)
 fail:
 	/* The reader names the temporary file; the client knows its own name. */
 	store_redact(detail, sizeof detail, s->cfg.data_dir, u->tmp, u->name);
-	r->pending = api_problem_response(p, r->url, NULL, detail, &r->pending_status);
+	r->pending = api_problem_response_members(p, r->url, NULL, detail,
+						  api_problem_members(r, p), &r->pending_status);
 }
 
 json_t *api_mesh_json(const struct mesh_rec *m)
