@@ -28,7 +28,8 @@ struct upload {
 	char format[8];
 	char name[128];
 	char expect_sha[65];       /* lower-case hex, "" = not given */
-	int64_t bytes, limit;
+	int64_t bytes, limit;      /* body bytes so far (multipart framing too) */
+	int64_t file_bytes;        /* of those, the mesh's: what is stored and charged */
 	struct sha256_ctx sha;
 	int multipart;
 	struct multipart mp;
@@ -116,6 +117,7 @@ static int write_all(struct upload *u, const void *p, size_t len)
 	struct err e;
 
 	sha256_update(&u->sha, len, (const uint8_t *)p);
+	u->file_bytes += (int64_t)len;
 	return sink_write(&u->out, p, len, &e) ? -1 : 0;
 }
 
@@ -324,7 +326,7 @@ enum MHD_Result api_mesh_upload(struct api_req *r)
 	if (u->expect_sha[0] && strcmp(u->expect_sha, u->sha_hex) != 0)
 		return api_problem(r, PROB_CHECKSUM, "sha256",
 				   "received %lld bytes with SHA-256 %s, expected %s",
-				   (long long)u->bytes, u->sha_hex, u->expect_sha);
+				   (long long)u->file_bytes, u->sha_hex, u->expect_sha);
 	close(u->fd);
 	u->fd = -1;
 	/* Readers pick binary/ASCII by content and use the extension as a
@@ -372,7 +374,7 @@ void api_upload_complete(struct api_req *r)
 	int rc;
 
 	err_clear(&e);
-	if (u->bytes == 0) {
+	if (u->file_bytes == 0) {
 		p = PROB_INVALID_MESH;
 		snprintf(detail, sizeof detail, "the upload is empty");
 		goto fail;
@@ -407,7 +409,7 @@ void api_upload_complete(struct api_req *r)
 	m.tenant_id = r->tenant.id;
 	snprintf(m.name, sizeof m.name, "%s", u->name);
 	snprintf(m.format, sizeof m.format, "%s", u->format);
-	m.size_bytes = u->bytes;
+	m.size_bytes = u->file_bytes;
 	snprintf(m.sha256, sizeof m.sha256, "%s", u->sha_hex);
 	m.analysis = json_dumps(analysis, JSON_COMPACT);
 	m.created_ms = db_now_ms();
