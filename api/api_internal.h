@@ -173,6 +173,10 @@ struct MHD_Response *api_problem_response(enum problem p, const char *instance,
 struct MHD_Response *api_problem_response_members(enum problem p, const char *instance,
 						  const char *field, const char *detail,
 						  json_t *members, unsigned *status);
+/* The members a problem of kind p carries for request r (new reference,
+ * NULL = none): quota refusals say where the tenant stands, as of
+ * r->tenant. */
+json_t *api_problem_members(const struct api_req *r, enum problem p);
 /* Problem for an engine/db error record: maps err codes to types. */
 enum MHD_Result api_problem_err(struct api_req *r, const struct err *e);
 unsigned problem_status(enum problem p);

@@ -28,7 +28,8 @@ struct upload {
 	char format[8];
 	char name[128];
 	char expect_sha[65];       /* lower-case hex, "" = not given */
-	int64_t bytes, limit;
+	int64_t bytes, limit;      /* body bytes so far (multipart framing too) */
+	int64_t file_bytes;        /* of those, the mesh's: what is stored and charged */
 	struct sha256_ctx sha;
 	int multipart;
 	struct multipart mp;
@@ -116,6 +117,7 @@ static int write_all(struct upload *u, const void *p, size_t len)
 	struct err e;
 
 	sha256_update(&u->sha, len, (const uint8_t *)p);
+	u->file_bytes += (int64_t)len;
 	return sink_write(&u->out, p, len, &e) ? -1 : 0;
 }
 
@@ -324,7 +326,7 @@ enum MHD_Result api_mesh_upload(struct api_req *r)
 	if (u->expect_sha[0] && strcmp(u->expect_sha, u->sha_hex) != 0)
 		return api_problem(r, PROB_CHECKSUM, "sha256",
 				   "received %lld bytes with SHA-256 %s, expected %s",
-				   (long long)u->bytes, u->sha_hex, u->expect_sha);
+				   (long long)u->file_bytes, u->sha_hex, u->expect_sha);
 	close(u->fd);
 	u->fd = -1;
 	/* Readers pick binary/ASCII by content and use the extension as a
@@ -369,9 +371,10 @@ void api_upload_complete(struct api_req *r)
 	struct db *db;
 	enum problem p = PROB_INTERNAL;
 	char detail[700] = "";
+	int rc;
 
 	err_clear(&e);
-	if (u->bytes == 0) {
+	if (u->file_bytes == 0) {
 		p = PROB_INVALID_MESH;
 		snprintf(detail, sizeof detail, "the upload is empty");
 		goto fail;
@@ -406,7 +409,7 @@ void api_upload_complete(struct api_req *r)
 	m.tenant_id = r->tenant.id;
 	snprintf(m.name, sizeof m.name, "%s", u->name);
 	snprintf(m.format, sizeof m.format, "%s", u->format);
-	m.size_bytes = u->bytes;
+	m.size_bytes = u->file_bytes;
 	snprintf(m.sha256, sizeof m.sha256, "%s", u->sha_hex);
 	m.analysis = json_dumps(analysis, JSON_COMPACT);
 	m.created_ms = db_now_ms();
@@ -422,10 +425,26 @@ void api_upload_complete(struct api_req *r)
 	}
 	u->tmp[0] = '\0'; /* published: nothing to clean up */
 	db = db_pool_get(s->pool);
-	if (db_mesh_add(db, &m, &e)) {
+	/* The quota is checked and charged here, in the transaction that
+	 * records the mesh; the checks before and while reading the body only
+	 * refuse early, from the usage as of the request's start. */
+	if ((rc = db_mesh_add(db, &m, &e))) {
+		struct tenant now;
+		struct err e2;
+		if (rc == ERR_LIMIT && db_tenant_get_id(db, r->tenant.id, &now, &e2) == 0)
+			r->tenant = now; /* the refusal shows the usage that refused it */
 		db_pool_put(s->pool, db);
 		unlink(final_path);
 		free(m.analysis);
+		if (rc == ERR_LIMIT) {
+			p = PROB_QUOTA;
+			snprintf(detail, sizeof detail,
+				 "the upload (%lld bytes) would take the tenant past its storage "
+				 "quota of %lld bytes (%lld in use)",
+				 (long long)m.size_bytes, (long long)r->tenant.quota_bytes,
+				 (long long)r->tenant.used_bytes);
+			goto fail;
+		}
 		log_msg(LOG_ERROR, "upload", "recording mesh: %s", e.msg);
 		p = PROB_UNAVAILABLE;
 		snprintf(detail, sizeof detail, "cannot record the mesh");
@@ -447,7 +466,8 @@ void api_upload_complete(struct api_req *r)
 fail:
 	/* The reader names the temporary file; the client knows its own name. */
 	store_redact(detail, sizeof detail, s->cfg.data_dir, u->tmp, u->name);
-	r->pending = api_problem_response(p, r->url, NULL, detail, &r->pending_status);
+	r->pending = api_problem_response_members(p, r->url, NULL, detail,
+						  api_problem_members(r, p), &r->pending_status);
 }
 
 json_t *api_mesh_json(const struct mesh_rec *m)

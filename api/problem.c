@@ -118,6 +118,14 @@ struct MHD_Response *api_problem_response_members(enum problem p, const char *in
 	return resp;
 }
 
+json_t *api_problem_members(const struct api_req *r, enum problem p)
+{
+	if (p != PROB_QUOTA)
+		return NULL;
+	return json_pack("{s:I, s:I}", "used_bytes", (json_int_t)r->tenant.used_bytes,
+			 "quota_bytes", (json_int_t)r->tenant.quota_bytes);
+}
+
 enum MHD_Result api_problem(struct api_req *r, enum problem p, const char *field,
 			    const char *fmt, ...)
 {
@@ -129,13 +137,8 @@ enum MHD_Result api_problem(struct api_req *r, enum problem p, const char *field
 	va_start(ap, fmt);
 	vsnprintf(detail, sizeof detail, fmt, ap);
 	va_end(ap);
-	/* Quota refusals say where the tenant stands (as of this request). */
-	resp = api_problem_response_members(
-		p, r->url, field, detail,
-		p == PROB_QUOTA ? json_pack("{s:I, s:I}", "used_bytes", (json_int_t)r->tenant.used_bytes,
-					    "quota_bytes", (json_int_t)r->tenant.quota_bytes)
-				: NULL,
-		&status);
+	resp = api_problem_response_members(p, r->url, field, detail, api_problem_members(r, p),
+					    &status);
 	if (resp && p == PROB_UNAUTHORIZED)
 		MHD_add_response_header(resp, MHD_HTTP_HEADER_WWW_AUTHENTICATE,
 					"Bearer realm=\"infilld\"");

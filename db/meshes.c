@@ -60,7 +60,7 @@ int db_mesh_add(struct db *db, const struct mesh_rec *m, struct err *e)
 	sqlite3_bind_int64(st, 8, m->created_ms);
 	rc = sqlite3_step(st);
 	sqlite3_reset(st);
-	rc = rc == SQLITE_DONE ? db_tenant_add_usage(db, m->tenant_id, m->size_bytes, e)
+	rc = rc == SQLITE_DONE ? db_tenant_charge(db, m->tenant_id, m->size_bytes, e)
 			       : db_fail(db, e, "recording mesh");
 	if (!rc)
 		rc = db_commit(db, e);

@@ -24,8 +24,10 @@ struct mesh_rec {
 void db_mesh_rec_fini(struct mesh_rec *m);
 void db_mesh_recs_free(struct mesh_rec *v, int n);
 
-/* Record an uploaded mesh (id made by the caller with db_make_id("m_")),
- * adding its size to the tenant's usage. */
+/* Record an uploaded mesh (id made by the caller with db_make_id("m_"))
+ * and charge its size to the tenant's usage, in one transaction.
+ * ERR_LIMIT (nothing recorded or charged; e says the usage) when the size
+ * would take the tenant past its quota: the caller removes the file. */
 int db_mesh_add(struct db *db, const struct mesh_rec *m, struct err *e);
 /* ERR_NOTFOUND for a missing mesh or another tenant's. */
 int db_mesh_get(struct db *db, int64_t tenant_id, const char *id, struct mesh_rec *out,

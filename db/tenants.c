@@ -332,6 +332,35 @@ int db_tenant_add_usage(struct db *db, int64_t tenant_id, int64_t delta, struct 
 	return rc == SQLITE_DONE ? 0 : db_fail(db, e, "updating usage");
 }
 
+int db_tenant_charge(struct db *db, int64_t tenant_id, int64_t bytes, struct err *e)
+{
+	/* One statement checks and charges: concurrent writers of a tenant
+	 * each see the usage the previous one left (BEGIN IMMEDIATE). */
+	static const char sql[] =
+		"UPDATE tenants SET used_bytes = used_bytes + ?2 WHERE id = ?1"
+		" AND (quota_bytes = 0 OR used_bytes + ?2 <= quota_bytes)";
+	sqlite3_stmt *st = db_stmt(db, sql, e);
+	struct tenant t;
+	int rc;
+
+	if (!st)
+		return ERR_IO;
+	sqlite3_bind_int64(st, 1, tenant_id);
+	sqlite3_bind_int64(st, 2, bytes);
+	rc = sqlite3_step(st);
+	sqlite3_reset(st);
+	if (rc != SQLITE_DONE)
+		return db_fail(db, e, "charging usage");
+	if (sqlite3_changes(db->sq) == 1)
+		return 0;
+	if ((rc = db_tenant_get_id(db, tenant_id, &t, e)))
+		return rc;
+	return ERR_SET(e, ERR_LIMIT,
+		       "%lld bytes more would take the tenant past its storage quota of %lld bytes "
+		       "(%lld in use)",
+		       (long long)bytes, (long long)t.quota_bytes, (long long)t.used_bytes);
+}
+
 /* Look the key id up with sql and compare hashes in constant time. */
 static int auth_key(struct db *db, const char *sql, const char *kind, const char *key,
 		    struct tenant *out, struct err *e)

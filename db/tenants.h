@@ -56,6 +56,11 @@ int db_tenant_remove(struct db *db, const char *name, int64_t *id, struct err *e
 /* Add delta to the tenant's used_bytes (inside the caller's transaction or
  * on its own). */
 int db_tenant_add_usage(struct db *db, int64_t tenant_id, int64_t delta, struct err *e);
+/* Charge bytes (>= 0) to the tenant's used_bytes only if they fit its
+ * quota (0 = none), checked and charged in one statement inside the
+ * caller's transaction.  ERR_LIMIT (nothing charged) when they would pass
+ * it; ERR_NOTFOUND for a missing tenant. */
+int db_tenant_charge(struct db *db, int64_t tenant_id, int64_t bytes, struct err *e);
 
 /* Authenticate a tenant key: 0 and *out, or ERR_NOTFOUND for any key that
  * is malformed, unknown or wrong (callers answer 401 without saying why). */

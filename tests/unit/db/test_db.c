@@ -204,6 +204,54 @@ static void test_meshes(void)
 	db_close(db);
 }
 
+/* The quota is checked where the mesh is recorded: a mesh that would pass
+ * it is neither recorded nor charged; one that fills it exactly fits. */
+static void test_mesh_quota(void)
+{
+	struct db *db = fresh();
+	struct tenant_limits l;
+	struct tenant t;
+	struct mesh_rec m = {0}, *v;
+	char k[API_KEY_MAX];
+	struct err e;
+	int n, more;
+
+	REQUIRE(db);
+	db_tenant_limits_default(&l);
+	l.quota_bytes = 2500;
+	REQUIRE_OK(db_tenant_add(db, "q", &l, &t, k, &e), &e);
+	m.tenant_id = t.id;
+	snprintf(m.name, sizeof m.name, "part.stl");
+	snprintf(m.format, sizeof m.format, "stl");
+	snprintf(m.sha256, sizeof m.sha256, "%064d", 0);
+	m.size_bytes = 1000;
+	for (int i = 0; i < 3; i++) {
+		db_make_id("m_", m.id, &e);
+		m.created_ms = db_now_ms();
+		CHECK_EQ_INT(db_mesh_add(db, &m, &e), i < 2 ? 0 : ERR_LIMIT);
+	}
+	CHECK_CONTAINS(e.msg, "(2000 in use)");
+	REQUIRE_OK(db_tenant_get_id(db, t.id, &t, &e), &e);
+	CHECK_EQ_INT(t.used_bytes, 2000);
+	REQUIRE_OK(db_mesh_list(db, t.id, 0, "", 10, &v, &n, &more, &e), &e);
+	CHECK_EQ_INT(n, 2);
+	db_mesh_recs_free(v, n);
+	CHECK_EQ_INT(db_mesh_get(db, t.id, m.id, &m, &e), ERR_NOTFOUND);
+	m.size_bytes = 500; /* exactly the rest */
+	db_make_id("m_", m.id, &e);
+	REQUIRE_OK(db_mesh_add(db, &m, &e), &e);
+	REQUIRE_OK(db_tenant_get_id(db, t.id, &t, &e), &e);
+	CHECK_EQ_INT(t.used_bytes, 2500);
+	/* quota 0: no limit */
+	l.quota_bytes = 0;
+	REQUIRE_OK(db_tenant_add(db, "u", &l, &t, k, &e), &e);
+	m.tenant_id = t.id;
+	m.size_bytes = 1ll << 40;
+	db_make_id("m_", m.id, &e);
+	REQUIRE_OK(db_mesh_add(db, &m, &e), &e);
+	db_close(db);
+}
+
 static void test_submit_idempotency(void)
 {
 	struct db *db = fresh();
@@ -523,6 +571,7 @@ int main(void)
 	RUN(test_ids);
 	RUN(test_tenants);
 	RUN(test_meshes);
+	RUN(test_mesh_quota);
 	RUN(test_submit_idempotency);
 	RUN(test_fair_claim);
 	RUN(test_fencing_and_rescue);
