@@ -137,7 +137,7 @@ static const struct param_desc hy_desc[] = {
 	 .max = 1000, .def = 3, .flags = PARAM_F_MIN_EXCL, .unit = "mm",
 	 .help = "Poisson-disk spacing of the extended support columns."},
 	{.name = "skin_mm", .type = PARAM_NUM, .offset = P(skin_mm), .min = 0, .max = 100,
-	 .def = 1.0, .flags = PARAM_F_MIN_EXCL, .unit = "mm",
+	 .def = 0.8, .flags = PARAM_F_MIN_EXCL, .unit = "mm",
 	 .help = "Solid outer shell; a common shell_mm > 0 replaces it."},
 	{.name = "grid_mm", .type = PARAM_NUM, .offset = P(grid_mm), .min = 0, .max = 10,
 	 .def = 0, .flags = PARAM_F_AUTO, .unit = "mm",

@@ -128,14 +128,14 @@ print("  components: " + "; ".join(
 PY
 	# 2. the one-structure designs at the hybrid's weight
 	tcs_max=$(python3 -c "import math, sys; print(f'{math.sqrt(3) / 4 * float(sys.argv[1]):.4f}')" "$TCS_CELL")
-	tune "$name" tcs tcs_stick_mm "$TCS_STICK" 0 "$tcs_max" + "$WH"
+	tune "$name" "$mesh" tcs tcs_stick_mm "$TCS_STICK" 0 "$tcs_max" + "$WH"
 	TCS_SET=(--set tcs_stick_mm="$TUNED") TCS_OK=$TUNED_OK
 	[ -n "$TUNED" ] || { echo "!! $name tcs: no run succeeded"; status=1; }
-	tune "$name" mfs wall_mm "$MFS_WALL" 0 "$MFS_CELL" + "$WH"
+	tune "$name" "$mesh" mfs wall_mm "$MFS_WALL" 0 "$MFS_CELL" + "$WH"
 	MFS_SET=(--set wall_mm="$TUNED") MFS_OK=$TUNED_OK
 	if [ "$TUNED_OK" != 1 ] && [ "$REACHED" != 1 ]; then
 		echo "  $name mfs: walls below $MFS_CELL mm do not reach $WH; bisecting mfs_cell_mm (wall $MFS_WALL)"
-		tune "$name" mfs mfs_cell_mm "$MFS_CELL" "$MFS_WALL" \
+		tune "$name" "$mesh" mfs mfs_cell_mm "$MFS_CELL" "$MFS_WALL" \
 			"$(python3 -c "import sys; print(float(sys.argv[1]) * 8)" "$MFS_CELL")" - "$WH" \
 			--set wall_mm="$MFS_WALL"
 		MFS_SET=(--set wall_mm="$MFS_WALL" --set mfs_cell_mm="$TUNED") MFS_OK=$TUNED_OK
