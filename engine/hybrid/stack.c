@@ -627,7 +627,7 @@ int hy_stack_compose(struct hy_stack *st, const struct hy_design *d, struct prog
 	t0 = progress_now_s();
 	/* top-down support rule; above = material of layer k + 1, vabove its voids */
 	memset(vabove, 0, n);
-	for (int k = st->layers - 1; k >= 0; k--) {
+	for (int k = st->layers - 1; k >= 0 && !d->raw; k--) {
 		uint64_t *pv = plane_w(st->voids, st, k);
 		const uint64_t *pp = plane(st->part, st, k), *pt = plane(st->tcsr, st, k);
 		uint8_t *cur = im.mat, *cand = im.mask;

@@ -59,6 +59,8 @@ struct hy_design {
 	double r_tcs_mm;               /* h tan(alpha_tcs): TCS side */
 	int threads;
 	uint64_t seed;
+	int raw;                       /* 1: skip the support rule (the candidates
+					  as composed; for tests of the checker) */
 };
 
 struct hy_stack_report {
