@@ -91,7 +91,8 @@ def test_hybrid_job():
     """The hybrid engine through the API: its components come back as a
     JSON list of objects, its compliance under the given loads; a local
     template path is the CLI's only."""
-    r = submit({"height_mm": 50, "layer_mm": 0.2, "loads": VALID}, "hybrid")
+    loads = dict(VALID, fixed=["plate", {"box_mm": [0, 0, 0, 20, 17, 1], "axes": "z"}])
+    r = submit({"height_mm": 50, "layer_mm": 0.2, "loads": loads}, "hybrid")
     check(r.status == 202, "hybrid job accepted: %s %s" % (r.status, r.body[:300]))
     j = srv.wait_job(S["key"], r.json()["id"], timeout=400)
     check(j["state"] == "succeeded", "hybrid job ran: %s" % j)
