@@ -118,7 +118,7 @@ for name in $MESHES; do
 import json, sys
 name, h = sys.argv[1:]
 H = json.load(open(h + ".json"))["hybrid"]; t = open(h + ".time").read().split()
-print(f"  {name} hybrid defaults: weight {H['weight_fraction']:.4f}, {t[0]} s, "
+print(f"  {name} hybrid defaults: weight {H['weight_fraction']:.4f} (skin {H.get('shell_mm', '?')} mm), {t[0]} s, "
       f"{int(t[1]) // 1024} MB; {H.get('vcol_components', '?')} VCol, "
       f"{H.get('extended_columns', '?')} extended columns, {H.get('tcs_capsules', '?')} capsules, "
       f"islands {H.get('islands', '?')}")
