@@ -1,13 +1,18 @@
 /* cli_verify.c - `infilld verify ARCHIVE [--alpha-deg A] [--layer-mm H]
- * [--pixel-mm P] [--solid SOLID_ARCHIVE] [--strict]`: check a written
+ * [--pixel-mm P] [--tolerance-px T] [--solid SOLID_ARCHIVE] [--strict |
+ * --strict-all]`: check a written
  * SL1/SL1S/zip layer stack for interior overhangs, floating islands and
  * wall thickness (engine/verify/, docs/verify.md) and print the report as
  * JSON.  Works on any producer's archive; it knows nothing of the engine
  * that made it.  --solid names the solid engine's archive of the same part
  * and printer: islands the part itself does not have are reported as
- * islands_added.  Exit 0 when checked (with --strict: 3 if interior
- * overhangs or floating islands were found, with --solid only added
- * islands count), 1 on errors, 2 on usage errors. */
+ * islands_added.  `printable` asks what the interior adds: no interior
+ * overhang and no island over an enclosed void (islands_interior; with
+ * --solid, islands_added); the part's own islands (islands_part) need
+ * external supports whatever fills it and are reported apart
+ * (`part_needs_supports`).  Exit 0 when checked (--strict: 3 when not
+ * printable; --strict-all: 3 also when the part needs supports), 1 on
+ * errors, 2 on usage errors. */
 #include <errno.h>
 #include <math.h>
 #include <stdio.h>
@@ -42,7 +47,7 @@ int cmd_verify(int argc, char **argv)
 	struct metrics m;
 	struct err e;
 	const char *path = NULL, *solid = NULL;
-	int strict = 0, rc, bad;
+	int strict = 0, rc, bad, part;
 	json_t *j;
 
 	memset(&vp, 0, sizeof vp);
@@ -53,6 +58,9 @@ int cmd_verify(int argc, char **argv)
 
 		if (!strcmp(a, "--strict")) {
 			strict = 1;
+			continue;
+		} else if (!strcmp(a, "--strict-all")) {
+			strict = 2;
 			continue;
 		} else if (!strcmp(a, "--solid")) {
 			if (++i >= argc) {
@@ -69,6 +77,9 @@ int cmd_verify(int argc, char **argv)
 			hi = 10;
 		} else if (!strcmp(a, "--pixel-mm")) {
 			slot = &vp.pixel_x_mm;
+			hi = 10;
+		} else if (!strcmp(a, "--tolerance-px")) {
+			slot = &vp.tolerance_px;
 			hi = 10;
 		} else if (a[0] == '-') {
 			fprintf(stderr, "infilld verify: unknown option '%s'\n", a);
@@ -100,14 +111,18 @@ int cmd_verify(int argc, char **argv)
 		fprintf(stderr, "infilld: %s\n", err_format(&e, line, sizeof line));
 		return 1;
 	}
-	/* with the solid part to compare with, its own islands (first contacts
-	 * it needs supports for anyway) do not make the fill unprintable */
+	/* the part's own islands (first contacts it needs supports for
+	 * anyway) do not make the interior unprintable: islands over enclosed
+	 * voids do (with the solid part to compare with: islands it lacks) */
 	bad = rep.interior_overhang_px > 0 ||
-	      (solid ? rep.islands_added > 0 : rep.islands > 0);
+	      (solid ? rep.islands_added > 0 : rep.islands_interior > 0);
+	part = rep.islands > rep.islands_interior;
 	metrics_init(&m);
 	rc = verify_report_metrics(&rep, "verify", &m, &e);
 	if (!rc)
 		rc = metrics_bool(&m, "verify.printable", !bad);
+	if (!rc)
+		rc = metrics_bool(&m, "verify.part_needs_supports", part);
 	j = rc ? NULL : api_metrics_json(&m);
 	if (j) {
 		json_dumpf(json_object_get(j, "verify"), stdout,
@@ -119,7 +134,7 @@ int cmd_verify(int argc, char **argv)
 		rc = 1;
 	}
 	metrics_fini(&m);
-	if (!rc && strict && bad)
+	if (!rc && strict && (bad || (strict == 2 && part)))
 		rc = 3;
 	verify_report_fini(&rep);
 	return rc;

@@ -21,7 +21,8 @@ static const struct command commands[] = {
 	{"analyze", cmd_analyze, "analyze MESH [--set KEY=VALUE]...   (JSON report on stdout)"},
 	{"engines", cmd_engines, "engines                              (JSON: engines and parameters)"},
 	{"verify", cmd_verify,
-	 "verify ARCHIVE [--alpha-deg A] [--layer-mm H] [--pixel-mm P] [--solid SOLID] [--strict]\n"
+	 "verify ARCHIVE [--alpha-deg A] [--layer-mm H] [--pixel-mm P] [--tolerance-px T]\n"
+	 "       [--solid SOLID] [--strict | --strict-all]\n"
 	 "              (JSON: interior overhangs, floating islands, walls of an SL1/zip stack)"},
 	{"fea", cmd_fea,
 	 "fea INPUT [--loads FILE.json] [--printer NAME] [--set KEY=VALUE]... [--out-vtk FILE.vti]\n"

@@ -56,6 +56,7 @@
 #include "engine/verify/between.h"
 #include "engine/verify/contact.h"
 #include "engine/verify/fins.h"
+#include "engine/verify/subpx.h"
 
 #define VX_OUT 1u /* union-find id of the outside */
 #define VX_FIN_PX 2 /* fins and shelves: solid runs of at most this many pixels / layers */
@@ -65,8 +66,13 @@ struct crop {
 	int sx0, sy0, sx1, sy1; /* bounding box of the layer's solid; sx1 < 0: none */
 	size_t cap;
 	uint8_t *solid;   /* 1 = solid */
+	uint8_t *gray;    /* the layer's gray (coverage x 255), for subpx.h */
 	uint32_t *lab;    /* void component id, 0 on solid */
 	float *d2;        /* squared distance (mm^2) to this layer's solid */
+	int32_t *near;    /* crop index of that nearest solid pixel, -1 if none */
+	float *any_d2;    /* squared distance (mm^2) to the nearest pixel with
+			   * gray > 0; computed on demand (any_ok) */
+	int any_ok;
 };
 
 struct rec {
@@ -83,13 +89,16 @@ struct recs {
 
 struct verify {
 	struct verify_params p;
-	double reach_mm;
+	double slope_mm;  /* layer_mm tan(alpha): the rule's reach */
+	double reach_mm;  /* slope_mm + tolerance_px pixels: interior overhang beyond it */
+	double ext_reach_mm; /* slope_mm + 1 pixel: the centre test over the outside */
 	int margin;
 	int w, h, next;
 	struct crop a, b, *prev, *cur;
 	uint32_t *uf;
 	size_t nuf, ufcap;
 	struct recs ov, wall, vol, vwall, fin;
+	struct recs ovx;      /* per component and layer: largest slope excess (mm) */
 	struct recs between;  /* in-layer walls between two 2D-enclosed voids */
 	struct recs shelf;    /* column runs of <= VX_FIN_PX layers between them */
 	struct verify_between vb;
@@ -106,6 +115,8 @@ struct verify {
 	uint32_t prev_first, cur_first; /* first component id of each layer */
 	double *agg;          /* per-component scratch */
 	size_t agg_cap;
+	double *aggx;         /* per-component scratch: largest slope excess (mm) */
+	size_t aggx_cap;
 	int *stack;
 	size_t stack_cap;
 	uint8_t *seed;
@@ -133,8 +144,11 @@ void verify_report_fini(struct verify_report *r)
 static void crop_fini(struct crop *c)
 {
 	mem_free(c->solid);
+	mem_free(c->gray);
 	mem_free(c->lab);
 	mem_free(c->d2);
+	mem_free(c->near);
+	mem_free(c->any_d2);
 	memset(c, 0, sizeof *c);
 }
 
@@ -146,6 +160,8 @@ void verify_free(struct verify *v)
 	crop_fini(&v->b);
 	mem_free(v->uf);
 	mem_free(v->ov.v);
+	mem_free(v->ovx.v);
+	mem_free(v->aggx);
 	mem_free(v->wall.v);
 	mem_free(v->vol.v);
 	mem_free(v->vwall.v);
@@ -195,15 +211,16 @@ int verify_new(const struct verify_params *p, struct verify **out, struct err *e
 		return ERR_SET(e, ERR_NOMEM, "verify: out of memory");
 	v->p = *p;
 	if (v->p.tolerance_px == 0)
-		v->p.tolerance_px = 1;
+		v->p.tolerance_px = VERIFY_TOLERANCE_PX;
 	if (v->p.threshold == 0)
 		v->p.threshold = VERIFY_THRESHOLD;
 	if (v->p.speck_voxels == 0)
 		v->p.speck_voxels = VERIFY_SPECK_VOXELS;
 	pmin = fmin(p->pixel_x_mm, p->pixel_y_mm);
-	v->reach_mm = p->layer_mm * tan(p->alpha_deg * M_PI / 180) +
-		      v->p.tolerance_px * fmax(p->pixel_x_mm, p->pixel_y_mm);
-	v->margin = (int)ceil(v->reach_mm / pmin) + 2;
+	v->slope_mm = p->layer_mm * tan(p->alpha_deg * M_PI / 180);
+	v->reach_mm = v->slope_mm + v->p.tolerance_px * fmax(p->pixel_x_mm, p->pixel_y_mm);
+	v->ext_reach_mm = v->slope_mm + fmax(p->pixel_x_mm, p->pixel_y_mm);
+	v->margin = (int)ceil(fmax(v->reach_mm, v->ext_reach_mm) / pmin) + 2;
 	v->prev = &v->a;
 	v->cur = &v->b;
 	edt_scratch_init(&v->es);
@@ -212,6 +229,7 @@ int verify_new(const struct verify_params *p, struct verify **out, struct err *e
 	v->r.worst_layer = -1;
 	v->r.first_island_layer = -1;
 	v->r.first_added_island_layer = -1;
+	v->r.first_interior_island_layer = -1;
 	v->r.first_solid_layer = -1;
 	verify_contact_init(&v->ref);
 	v->r.min_wall_mm = INFINITY;
@@ -336,12 +354,18 @@ static int crop_alloc(struct crop *c, size_t n)
 	if (n <= c->cap)
 		return 0;
 	mem_free(c->solid);
+	mem_free(c->gray);
 	mem_free(c->lab);
 	mem_free(c->d2);
+	mem_free(c->near);
+	mem_free(c->any_d2);
 	c->solid = mem_alloc(n);
+	c->gray = mem_alloc(n);
 	c->lab = mem_alloc(n * sizeof *c->lab);
 	c->d2 = mem_alloc(n * sizeof *c->d2);
-	c->cap = c->solid && c->lab && c->d2 ? n : 0;
+	c->near = mem_alloc(n * sizeof *c->near);
+	c->any_d2 = mem_alloc(n * sizeof *c->any_d2);
+	c->cap = c->solid && c->gray && c->lab && c->d2 && c->near && c->any_d2 ? n : 0;
 	return c->cap ? 0 : ERR_NOMEM;
 }
 
@@ -424,6 +448,13 @@ static int label_voids(struct verify *v, uint32_t *ncomp)
 	return 0;
 }
 
+/* Is component id (of the previous layer) 2D-enclosed there? */
+static int prev_enclosed(const struct verify *v, uint32_t id)
+{
+	return id >= v->prev_first && id - v->prev_first < v->prev_enc_cap &&
+	       v->prev_enc[id - v->prev_first];
+}
+
 /* Islands: solid components (8-connected) without solid beneath.  Not
  * the dual of the 8-connected voids on purpose: this asks whether cured
  * resin is attached, and pixels meeting at a corner cure together; with
@@ -445,6 +476,7 @@ static int islands(struct verify *v, int layer)
 		for (int x = 0; x < w; x++) {
 			size_t i = (size_t)y * (size_t)w + (size_t)x, sp = 0, area = 0;
 			int supported = 0, own = 0; /* own: touches an island of the reference */
+			int inner = 0; /* over a void the previous layer encloses */
 			if (!c->solid[i] || seen[i])
 				continue;
 			seen[i] = 1;
@@ -456,6 +488,9 @@ static int islands(struct verify *v, int layer)
 				area++;
 				if (!supported && crop_solid(v->prev, qx + c->x0, qy + c->y0, &pi))
 					supported = 1;
+				if (!supported && !inner && pi != SIZE_MAX &&
+				    prev_enclosed(v, v->prev->lab[pi]))
+					inner = 1;
 				/* checked only while unsupported: a supported component
 				 * (nearly all) stops paying for it at its first such pixel */
 				if (!supported && !own && v->r.has_reference &&
@@ -480,6 +515,13 @@ static int islands(struct verify *v, int layer)
 				v->r.island_mm2 += (double)area * v->p.pixel_x_mm * v->p.pixel_y_mm;
 				if (v->r.first_island_layer < 0)
 					v->r.first_island_layer = layer;
+				if (inner) {
+					v->r.islands_interior++;
+					v->r.island_interior_mm2 +=
+						(double)area * v->p.pixel_x_mm * v->p.pixel_y_mm;
+					if (v->r.first_interior_island_layer < 0)
+						v->r.first_interior_island_layer = layer;
+				}
 				if (v->r.has_reference && !own) {
 					v->r.islands_added++;
 					v->r.island_added_mm2 +=
@@ -492,12 +534,6 @@ static int islands(struct verify *v, int layer)
 	return 0;
 }
 
-/* Is component id (of the previous layer) 2D-enclosed there? */
-static int prev_enclosed(const struct verify *v, uint32_t id)
-{
-	return id >= v->prev_first && id - v->prev_first < v->prev_enc_cap &&
-	       v->prev_enc[id - v->prev_first];
-}
 
 /* In-layer walls between two 2D-enclosed void components of the current
  * crop: every void pixel is a seed (the outside too, so two cavities
@@ -549,6 +585,125 @@ static int walls_between(struct verify *v, int layer, struct err *e)
 	return 0;
 }
 
+/* The void component of the previous layer that a pixel of this layer
+ * overhangs: the one under it, else (its pixel below is solid at the
+ * threshold, but its region may still reach past the slope) the first
+ * void 8-neighbour of that pixel; 0 when there is none. */
+static uint32_t void_under(const struct crop *pc, int gx, int gy)
+{
+	size_t pi;
+
+	if (!crop_solid(pc, gx, gy, &pi))
+		return pi == SIZE_MAX ? VX_OUT : pc->lab[pi];
+	for (int dy = -1; dy <= 1; dy++)
+		for (int dx = -1; dx <= 1; dx++) {
+			size_t j;
+			if (!crop_solid(pc, gx + dx, gy + dy, &j))
+				return j == SIZE_MAX ? VX_OUT : pc->lab[j];
+		}
+	return 0;
+}
+
+/* 3. Overhangs of the current layer over the previous one (head comment,
+ * docs/verify.md "Sub-pixel overhangs").  Over voids already known to be
+ * the outside: the pixel-centre test with one pixel of slack, an
+ * estimate of the support area.  Elsewhere, every pixel with some solid
+ * (gray > 0) over a pixel that is not fully solid: an upper bound U on
+ * the farthest point of its region from the previous layer's solid (the
+ * centre distance to the nearest solid pixel plus that pixel's gap from
+ * square to region) settles most pixels (U <= slope); a lower bound from
+ * the distance to any grey pixel settles gross overhangs; the rest are
+ * measured (subpx.h).  A pixel overhangs when its farthest point lies
+ * beyond slope + tolerance; the largest excess over the slope is
+ * recorded per component. */
+static int overhangs(struct verify *v, int layer, struct err *e)
+{
+	struct crop *c = v->cur, *pc = v->prev;
+	size_t np = pc->w ? (size_t)(v->nuf - v->prev_first) : 0;
+	double pmin = fmin(v->p.pixel_x_mm, v->p.pixel_y_mm);
+	double hd = 0.5 * hypot(v->p.pixel_x_mm, v->p.pixel_y_mm), pa = v->p.pixel_x_mm * v->p.pixel_y_mm;
+	double ext2 = v->ext_reach_mm * v->ext_reach_mm;
+	struct verify_subpx_img below = {pc->gray, pc->x0, pc->y0, pc->w, pc->h, v->p.pixel_x_mm,
+					 v->p.pixel_y_mm};
+	struct verify_subpx_img above = {c->gray, c->x0, c->y0, c->w, c->h, v->p.pixel_x_mm,
+					 v->p.pixel_y_mm};
+	long long out_px = 0;
+
+	if (np && (grow_bytes((void **)&v->agg, &v->agg_cap, np * sizeof *v->agg) ||
+		   grow_bytes((void **)&v->aggx, &v->aggx_cap, np * sizeof *v->aggx)))
+		return ERR_SET(e, ERR_NOMEM, "verify: out of memory at layer %d", layer);
+	for (size_t k = 0; k < np; k++) {
+		v->agg[k] = 0;
+		v->aggx[k] = -INFINITY;
+	}
+	for (int y = 0; y < c->h; y++)
+		for (int x = 0; x < c->w; x++) {
+			size_t i = (size_t)y * (size_t)c->w + (size_t)x, pi;
+			int gx = x + c->x0, gy = y + c->y0, gb;
+			uint32_t id;
+			double u, lo, far;
+			if (c->gray[i] == 0)
+				continue;
+			crop_solid(pc, gx, gy, &pi);
+			if (pi == SIZE_MAX) {
+				if (c->solid[i])
+					out_px++; /* over the outside, beyond the reach by the margin */
+				continue;
+			}
+			gb = pc->gray[pi];
+			if (gb == 255 || !(id = void_under(pc, gx, gy)))
+				continue;
+			if (id == VX_OUT || uf_find(v, id) == VX_OUT) {
+				if (c->solid[i] && !pc->solid[pi] && pc->d2[pi] > ext2)
+					out_px++;
+				continue;
+			}
+			if (id < v->prev_first)
+				continue; /* cannot happen: labels of the previous layer */
+			u = INFINITY;
+			if (pc->near[pi] >= 0) {
+				int32_t n = pc->near[pi];
+				u = sqrt(pc->d2[pi]) + verify_subpx_gap_mm(&below, n % pc->w + pc->x0,
+									   n / pc->w + pc->y0);
+			}
+			if (u <= v->slope_mm)
+				continue;
+			if (!pc->any_ok) {
+				size_t n = (size_t)pc->w * (size_t)pc->h;
+				if (grow_bytes((void **)&v->seed, &v->scratch_cap, n))
+					return ERR_SET(e, ERR_NOMEM, "verify: out of memory at layer %d",
+						       layer);
+				for (size_t k = 0; k < n; k++)
+					v->seed[k] = pc->gray[k] > 0;
+				if (edt_sq(v->seed, (size_t)pc->w, pc->w, pc->h, v->p.pixel_x_mm,
+					   v->p.pixel_y_mm, pc->any_d2, &v->es, e))
+					return e ? e->code : ERR_NOMEM;
+				pc->any_ok = 1;
+			}
+			lo = sqrt(pc->any_d2[pi]) - (c->gray[i] >= 128 ? hd : 2 * hd);
+			if (lo > v->reach_mm) {
+				far = lo; /* a lower bound: beyond the reach anyway */
+			} else {
+				double wmm = fmin(u, sqrt(pc->any_d2[pi]) + 2 * hd) + 2 * hd;
+				far = verify_subpx_far_mm(&below, &above, gx, gy,
+							  (int)ceil(wmm / pmin));
+			}
+			if (far - v->slope_mm > v->aggx[id - v->prev_first])
+				v->aggx[id - v->prev_first] = far - v->slope_mm;
+			if (far > v->reach_mm)
+				v->agg[id - v->prev_first] += 1;
+		}
+	v->r.exterior_overhang_mm2 += (double)out_px * pa;
+	for (size_t k = 0; k < np; k++) {
+		if (v->agg[k] > 0 && rec_add(&v->ov, v->prev_first + (uint32_t)k, layer, v->agg[k]))
+			return ERR_SET(e, ERR_NOMEM, "verify: out of memory at layer %d", layer);
+		if (v->aggx[k] > 0 &&
+		    rec_add(&v->ovx, v->prev_first + (uint32_t)k, layer, v->aggx[k]))
+			return ERR_SET(e, ERR_NOMEM, "verify: out of memory at layer %d", layer);
+	}
+	return 0;
+}
+
 int verify_layer(struct verify *v, const struct raster *r, struct err *e)
 {
 	return verify_layer_ref(v, r, NULL, e);
@@ -560,7 +715,6 @@ int verify_layer_ref(struct verify *v, const struct raster *r, const struct rast
 	struct crop *c, *pc;
 	int x0 = INT32_MAX, y0 = INT32_MAX, x1 = -1, y1 = -1, layer = v->next;
 	uint32_t ncomp = 0;
-	double pa = v->p.pixel_x_mm * v->p.pixel_y_mm, reach2 = v->reach_mm * v->reach_mm;
 
 	if (v->failed || v->finished)
 		return ERR_SET(e, ERR_INTERNAL, "verify: check already %s",
@@ -645,9 +799,12 @@ int verify_layer_ref(struct verify *v, const struct raster *r, const struct rast
 			goto nomem;
 		for (int y = 0; y < c->h; y++) {
 			const uint8_t *row = r->px + (size_t)(y + y0) * r->stride + x0;
-			for (int x = 0; x < c->w; x++)
+			for (int x = 0; x < c->w; x++) {
 				c->solid[(size_t)y * (size_t)c->w + (size_t)x] = row[x] >= v->p.threshold;
+				c->gray[(size_t)y * (size_t)c->w + (size_t)x] = row[x];
+			}
 		}
+		c->any_ok = 0;
 		if (label_voids(v, &ncomp))
 			goto nomem;
 	}
@@ -675,39 +832,14 @@ int verify_layer_ref(struct verify *v, const struct raster *r, const struct rast
 			}
 	}
 	/* 3. overhangs of this layer over the previous one, per void component */
-	if (layer > 0 && c->w) {
-		size_t np = pc->w ? (size_t)(v->nuf - v->prev_first) : 0;
-		long long out_px = 0;
-		if (np && grow_bytes((void **)&v->agg, &v->agg_cap, np * sizeof *v->agg))
-			goto nomem;
-		for (size_t k = 0; k < np; k++)
-			v->agg[k] = 0;
-		for (int y = 0; y < c->h; y++)
-			for (int x = 0; x < c->w; x++) {
-				size_t i = (size_t)y * (size_t)c->w + (size_t)x, pi;
-				if (!c->solid[i])
-					continue;
-				if (crop_solid(pc, x + c->x0, y + c->y0, &pi))
-					continue;
-				if (pi == SIZE_MAX) {
-					out_px++; /* over the outside, beyond the reach by the margin */
-					continue;
-				}
-				if (pc->d2[pi] <= reach2)
-					continue;
-				v->agg[pc->lab[pi] - v->prev_first] += 1;
-			}
-		v->r.exterior_overhang_mm2 += (double)out_px * pa;
-		for (size_t k = 0; k < np; k++)
-			if (v->agg[k] > 0 && rec_add(&v->ov, v->prev_first + (uint32_t)k, layer, v->agg[k]))
-				goto nomem;
-	}
+	if (layer > 0 && c->w && overhangs(v, layer, e))
+		goto fail;
 	/* 4. islands */
 	if (c->w && islands(v, layer))
 		goto nomem;
 	/* 5a. distance to this layer's solid (next layer's overhang test) */
-	if (c->w && edt_sq(c->solid, (size_t)c->w, c->w, c->h, v->p.pixel_x_mm, v->p.pixel_y_mm,
-			   c->d2, &v->es, e))
+	if (c->w && edt_nearest_sq(c->solid, (size_t)c->w, c->w, c->h, v->p.pixel_x_mm,
+				   v->p.pixel_y_mm, c->d2, c->near, &v->es, e))
 		goto fail;
 	/* 5b. walls: distance from enclosed voids to this layer's outside void */
 	if (c->w && ncomp) {
@@ -842,6 +974,7 @@ int verify_finish(struct verify *v, struct verify_report *out, struct err *e)
 		}
 	}
 	v->r.layers = v->next;
+	v->r.tolerance_px = v->p.tolerance_px;
 	v->r.width = v->w;
 	v->r.height = v->h;
 	v->r.overhang_px = mem_calloc((size_t)v->next + 1, sizeof *v->r.overhang_px);
@@ -868,6 +1001,11 @@ int verify_finish(struct verify *v, struct verify_report *out, struct err *e)
 		}
 	}
 	v->r.interior_overhang_mm2 = (double)v->r.interior_overhang_px * pa;
+	for (size_t k = 0; k < v->ovx.n; k++)
+		if (uf_find(v, v->ovx.v[k].id) != VX_OUT &&
+		    v->ovx.v[k].val > v->r.slope_excess_mm)
+			v->r.slope_excess_mm = v->ovx.v[k].val;
+	v->r.slope_excess_px = v->r.slope_excess_mm / fmax(v->p.pixel_x_mm, v->p.pixel_y_mm);
 	/* voxels per enclosed 3D component (indexed by root id): every layer
 	 * component of an enclosed 3D component is 2D-enclosed, so it has a
 	 * vol record */
@@ -960,10 +1098,17 @@ int verify_report_metrics(const struct verify_report *r, const char *prefix, str
 	rc |= metrics_int(m, KEY("overhang_layers"), r->overhang_layers);
 	rc |= metrics_int(m, KEY("worst_layer"), r->worst_layer);
 	rc |= metrics_int(m, KEY("worst_layer_px"), r->worst_layer_px);
+	rc |= metrics_num(m, KEY("slope_excess_mm"), r->slope_excess_mm);
+	rc |= metrics_num(m, KEY("slope_excess_px"), r->slope_excess_px);
+	rc |= metrics_num(m, KEY("tolerance_px"), r->tolerance_px);
 	rc |= metrics_num(m, KEY("exterior_overhang_mm2"), r->exterior_overhang_mm2);
 	rc |= metrics_int(m, KEY("islands"), r->islands);
 	rc |= metrics_num(m, KEY("island_mm2"), r->island_mm2);
 	rc |= metrics_int(m, KEY("first_island_layer"), r->first_island_layer);
+	rc |= metrics_int(m, KEY("islands_interior"), r->islands_interior);
+	rc |= metrics_num(m, KEY("island_interior_mm2"), r->island_interior_mm2);
+	rc |= metrics_int(m, KEY("first_interior_island_layer"), r->first_interior_island_layer);
+	rc |= metrics_int(m, KEY("islands_part"), r->islands - r->islands_interior);
 	if (r->has_reference) {
 		rc |= metrics_int(m, KEY("islands_added"), r->islands_added);
 		rc |= metrics_num(m, KEY("island_added_mm2"), r->island_added_mm2);

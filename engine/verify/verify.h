@@ -36,7 +36,9 @@ struct verify_params {
 	double alpha_deg;    /* largest self-supporting overhang from the vertical, (0, 90) */
 	double pixel_x_mm;   /* pitch along image columns (x), > 0 */
 	double pixel_y_mm;   /* pitch along image rows (y), > 0 */
-	double tolerance_px; /* rasterisation tolerance in pixels (1 when 0 is given) */
+	double tolerance_px; /* overhang tolerance in pixels of the larger pitch beyond
+			      * layer_mm tan(alpha), distances measured at sub-pixel
+			      * accuracy (VERIFY_TOLERANCE_PX when 0 is given) */
 	int threshold;       /* gray >= threshold is solid (128 when 0 is given): an
 			      * anti-aliased pixel is solid when at least half covered */
 	int speck_voxels;    /* enclosed 3D void components of at most this many
@@ -46,6 +48,10 @@ struct verify_params {
 
 /* Default speck size: a 2 x 2 x 2 voxel pocket. */
 #define VERIFY_SPECK_VOXELS 8
+/* Default overhang tolerance (pixels): the sub-pixel distances' error
+ * on exactly rendered straight and curved edges stays below it
+ * (tests/unit/verify/test_verify_subpx.c). */
+#define VERIFY_TOLERANCE_PX 0.2
 /* Default threshold: gray >= 128 is solid. */
 #define VERIFY_THRESHOLD 128
 
@@ -59,12 +65,27 @@ struct verify_report {
 	int worst_layer;              /* -1 when none */
 	long long worst_layer_px;
 	long long *overhang_px;       /* per layer (layers entries, owned): interior px on that layer */
+	/* the largest distance by which a solid point over an enclosed void
+	 * lies farther from the layer below's solid than layer_mm tan(alpha)
+	 * (sub-pixel, verify.c); 0 when no point does.  In mm and in pixels
+	 * of the larger pitch */
+	double slope_excess_mm, slope_excess_px;
+	double tolerance_px;          /* the tolerance the check ran with */
 	/* overhangs over voids open to the outside (removable supports) */
 	double exterior_overhang_mm2;
 	/* floating islands */
 	long long islands;
 	double island_mm2;
 	int first_island_layer;       /* -1 when none */
+	/* islands the interior adds: an island with a pixel over a void that
+	 * the layer below encloses (2D: its void component does not reach
+	 * the image border), where the part filled solid would have held it
+	 * up.  The others (islands - islands_interior, metric islands_part)
+	 * start over the outside: the part's own features that begin in mid
+	 * air and need external supports whatever fills it */
+	long long islands_interior;
+	double island_interior_mm2;
+	int first_interior_island_layer; /* -1 when none */
 	/* islands the solid part does not have (only with a reference stack,
 	 * verify_layer_ref): islands none of whose pixels lies within
 	 * tolerance_px (Chebyshev) of a pixel of an island of the reference's

@@ -43,7 +43,10 @@ static int solid_at(enum shape s, double x, double y, double z)
 		d = fmin(fmin(x - 3, 19 - x), fmin(y - 3, 19 - y));
 		if (s == LOWROOF) /* 71.6 degrees from the vertical: 0.3 mm per layer */
 			d /= 3;
-		return !(z < 18 && z - 10 < d);
+		/* pixel and layer centres fall on the roof's steps exactly: the
+		 * 1e-9 decides the ties one way (a step of one pixel per layer),
+		 * where rounding would give steps of 0 and 2 */
+		return !(z < 18 && z - 10 < d + 1e-9);
 	}
 	return 1;
 }

@@ -1,0 +1,71 @@
+/* subpx.h - a layer's solid at sub-pixel accuracy, read from its
+ * anti-aliased image, and the overhang distance between two layers
+ * (verify.c's overhang test; docs/verify.md "Sub-pixel overhangs").
+ *
+ * Model of one layer.  A pixel of gray 255 is its whole square, a pixel
+ * of gray 0 is empty, and a pixel of gray g in between is the part of
+ * its square on the solid side of one straight edge: the edge's normal
+ * is the gray gradient there (3 x 3 isotropic Sobel weights 1, sqrt 2,
+ * 1), and its offset from the centre is the one at which the cut-off
+ * part's area is g / 255 of the square (exact for a straight edge; the
+ * inverse of the area of a square cut by a line).  A grey pixel with no
+ * gradient (a speck alone) is a centred square of that area.  Pixels
+ * beyond the crop are empty.  This is the reading of Gustavson and
+ * Strand's anti-aliased distance transform (2011), kept as regions so
+ * that distances are between sets, not between pixel centres.
+ *
+ * Units: positions in image pixels (pixel (x, y) is the square
+ * [x - 1/2, x + 1/2] x [y - 1/2, y + 1/2] around its centre (x, y): the
+ * half-pixel shift of raster.h does not matter to distances); distances
+ * in mm with the two pitches.
+ *
+ * Internal to engine/verify.
+ */
+#ifndef INFILLD_VERIFY_SUBPX_H
+#define INFILLD_VERIFY_SUBPX_H
+
+#include <stdint.h>
+
+/* A crop of one layer: gray[(y - y0) * w + (x - x0)] for image pixel
+ * (x, y) inside it (borrowed). */
+struct verify_subpx_img {
+	const uint8_t *gray;
+	int x0, y0, w, h;
+	double px_mm, py_mm; /* pitch along x (columns) and y (rows) */
+};
+
+/* A pixel's solid region: a convex polygon of at most 5 vertices in mm,
+ * image-pixel origin, wound consistently; n == 0 when empty. */
+struct verify_subpx_poly {
+	int n;
+	double x[8], y[8];
+};
+
+/* Gray of image pixel (x, y), 0 beyond the crop. */
+int verify_subpx_gray(const struct verify_subpx_img *im, int x, int y);
+
+/* Region of image pixel (x, y) by the model above. */
+void verify_subpx_region(const struct verify_subpx_img *im, int x, int y,
+			 struct verify_subpx_poly *out);
+
+/* Largest distance (mm) from a point of pixel (x, y)'s square to its
+ * region: 0 for gray 255, at most half the pixel diagonal. */
+double verify_subpx_gap_mm(const struct verify_subpx_img *im, int x, int y);
+
+/* Distance (mm) from point (x_mm, y_mm) to polygon p (0 inside). */
+double verify_subpx_poly_dist(const struct verify_subpx_poly *p, double x_mm, double y_mm);
+
+/* Largest distance (mm) from a point of the region of pixel (x, y) of
+ * layer `above` to the solid of layer `below` (the union of its pixels'
+ * regions), looking at the pixels of `below` within win_px (Chebyshev)
+ * of (x, y); INFINITY when none of them is solid (or the region is
+ * empty: then -INFINITY).  Evaluated at the region's vertices and at
+ * the points of a 5 x 5 grid over the square (quarter-pixel steps) that
+ * lie in it: exact where the farthest point is a vertex (a slope's
+ * edge), within an eighth of a pixel's diagonal on a ridge (where two
+ * walls below are equally near).  The caller sizes win_px to cover
+ * every pixel of `below` that can be nearest (verify.c). */
+double verify_subpx_far_mm(const struct verify_subpx_img *below,
+			   const struct verify_subpx_img *above, int x, int y, int win_px);
+
+#endif
