@@ -57,83 +57,7 @@
 #include "engine/verify/contact.h"
 #include "engine/verify/fins.h"
 #include "engine/verify/subpx.h"
-
-#define VX_OUT 1u /* union-find id of the outside */
-#define VX_FIN_PX 2 /* fins and shelves: solid runs of at most this many pixels / layers */
-
-struct crop {
-	int x0, y0, w, h; /* w == 0: empty */
-	int sx0, sy0, sx1, sy1; /* bounding box of the layer's solid; sx1 < 0: none */
-	size_t cap;
-	uint8_t *solid;   /* 1 = solid */
-	uint8_t *gray;    /* the layer's gray (coverage x 255), for subpx.h */
-	uint32_t *lab;    /* void component id, 0 on solid */
-	float *d2;        /* squared distance (mm^2) to this layer's solid */
-	int32_t *near;    /* crop index of that nearest solid pixel, -1 if none */
-	float *any_d2;    /* squared distance (mm^2) to the nearest pixel with
-			   * gray > 0; computed on demand (any_ok) */
-	int any_ok;
-};
-
-struct rec {
-	uint32_t id;
-	uint32_t id2; /* vertical walls: the void on the run's other side */
-	int layer;
-	double val; /* px count (overhang, void volume) or wall mm */
-};
-
-struct recs {
-	struct rec *v;
-	size_t n, cap;
-};
-
-struct verify {
-	struct verify_params p;
-	double slope_mm;  /* layer_mm tan(alpha): the rule's reach */
-	double reach_mm;  /* slope_mm + tolerance_px pixels: interior overhang beyond it */
-	double ext_reach_mm; /* slope_mm + 1 pixel: the centre test over the outside */
-	int margin;
-	int w, h, next;
-	struct crop a, b, *prev, *cur;
-	uint32_t *uf;
-	size_t nuf, ufcap;
-	struct recs ov, wall, vol, vwall, fin;
-	struct recs ovx;      /* per component and layer: largest slope excess (mm) */
-	struct recs between;  /* in-layer walls between two 2D-enclosed voids */
-	struct recs shelf;    /* column runs of <= VX_FIN_PX layers between them */
-	struct verify_between vb;
-	uint32_t *wlab;       /* walls_between's window of void labels */
-	size_t wlab_cap;
-	uint16_t *col;        /* per image pixel: layer where its solid run began */
-	uint32_t *col_id;     /* per image pixel: void component under that run when
-			       * it was 2D-enclosed, else VX_OUT (outside, plate) */
-	int col_ok;           /* layer count fits the 16-bit counter */
-	uint8_t *enc;         /* per component of the current layer: 2D-enclosed */
-	size_t enc_cap;
-	uint8_t *prev_enc;    /* same for the previous layer's components */
-	size_t prev_enc_cap;
-	uint32_t prev_first, cur_first; /* first component id of each layer */
-	double *agg;          /* per-component scratch */
-	size_t agg_cap;
-	double *aggx;         /* per-component scratch: largest slope excess (mm) */
-	size_t aggx_cap;
-	int *stack;
-	size_t stack_cap;
-	uint8_t *seed;
-	float *ext_d2;
-	size_t ext_cap;
-	double *cnt;          /* per-component pixel counts */
-	size_t cnt_cap;
-	double *fcnt;         /* per-component fin, then sliver, pixel counts */
-	struct verify_fins vf;
-	struct recs sliver;   /* fin pixels standing free (fins.h) */
-	size_t fcnt_cap;
-	size_t scratch_cap;
-	struct edt_scratch es;
-	struct verify_contact ref; /* the reference stack's own islands (has_reference) */
-	struct verify_report r;
-	int failed, finished;
-};
+#include "engine/verify/verify_int.h"
 
 void verify_report_fini(struct verify_report *r)
 {
@@ -253,7 +177,7 @@ int verify_new(const struct verify_params *p, struct verify **out, struct err *e
 	return 0;
 }
 
-static uint32_t uf_find(struct verify *v, uint32_t a)
+uint32_t verify_uf_find(struct verify *v, uint32_t a)
 {
 	while (v->uf[a] != a) {
 		v->uf[a] = v->uf[v->uf[a]];
@@ -264,8 +188,8 @@ static uint32_t uf_find(struct verify *v, uint32_t a)
 
 static void uf_union(struct verify *v, uint32_t a, uint32_t b)
 {
-	a = uf_find(v, a);
-	b = uf_find(v, b);
+	a = verify_uf_find(v, a);
+	b = verify_uf_find(v, b);
 	if (a == b)
 		return;
 	/* the outside stays a root */
@@ -305,7 +229,7 @@ static int rec_add2(struct recs *r, uint32_t id, uint32_t id2, int layer, double
 	return 0;
 }
 
-static int rec_add(struct recs *r, uint32_t id, int layer, double val)
+int verify_rec_add(struct recs *r, uint32_t id, int layer, double val)
 {
 	return rec_add2(r, id, 0, layer, val);
 }
@@ -339,7 +263,7 @@ static int shelf_add(struct verify *v, uint32_t a, uint32_t b, int layer, double
 }
 
 /* Scratch growth: the old contents are dropped, not copied. */
-static int grow_bytes(void **p, size_t *cap, size_t need)
+int verify_grow_bytes(void **p, size_t *cap, size_t need)
 {
 	if (need <= *cap)
 		return 0;
@@ -371,7 +295,7 @@ static int crop_alloc(struct crop *c, size_t n)
 
 /* Solid state of image pixel (x, y) in crop c: 1 solid, 0 void (outside the
  * crop is void). */
-static int crop_solid(const struct crop *c, int x, int y, size_t *idx)
+int verify_crop_solid(const struct crop *c, int x, int y, size_t *idx)
 {
 	int cx = x - c->x0, cy = y - c->y0;
 
@@ -383,7 +307,7 @@ static int crop_solid(const struct crop *c, int x, int y, size_t *idx)
 	return c->solid[*idx];
 }
 
-static int push(struct verify *v, size_t n, int val)
+int verify_push(struct verify *v, size_t n, int val)
 {
 	if (n >= v->stack_cap) {
 		void *arr = v->stack;
@@ -412,7 +336,7 @@ static int label_voids(struct verify *v, uint32_t *ncomp)
 			int touch = 0;
 			if (c->solid[i] || c->lab[i])
 				continue;
-			if (uf_new(v, &id) || push(v, sp++, (int)i))
+			if (uf_new(v, &id) || verify_push(v, sp++, (int)i))
 				return ERR_NOMEM;
 			c->lab[i] = id;
 			while (sp) {
@@ -430,7 +354,7 @@ static int label_voids(struct verify *v, uint32_t *ncomp)
 					if (c->solid[j] || c->lab[j])
 						continue;
 					c->lab[j] = id;
-					if (push(v, sp++, (int)j))
+					if (verify_push(v, sp++, (int)j))
 						return ERR_NOMEM;
 				}
 			}
@@ -447,93 +371,6 @@ static int label_voids(struct verify *v, uint32_t *ncomp)
 	*ncomp = n;
 	return 0;
 }
-
-/* Is component id (of the previous layer) 2D-enclosed there? */
-static int prev_enclosed(const struct verify *v, uint32_t id)
-{
-	return id >= v->prev_first && id - v->prev_first < v->prev_enc_cap &&
-	       v->prev_enc[id - v->prev_first];
-}
-
-/* Islands: solid components (8-connected) without solid beneath.  Not
- * the dual of the 8-connected voids on purpose: this asks whether cured
- * resin is attached, and pixels meeting at a corner cure together; with
- * 4-connectivity every stair-step pixel of a rasterised slope with no
- * solid beneath would read as a floating part. */
-static int islands(struct verify *v, int layer)
-{
-	struct crop *c = v->cur;
-	int w = c->w, h = c->h, tol = (int)ceil(v->p.tolerance_px);
-	uint8_t *seen;
-
-	if (layer == 0)
-		return 0;
-	if (grow_bytes((void **)&v->seed, &v->scratch_cap, (size_t)w * (size_t)h))
-		return ERR_NOMEM;
-	seen = v->seed;
-	memset(seen, 0, (size_t)w * (size_t)h);
-	for (int y = 0; y < h; y++)
-		for (int x = 0; x < w; x++) {
-			size_t i = (size_t)y * (size_t)w + (size_t)x, sp = 0, area = 0;
-			int supported = 0, own = 0; /* own: touches an island of the reference */
-			int inner = 0; /* over a void the previous layer encloses */
-			if (!c->solid[i] || seen[i])
-				continue;
-			seen[i] = 1;
-			if (push(v, sp++, (int)i))
-				return ERR_NOMEM;
-			while (sp) {
-				int q = v->stack[--sp], qx = q % w, qy = q / w;
-				size_t pi;
-				area++;
-				if (!supported && crop_solid(v->prev, qx + c->x0, qy + c->y0, &pi))
-					supported = 1;
-				if (!supported && !inner && pi != SIZE_MAX &&
-				    prev_enclosed(v, v->prev->lab[pi]))
-					inner = 1;
-				/* checked only while unsupported: a supported component
-				 * (nearly all) stops paying for it at its first such pixel */
-				if (!supported && !own && v->r.has_reference &&
-				    verify_contact_near(&v->ref, qx + c->x0, qy + c->y0, tol))
-					own = 1;
-				for (int dy = -1; dy <= 1; dy++)
-					for (int dx = -1; dx <= 1; dx++) {
-						int nx = qx + dx, ny = qy + dy;
-						size_t j;
-						if (nx < 0 || ny < 0 || nx >= w || ny >= h)
-							continue;
-						j = (size_t)ny * (size_t)w + (size_t)nx;
-						if (!c->solid[j] || seen[j])
-							continue;
-						seen[j] = 1;
-						if (push(v, sp++, (int)j))
-							return ERR_NOMEM;
-					}
-			}
-			if (!supported) {
-				v->r.islands++;
-				v->r.island_mm2 += (double)area * v->p.pixel_x_mm * v->p.pixel_y_mm;
-				if (v->r.first_island_layer < 0)
-					v->r.first_island_layer = layer;
-				if (inner) {
-					v->r.islands_interior++;
-					v->r.island_interior_mm2 +=
-						(double)area * v->p.pixel_x_mm * v->p.pixel_y_mm;
-					if (v->r.first_interior_island_layer < 0)
-						v->r.first_interior_island_layer = layer;
-				}
-				if (v->r.has_reference && !own) {
-					v->r.islands_added++;
-					v->r.island_added_mm2 +=
-						(double)area * v->p.pixel_x_mm * v->p.pixel_y_mm;
-					if (v->r.first_added_island_layer < 0)
-						v->r.first_added_island_layer = layer;
-				}
-			}
-		}
-	return 0;
-}
-
 
 /* In-layer walls between two 2D-enclosed void components of the current
  * crop: every void pixel is a seed (the outside too, so two cavities
@@ -562,7 +399,7 @@ static int walls_between(struct verify *v, int layer, struct err *e)
 	ww = x1 - x0 + 1;
 	wh = y1 - y0 + 1;
 	/* window copies: seeds in v->seed, labels in v->wlab */
-	if (grow_bytes((void **)&v->wlab, &v->wlab_cap, (size_t)ww * (size_t)wh * sizeof *v->wlab))
+	if (verify_grow_bytes((void **)&v->wlab, &v->wlab_cap, (size_t)ww * (size_t)wh * sizeof *v->wlab))
 		return ERR_SET(e, ERR_NOMEM, "verify: out of memory at layer %d", layer);
 	for (int y = 0; y < wh; y++)
 		for (int x = 0; x < ww; x++) {
@@ -580,125 +417,6 @@ static int walls_between(struct verify *v, int layer, struct err *e)
 		    !v->enc[q->b - v->cur_first])
 			continue;
 		if (rec_add2(&v->between, q->a, q->b, layer, q->d_mm - pmin))
-			return ERR_SET(e, ERR_NOMEM, "verify: out of memory at layer %d", layer);
-	}
-	return 0;
-}
-
-/* The void component of the previous layer that a pixel of this layer
- * overhangs: the one under it, else (its pixel below is solid at the
- * threshold, but its region may still reach past the slope) the first
- * void 8-neighbour of that pixel; 0 when there is none. */
-static uint32_t void_under(const struct crop *pc, int gx, int gy)
-{
-	size_t pi;
-
-	if (!crop_solid(pc, gx, gy, &pi))
-		return pi == SIZE_MAX ? VX_OUT : pc->lab[pi];
-	for (int dy = -1; dy <= 1; dy++)
-		for (int dx = -1; dx <= 1; dx++) {
-			size_t j;
-			if (!crop_solid(pc, gx + dx, gy + dy, &j))
-				return j == SIZE_MAX ? VX_OUT : pc->lab[j];
-		}
-	return 0;
-}
-
-/* 3. Overhangs of the current layer over the previous one (head comment,
- * docs/verify.md "Sub-pixel overhangs").  Over voids already known to be
- * the outside: the pixel-centre test with one pixel of slack, an
- * estimate of the support area.  Elsewhere, every pixel with some solid
- * (gray > 0) over a pixel that is not fully solid: an upper bound U on
- * the farthest point of its region from the previous layer's solid (the
- * centre distance to the nearest solid pixel plus that pixel's gap from
- * square to region) settles most pixels (U <= slope); a lower bound from
- * the distance to any grey pixel settles gross overhangs; the rest are
- * measured (subpx.h).  A pixel overhangs when its farthest point lies
- * beyond slope + tolerance; the largest excess over the slope is
- * recorded per component. */
-static int overhangs(struct verify *v, int layer, struct err *e)
-{
-	struct crop *c = v->cur, *pc = v->prev;
-	size_t np = pc->w ? (size_t)(v->nuf - v->prev_first) : 0;
-	double pmin = fmin(v->p.pixel_x_mm, v->p.pixel_y_mm);
-	double hd = 0.5 * hypot(v->p.pixel_x_mm, v->p.pixel_y_mm), pa = v->p.pixel_x_mm * v->p.pixel_y_mm;
-	double ext2 = v->ext_reach_mm * v->ext_reach_mm;
-	struct verify_subpx_img below = {pc->gray, pc->x0, pc->y0, pc->w, pc->h, v->p.pixel_x_mm,
-					 v->p.pixel_y_mm};
-	struct verify_subpx_img above = {c->gray, c->x0, c->y0, c->w, c->h, v->p.pixel_x_mm,
-					 v->p.pixel_y_mm};
-	long long out_px = 0;
-
-	if (np && (grow_bytes((void **)&v->agg, &v->agg_cap, np * sizeof *v->agg) ||
-		   grow_bytes((void **)&v->aggx, &v->aggx_cap, np * sizeof *v->aggx)))
-		return ERR_SET(e, ERR_NOMEM, "verify: out of memory at layer %d", layer);
-	for (size_t k = 0; k < np; k++) {
-		v->agg[k] = 0;
-		v->aggx[k] = -INFINITY;
-	}
-	for (int y = 0; y < c->h; y++)
-		for (int x = 0; x < c->w; x++) {
-			size_t i = (size_t)y * (size_t)c->w + (size_t)x, pi;
-			int gx = x + c->x0, gy = y + c->y0, gb;
-			uint32_t id;
-			double u, lo, far;
-			if (c->gray[i] == 0)
-				continue;
-			crop_solid(pc, gx, gy, &pi);
-			if (pi == SIZE_MAX) {
-				if (c->solid[i])
-					out_px++; /* over the outside, beyond the reach by the margin */
-				continue;
-			}
-			gb = pc->gray[pi];
-			if (gb == 255 || !(id = void_under(pc, gx, gy)))
-				continue;
-			if (id == VX_OUT || uf_find(v, id) == VX_OUT) {
-				if (c->solid[i] && !pc->solid[pi] && pc->d2[pi] > ext2)
-					out_px++;
-				continue;
-			}
-			if (id < v->prev_first)
-				continue; /* cannot happen: labels of the previous layer */
-			u = INFINITY;
-			if (pc->near[pi] >= 0) {
-				int32_t n = pc->near[pi];
-				u = sqrt(pc->d2[pi]) + verify_subpx_gap_mm(&below, n % pc->w + pc->x0,
-									   n / pc->w + pc->y0);
-			}
-			if (u <= v->slope_mm)
-				continue;
-			if (!pc->any_ok) {
-				size_t n = (size_t)pc->w * (size_t)pc->h;
-				if (grow_bytes((void **)&v->seed, &v->scratch_cap, n))
-					return ERR_SET(e, ERR_NOMEM, "verify: out of memory at layer %d",
-						       layer);
-				for (size_t k = 0; k < n; k++)
-					v->seed[k] = pc->gray[k] > 0;
-				if (edt_sq(v->seed, (size_t)pc->w, pc->w, pc->h, v->p.pixel_x_mm,
-					   v->p.pixel_y_mm, pc->any_d2, &v->es, e))
-					return e ? e->code : ERR_NOMEM;
-				pc->any_ok = 1;
-			}
-			lo = sqrt(pc->any_d2[pi]) - (c->gray[i] >= 128 ? hd : 2 * hd);
-			if (lo > v->reach_mm) {
-				far = lo; /* a lower bound: beyond the reach anyway */
-			} else {
-				double wmm = fmin(u, sqrt(pc->any_d2[pi]) + 2 * hd) + 2 * hd;
-				far = verify_subpx_far_mm(&below, &above, gx, gy,
-							  (int)ceil(wmm / pmin));
-			}
-			if (far - v->slope_mm > v->aggx[id - v->prev_first])
-				v->aggx[id - v->prev_first] = far - v->slope_mm;
-			if (far > v->reach_mm)
-				v->agg[id - v->prev_first] += 1;
-		}
-	v->r.exterior_overhang_mm2 += (double)out_px * pa;
-	for (size_t k = 0; k < np; k++) {
-		if (v->agg[k] > 0 && rec_add(&v->ov, v->prev_first + (uint32_t)k, layer, v->agg[k]))
-			return ERR_SET(e, ERR_NOMEM, "verify: out of memory at layer %d", layer);
-		if (v->aggx[k] > 0 &&
-		    rec_add(&v->ovx, v->prev_first + (uint32_t)k, layer, v->aggx[k]))
 			return ERR_SET(e, ERR_NOMEM, "verify: out of memory at layer %d", layer);
 	}
 	return 0;
@@ -815,7 +533,7 @@ int verify_layer_ref(struct verify *v, const struct raster *r, const struct rast
 				size_t i = (size_t)y * (size_t)c->w + (size_t)x, pi;
 				if (c->solid[i])
 					continue;
-				if (crop_solid(pc, x + c->x0, y + c->y0, &pi))
+				if (verify_crop_solid(pc, x + c->x0, y + c->y0, &pi))
 					continue;
 				uf_union(v, c->lab[i], pi == SIZE_MAX ? VX_OUT : pc->lab[pi]);
 			}
@@ -826,16 +544,16 @@ int verify_layer_ref(struct verify *v, const struct raster *r, const struct rast
 				int gx = x + pc->x0, gy = y + pc->y0;
 				if (pc->solid[i])
 					continue;
-				crop_solid(c, gx, gy, &ci);
+				verify_crop_solid(c, gx, gy, &ci);
 				if (ci == SIZE_MAX)
 					uf_union(v, pc->lab[i], VX_OUT);
 			}
 	}
 	/* 3. overhangs of this layer over the previous one, per void component */
-	if (layer > 0 && c->w && overhangs(v, layer, e))
+	if (layer > 0 && c->w && verify_overhangs(v, layer, e))
 		goto fail;
 	/* 4. islands */
-	if (c->w && islands(v, layer))
+	if (c->w && verify_islands(v, layer))
 		goto nomem;
 	/* 5a. distance to this layer's solid (next layer's overhang test) */
 	if (c->w && edt_nearest_sq(c->solid, (size_t)c->w, c->w, c->h, v->p.pixel_x_mm,
@@ -845,10 +563,10 @@ int verify_layer_ref(struct verify *v, const struct raster *r, const struct rast
 	if (c->w && ncomp) {
 		size_t n = (size_t)c->w * (size_t)c->h;
 		int any = 0, nenc = 0;
-		if (grow_bytes((void **)&v->seed, &v->scratch_cap, n) ||
-		    grow_bytes((void **)&v->agg, &v->agg_cap, ncomp * sizeof *v->agg) ||
-		    grow_bytes((void **)&v->cnt, &v->cnt_cap, ncomp * sizeof *v->cnt) ||
-		    grow_bytes((void **)&v->ext_d2, &v->ext_cap, n * sizeof *v->ext_d2))
+		if (verify_grow_bytes((void **)&v->seed, &v->scratch_cap, n) ||
+		    verify_grow_bytes((void **)&v->agg, &v->agg_cap, ncomp * sizeof *v->agg) ||
+		    verify_grow_bytes((void **)&v->cnt, &v->cnt_cap, ncomp * sizeof *v->cnt) ||
+		    verify_grow_bytes((void **)&v->ext_d2, &v->ext_cap, n * sizeof *v->ext_d2))
 			goto nomem;
 		for (size_t i = 0; i < n; i++) {
 			uint32_t l = c->lab[i];
@@ -877,15 +595,15 @@ int verify_layer_ref(struct verify *v, const struct raster *r, const struct rast
 				nenc++;
 				/* centre-to-centre distance minus the two half pixels */
 				if (isfinite(v->agg[k]) &&
-				    rec_add(&v->wall, v->cur_first + k, layer,
+				    verify_rec_add(&v->wall, v->cur_first + k, layer,
 					    sqrt(v->agg[k]) - fmin(v->p.pixel_x_mm, v->p.pixel_y_mm)))
 					goto nomem;
-				if (rec_add(&v->vol, v->cur_first + k, layer, v->cnt[k]))
+				if (verify_rec_add(&v->vol, v->cur_first + k, layer, v->cnt[k]))
 					goto nomem;
 			}
 			/* fins: solid runs of <= VX_FIN_PX pixels between enclosed
 			 * voids (resolved in 3D in verify_finish) */
-			if (grow_bytes((void **)&v->fcnt, &v->fcnt_cap, 2 * ncomp * sizeof *v->fcnt))
+			if (verify_grow_bytes((void **)&v->fcnt, &v->fcnt_cap, 2 * ncomp * sizeof *v->fcnt))
 				goto nomem;
 			for (uint32_t k = 0; k < 2 * ncomp; k++)
 				v->fcnt[k] = 0;
@@ -894,9 +612,9 @@ int verify_layer_ref(struct verify *v, const struct raster *r, const struct rast
 				goto fail;
 			for (uint32_t k = 0; k < ncomp; k++)
 				if ((v->fcnt[k] > 0 &&
-				     rec_add(&v->fin, v->cur_first + k, layer, v->fcnt[k])) ||
+				     verify_rec_add(&v->fin, v->cur_first + k, layer, v->fcnt[k])) ||
 				    (v->fcnt[ncomp + k] > 0 &&
-				     rec_add(&v->sliver, v->cur_first + k, layer, v->fcnt[ncomp + k])))
+				     verify_rec_add(&v->sliver, v->cur_first + k, layer, v->fcnt[ncomp + k])))
 					goto nomem;
 			if (nenc >= 2 && walls_between(v, layer, e))
 				goto fail;
@@ -912,12 +630,12 @@ int verify_layer_ref(struct verify *v, const struct raster *r, const struct rast
 				int gx = x + c->x0, gy = y + c->y0, below_solid;
 				size_t gi = (size_t)gy * (size_t)v->w + (size_t)gx;
 				int enc_now = !c->solid[i] && v->enc[c->lab[i] - v->cur_first];
-				below_solid = layer > 0 && crop_solid(pc, gx, gy, &pi);
+				below_solid = layer > 0 && verify_crop_solid(pc, gx, gy, &pi);
 				if (c->solid[i]) {
 					if (!below_solid) {
 						/* a run starts: remember what is under it */
 						int enc_below = layer > 0 && pi != SIZE_MAX &&
-								prev_enclosed(v, pc->lab[pi]);
+								verify_prev_enclosed(v, pc->lab[pi]);
 						v->col[gi] = (uint16_t)layer;
 						v->col_id[gi] = enc_below ? pc->lab[pi] : VX_OUT;
 					}
@@ -984,7 +702,7 @@ int verify_finish(struct verify *v, struct verify_report *out, struct err *e)
 		qsort(v->ov.v, v->ov.n, sizeof *v->ov.v, cmp_rec_layer);
 	for (size_t k = 0; k < v->ov.n; k++) {
 		const struct rec *q = &v->ov.v[k];
-		if (uf_find(v, q->id) == VX_OUT) {
+		if (verify_uf_find(v, q->id) == VX_OUT) {
 			v->r.exterior_overhang_mm2 += q->val * pa;
 			continue;
 		}
@@ -1002,7 +720,7 @@ int verify_finish(struct verify *v, struct verify_report *out, struct err *e)
 	}
 	v->r.interior_overhang_mm2 = (double)v->r.interior_overhang_px * pa;
 	for (size_t k = 0; k < v->ovx.n; k++)
-		if (uf_find(v, v->ovx.v[k].id) != VX_OUT &&
+		if (verify_uf_find(v, v->ovx.v[k].id) != VX_OUT &&
 		    v->ovx.v[k].val > v->r.slope_excess_mm)
 			v->r.slope_excess_mm = v->ovx.v[k].val;
 	v->r.slope_excess_px = v->r.slope_excess_mm / fmax(v->p.pixel_x_mm, v->p.pixel_y_mm);
@@ -1013,30 +731,30 @@ int verify_finish(struct verify *v, struct verify_report *out, struct err *e)
 	if (!vox)
 		return ERR_SET(e, ERR_NOMEM, "verify: out of memory");
 	for (size_t k = 0; k < v->vol.n; k++) {
-		uint32_t root = uf_find(v, v->vol.v[k].id);
+		uint32_t root = verify_uf_find(v, v->vol.v[k].id);
 		if (root == VX_OUT)
 			continue;
 		v->r.enclosed_void_mm3 += v->vol.v[k].val * pa * v->p.layer_mm;
 		vox[root] += v->vol.v[k].val;
 	}
 	for (uint32_t k = 2; k < v->nuf; k++)
-		if (uf_find(v, k) == k && vox[k] > 0 && vox[k] <= v->p.speck_voxels)
+		if (verify_uf_find(v, k) == k && vox[k] > 0 && vox[k] <= v->p.speck_voxels)
 			v->r.specks++;
 	for (size_t k = 0; k < v->fin.n; k++)
-		if (uf_find(v, v->fin.v[k].id) != VX_OUT)
+		if (verify_uf_find(v, v->fin.v[k].id) != VX_OUT)
 			v->r.fin_px += (long long)v->fin.v[k].val;
 	v->r.fin_mm3 = (double)v->r.fin_px * pa * v->p.layer_mm;
 	for (size_t k = 0; k < v->sliver.n; k++)
-		if (uf_find(v, v->sliver.v[k].id) != VX_OUT)
+		if (verify_uf_find(v, v->sliver.v[k].id) != VX_OUT)
 			v->r.sliver_px += (long long)v->sliver.v[k].val;
 	v->r.sliver_mm3 = (double)v->r.sliver_px * pa * v->p.layer_mm;
 	for (size_t k = 0; k < v->shelf.n; k++)
-		if (uf_find(v, v->shelf.v[k].id) != VX_OUT && uf_find(v, v->shelf.v[k].id2) != VX_OUT)
+		if (verify_uf_find(v, v->shelf.v[k].id) != VX_OUT && verify_uf_find(v, v->shelf.v[k].id2) != VX_OUT)
 			v->r.shelf_px += (long long)v->shelf.v[k].val;
 	v->r.shelf_mm3 = (double)v->r.shelf_px * pa * v->p.layer_mm;
 	for (size_t k = 0; k < v->wall.n; k++) {
 		const struct rec *q = &v->wall.v[k];
-		uint32_t root = uf_find(v, q->id);
+		uint32_t root = verify_uf_find(v, q->id);
 		if (root == VX_OUT)
 			continue;
 		if (vox[root] <= v->p.speck_voxels) {
@@ -1053,7 +771,7 @@ int verify_finish(struct verify *v, struct verify_report *out, struct err *e)
 	 * counted here; thin ones are fins) */
 	for (size_t k = 0; k < v->between.n; k++) {
 		const struct rec *q = &v->between.v[k];
-		uint32_t ra = uf_find(v, q->id), rb = uf_find(v, q->id2);
+		uint32_t ra = verify_uf_find(v, q->id), rb = verify_uf_find(v, q->id2);
 		if (ra == VX_OUT || rb == VX_OUT || ra == rb || vox[ra] <= v->p.speck_voxels ||
 		    vox[rb] <= v->p.speck_voxels)
 			continue;
@@ -1067,7 +785,7 @@ int verify_finish(struct verify *v, struct verify_report *out, struct err *e)
 	 * cavities are a wall between them */
 	for (size_t k = 0; k < v->vwall.n; k++) {
 		const struct rec *q = &v->vwall.v[k];
-		uint32_t ra = uf_find(v, q->id), rb = uf_find(v, q->id2), in;
+		uint32_t ra = verify_uf_find(v, q->id), rb = verify_uf_find(v, q->id2), in;
 		if (ra != VX_OUT && rb != VX_OUT && ra != rb && vox[ra] > v->p.speck_voxels &&
 		    vox[rb] > v->p.speck_voxels)
 			v->r.min_wall_between_vertical_mm =
