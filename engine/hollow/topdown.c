@@ -437,7 +437,10 @@ int hl_fill_build(const struct mesh *part, const struct mesh *solid, const struc
 	r.map = *m;
 	g.pmax = fmax(g.px, g.py);
 	g.dd = L * tan(c->alpha_rad - c->margin_rad);
-	g.dg = L * tan(c->alpha_rad) + 0.98 * g.pmax;
+	/* the exact rule on the pixels: centre to centre within L tan(alpha),
+	 * which bounds every point of a solid pixel square by the same distance
+	 * from the square below (docs/verify.md "Sub-pixel overhangs") */
+	g.dg = L * tan(c->alpha_rad) + 1e-9;
 	g.wall = c->wall_next_mm;
 	g.mv = (int)ceil(g.wall / L - 1e-9);
 	g.birth = 0.5 * g.wall;

@@ -19,15 +19,10 @@
  *     solid runs of <= VX_FIN_PX pixels between 2D-enclosed voids,
  *     counted per void component and resolved at the end like overhangs.
  *
- * Tolerance.  A print's layer images are the surface sampled at pixel
- * centres (or thresholded coverage): each layer's boundary is displaced
- * by up to half a pixel (a pixel's centre can be inside while most of its
- * area is not, and the reverse).  An overhang compares two boundaries,
- * layer i's solid and layer i+1's, so a support-free surface can show up
- * to one pixel more than layer_mm * tan(alpha) between them.  Distances
- * are measured between pixel centres, so the reach a pixel centre may lie
- * from the nearest solid centre is layer_mm * tan(alpha) + 1 pixel; a
- * true overhang larger than that by any amount is always caught.
+ * Overhangs are measured at sub-pixel accuracy from the anti-aliased
+ * layers (subpx.h, support.c): a pixel overhangs when a point of its
+ * solid region lies farther than layer_mm * tan(alpha) + tolerance_px
+ * pixels from the layer below's solid regions.
  *
  * Walls.  In-layer wall of an enclosed void component = min over its
  * pixels of the Euclidean distance between that pixel's centre and the

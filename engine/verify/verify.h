@@ -3,8 +3,8 @@
  *
  * Reads layer images in print order (0 = on the plate) and finds:
  *  - interior overhangs: a solid pixel of layer i+1 above a void pixel of
- *    layer i that is farther than layer_mm * tan(alpha) (+ 1 pixel, see
- *    verify.c) from layer i's solid, where that void pixel belongs to an
+ *    layer i that is farther than layer_mm * tan(alpha) (+ tolerance_px,
+ *    distances at sub-pixel accuracy: subpx.h) from layer i's solid, where that void pixel belongs to an
  *    ENCLOSED void: its 3D void component (8-connected in a layer, linked
  *    to the void directly above and below) never reaches the outside (the
  *    image border, or anything above the last layer; the build plate
@@ -88,7 +88,7 @@ struct verify_report {
 	int first_interior_island_layer; /* -1 when none */
 	/* islands the solid part does not have (only with a reference stack,
 	 * verify_layer_ref): islands none of whose pixels lies within
-	 * tolerance_px (Chebyshev) of a pixel of an island of the reference's
+	 * ceil(tolerance_px) (Chebyshev) of a pixel of an island of the reference's
 	 * same layer (the part's own first contacts: an overhanging chin) */
 	int has_reference;
 	long long islands_added;
