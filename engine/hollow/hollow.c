@@ -288,7 +288,7 @@ static int hollow_prepare(const struct engine_ctx *ctx, const void *params, void
 	 * there are dropped like voids under min_void_mm3 (fragments.h) */
 	if (!rc && s->out.voids_optimised > 0 && (ctx->want_raster || ctx->want_region))
 		rc = hl_fragments_find(s->out.mesh, ctx->mesh->nv, ctx->mesh->nt,
-				       s->map ? s->map : &s->own_map, s->map ? s->antialias : 0,
+				       s->map ? s->map : &s->own_map, s->map ? s->antialias : 1,
 				       VERIFY_THRESHOLD, s->layer_mm, c->min_void_mm3, &s->frag, e);
 	if (rc) {
 		hollow_release(s);
@@ -328,7 +328,9 @@ static int hollow_layer(void *state, struct layer *ly, struct err *e)
 		rc = verify_layer(s->ver, ly->raster, e);
 	} else {
 		raster_clear(s->own);
-		rc = slice_rasterize(&ly->region, &s->own_map, 0, s->own, e);
+		/* anti-aliased, as a resin writer would: the verifier measures
+		 * the optimised voids' slopes at sub-pixel accuracy */
+		rc = slice_rasterize(&ly->region, &s->own_map, 1, s->own, e);
 		if (!rc && frag)
 			hl_fill_paint(&s->frag, frag, s->own, 255);
 		if (!rc && fill)
@@ -420,7 +422,7 @@ static int part_overhang(struct hollow_state *s, struct err *e)
 		raster_clear(r);
 		rc = slice_at(sl, ly.z_mm, &ly.region, NULL, e);
 		if (!rc)
-			rc = slice_rasterize(&ly.region, map, s->map ? s->antialias : 0, r, e);
+			rc = slice_rasterize(&ly.region, map, s->map ? s->antialias : 1, r, e);
 		if (!rc)
 			rc = verify_layer(v, r, e);
 		paths_fini(&ly.region);

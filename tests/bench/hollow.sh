@@ -55,6 +55,8 @@ if h.get("voids_dropped_for_fill"):
     extra += "  (optimiser's %d voids + fill: %.1f %%, fill alone kept)" % (
         h["voids_dropped_for_fill"], 100 * h["optimised_and_fill_volume_mm3"] / h["part_volume_mm3"])
 between = h["verify"]["min_wall_between_mm"]
+extra += "  slope excess %.3f px (tolerance %.1f)" % (h["verify"]["slope_excess_px"],
+                                                   h["verify"]["tolerance_px"])
 print("%-10s a=%-2s %-11s rounds<=%-2s %5.1f %%  %9.4f  %3d (%3d+%3d)  %6d  %5.2f %5s  %6.2f %6.3f %6.3f  %7.1f (opt %6.1f fill %6.1f)  %5d%s%s"
       % (sys.argv[3], sys.argv[4], sys.argv[5], sys.argv[6], 100 * h["volume_reduction"],
          h["interior_overhang_mm2"], h["voids"], h["voids_optimised"], h["voids_fill"],
@@ -66,6 +68,7 @@ PY
 }
 
 echo "50 mm, walls t = 1.0 / 0.8 mm, SL1, 2 threads; overhang by engine/verify on the layers"
+echo "(sub-pixel distances, 0.2 px tolerance: docs/verify.md)"
 echo "model      alpha objective   rounds    reduction overhang  voids(opt+fill) rounds minwall between fin sliver shelf mm3 time s                 RSS MB"
 
 status=0
