@@ -204,7 +204,6 @@ int verify_overhangs(struct verify *v, int layer, struct err *e)
 				v->aggx[id - v->prev_first] = far - v->slope_mm;
 			if (far > v->reach_mm)
 				v->agg[id - v->prev_first] += 1;
-			}
 		}
 	v->r.exterior_overhang_mm2 += (double)out_px * pa;
 	for (size_t k = 0; k < np; k++) {
