@@ -126,8 +126,9 @@ class HollowMeshTest(unittest.TestCase):
         h = self.m_stl["hollow"]
         self.assertTrue(h["fill_applied"])
         self.assertGreaterEqual(h["voids"], 1)
-        # outer surface plus one sphere-like surface per void: Euler 2 each
-        self.assertEqual(euler, 2 * (1 + h["voids"]))
+        # outer surface plus one closed surface per void, each of Euler
+        # characteristic 2 - 2 genus (a pillar through a void is a handle)
+        self.assertLessEqual(euler, 2 * (1 + h["voids"]))
         # the file holds what the engine reports
         self.assertAlmostEqual(vol, self.m_stl["material_volume_mm3"], delta=1e-3 * vol)
         self.assertTrue(self.m_stl["result_mesh"]["watertight"])
