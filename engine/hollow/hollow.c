@@ -14,8 +14,10 @@
 #include "engine/core/mem.h"
 #include "engine/geom/clip.h"
 #include "engine/hollow/fragments.h"
+#include "engine/hollow/hmesh.h"
 #include "engine/hollow/rounds.h"
 #include "engine/mesh/mesh.h"
+#include "engine/output/printer/printer.h"
 #include "engine/slice/slice.h"
 #include "engine/verify/verify.h"
 
@@ -79,8 +81,8 @@ static const struct param_desc hollow_desc[] = {
 	{.name = "fill", .type = PARAM_BOOL, .offset = offsetof(struct hollow_params, fill),
 	 .min = 0, .max = 1, .def = 1, .unit = "",
 	 .help = "After the optimised voids, hollow the space they left with the top-down "
-		 "support-free fill, designed on the layer pixels (docs/hollow.md; layer outputs "
-		 "only: mesh outputs carry the optimised voids alone). lightweight: the fill alone "
+		 "support-free fill, designed on the layer pixels (docs/hollow.md; a mesh output "
+		 "carries its pixels as stepped void surfaces). lightweight: the fill alone "
 		 "is built too, and kept when it hollows more. stability: only behind the "
 		 "centre of mass, away from the contact area."},
 	{.name = "lean_walls", .type = PARAM_BOOL,
@@ -123,6 +125,13 @@ struct hollow_state {
 	struct hl_config cfg;
 	int objective;
 	int fill_not_applied;        /* fill=true asked, but the output is a mesh */
+	/* mesh outputs: the checker's and the fill's grid is a resin printer's
+	 * own pixels (own_map), so the mesh reslices to the same pixels */
+	int own_is_printer;
+	int own_w, own_h;            /* that printer's image size */
+	struct mesh *result;         /* the mesh output, built on first request */
+	size_t result_void_nt;       /* its void surfaces' triangles */
+	double t_mesh;
 };
 
 static int hollow_validate(const void *params, const struct common_params *common,
@@ -175,6 +184,8 @@ static void verify_params_of(const struct hollow_state *s, struct verify_params 
 	vp->alpha_deg = s->alpha_deg;
 	if (s->map)
 		map_pitch(s->map, &vp->pixel_x_mm, &vp->pixel_y_mm);
+	else if (s->own_is_printer)
+		map_pitch(&s->own_map, &vp->pixel_x_mm, &vp->pixel_y_mm);
 	else
 		vp->pixel_x_mm = vp->pixel_y_mm = HOLLOW_VERIFY_PIXEL_MM;
 }
@@ -185,7 +196,11 @@ static int start_verify(struct hollow_state *s, const struct mesh *m, struct err
 	struct box3 bb = box3_empty();
 
 	verify_params_of(s, &vp);
-	if (!s->map) {
+	if (!s->map && s->own_is_printer) {
+		raster_free(s->own);
+		if (!(s->own = raster_new(s->own_w, s->own_h)))
+			return ERR_SET(e, ERR_NOMEM, "hollow: out of memory");
+	} else if (!s->map) {
 		double p = HOLLOW_VERIFY_PIXEL_MM;
 		int w, h;
 		for (size_t i = 0; i < m->nv; i++)
@@ -267,13 +282,22 @@ static int hollow_prepare(const struct engine_ctx *ctx, const void *params, void
 	c->objective = p->objective == 1 ? HL_OBJ_STABILITY : HL_OBJ_LIGHTWEIGHT;
 	c->light_weight = HOLLOW_LIGHT_WEIGHT;
 	c->print_layer_mm = ctx->layer_mm;
-	/* the fill lives in the layers: a mesh output could not carry it */
-	c->fill = p->fill && (ctx->want_raster || ctx->want_region);
-	s->fill_not_applied = p->fill && !c->fill;
+	/* the fill lives in the layers; a mesh output carries its pixels as
+	 * stepped void surfaces (hmesh.h) */
+	c->fill = p->fill;
 	c->fill_lean = p->lean_walls;
+	/* a mesh output for a resin printer is designed on that printer's
+	 * pixels: sliced again, it gives the very pixels checked here */
+	if (!ctx->want_raster && !ctx->want_region && ctx->printer &&
+	    ctx->printer->kind == PRINTER_RESIN) {
+		printer_raster_geometry(ctx->printer, &s->own_map, &s->own_w, &s->own_h);
+		s->own_is_printer = 1;
+	}
 	/* the fill is designed on the pixels the verifier reads */
 	if (s->map)
 		c->fill_map = *s->map;
+	else if (s->own_is_printer)
+		c->fill_map = s->own_map;
 	else
 		own_map_of(ctx->mesh, &c->fill_map);
 	c->fill_map_set = 1;
@@ -286,7 +310,7 @@ static int hollow_prepare(const struct engine_ctx *ctx, const void *params, void
 		rc = start_verify(s, s->out.mesh, e);
 	/* layer outputs print the pixels: beads split off the optimised voids
 	 * there are dropped like voids under min_void_mm3 (fragments.h) */
-	if (!rc && s->out.voids_optimised > 0 && (ctx->want_raster || ctx->want_region))
+	if (!rc && s->out.voids_optimised > 0)
 		rc = hl_fragments_find(s->out.mesh, ctx->mesh->nv, ctx->mesh->nt,
 				       s->map ? s->map : &s->own_map, s->map ? s->antialias : 1,
 				       VERIFY_THRESHOLD, s->layer_mm, c->min_void_mm3, &s->frag, e);
@@ -525,6 +549,10 @@ static int hollow_metrics(void *state, struct metrics *m, struct err *e)
 	rc |= metrics_num(m, "hollow.seconds.prepare", s->t_prepare);
 	rc |= metrics_num(m, "hollow.seconds.verify", s->t_verify);
 	rc |= metrics_bool(m, "hollow.fill_applied", s->cfg.fill);
+	if (s->result) {
+		rc |= metrics_int(m, "hollow.mesh.void_triangles", (long long)s->result_void_nt);
+		rc |= metrics_num(m, "hollow.mesh.seconds", s->t_mesh);
+	}
 	if (s->fill_not_applied) {
 		/* say so: the same job as SL1 or G-code would hollow far more */
 		char note[sizeof o->note + 160];
@@ -551,8 +579,16 @@ static int hollow_result_mesh(void *state, const struct mesh **out, struct err *
 {
 	struct hollow_state *s = state;
 
-	(void)e;
-	*out = s->out.mesh;
+	if (!s->result) {
+		double t0 = progress_now_s();
+		int rc = hl_mesh_build(s->out.mesh, s->part_nv, s->part_nt, &s->out.fill, &s->frag,
+				       &s->cfg.fill_map, s->layer_mm, &s->result,
+				       &s->result_void_nt, e);
+		if (rc)
+			return rc;
+		s->t_mesh = progress_now_s() - t0;
+	}
+	*out = s->result;
 	return 0;
 }
 
@@ -563,6 +599,7 @@ static void hollow_release(void *state)
 	if (!s)
 		return;
 	hl_outcome_fini(&s->out);
+	mesh_free(s->result);
 	hl_fill_fini(&s->frag);
 	slice_free(s->slicer);
 	verify_free(s->ver);

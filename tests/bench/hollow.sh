@@ -96,6 +96,37 @@ if [ -z "${HOLLOW_MODELS:-}" ]; then
 	run_one ChineseDragon-10kv.off z 45 lightweight 8 true 55.5 || status=1
 	run_one bunny.stl y 45 lightweight 8 true 50 || status=1
 fi
+# the mesh output (-o part.stl): the default pipeline's camel as a closed mesh,
+# its volume against the SL1's material, size, time; sliced again with
+# --engine solid and checked by infilld verify --strict against the plain part
+mesh_one() { # name up
+	local name=$1 up=$2 out="$TMP/${1}_mesh" rc
+	/usr/bin/time -f '%e %M' -o "$out.time" timeout -k 30 "$CAP_S" "$BIN" run \
+		"$SHARED/meshes/$name.off" -o "$out.stl" --engine hollow --set height_mm=50 \
+		--set up="$up" --threads 2 --quiet --metrics "$out.json" || { echo "$name mesh: run failed"; return 1; }
+	"$BIN" run "$out.stl" -o "$out.re.sl1" --engine solid --threads 2 --quiet &&
+		"$BIN" run "$SHARED/meshes/$name.off" -o "$out.solid.sl1" --engine solid \
+			--set height_mm=50 --set up="$up" --threads 2 --quiet &&
+		"$BIN" verify "$out.re.sl1" --solid "$out.solid.sl1" --strict > "$out.verify.json"
+	rc=$?
+	python3 - "$out.json" "$out.time" "$out.stl" "$out.verify.json" "$TMP/${name}_a45_lightweight_r8_h50.json" "$name" "$rc" <<'PY'
+import json, os, sys
+m = json.load(open(sys.argv[1])); wall, rss = open(sys.argv[2]).read().split()[-2:]
+v = json.load(open(sys.argv[4])) if os.path.getsize(sys.argv[4]) else {}
+layers = json.load(open(sys.argv[5]))["material_volume_mm3"] if os.path.exists(sys.argv[5]) else float("nan")
+print("%-10s mesh: %.1f mm3 vs layers %.1f mm3 (%+.3f %%)  %d triangles (voids %d)  watertight %s  %.0f MB  %.1f s (mesh %.1f s)  resliced: overhang %s mm2, verify --strict rc %s"
+      % (sys.argv[6], m["material_volume_mm3"], layers, 100 * (m["material_volume_mm3"] / layers - 1),
+         m["result_mesh"]["triangles"], m["hollow"]["mesh"]["void_triangles"], m["result_mesh"]["watertight"],
+         os.path.getsize(sys.argv[3]) / 1e6, float(wall), m["hollow"]["mesh"]["seconds"],
+         v.get("interior_overhang_mm2"), sys.argv[7]))
+PY
+	rm -f "$out.stl" "$out.re.sl1" "$out.solid.sl1"
+	[ "$rc" -eq 0 ]
+}
+if [ -z "${HOLLOW_MODELS:-}" ] || [[ " $HOLLOW_MODELS " == *" camel:"* ]]; then
+	echo "mesh output (-o part.stl), resliced with --engine solid:"
+	mesh_one camel y || status=1
+fi
 if [ "$MODE" = large ]; then
 	for m in "camel y" "armadillo y"; do
 		set -- $m

@@ -168,27 +168,24 @@ class HollowTest(unittest.TestCase):
         h = m["hollow"]
         self.assertEqual(h["voids"], 0)
         self.assertIn("too thin", h["note"])
-        # a mesh output cannot carry the layer fill, and says so
-        self.assertFalse(h["fill_applied"])
-        self.assertIn("layer outputs", h["note"])
         self.assertAlmostEqual(h["volume_reduction"], 0.0)
         self.assertAlmostEqual(m["material_volume_mm3"], m["part_volume_mm3"], delta=1e-6)
 
     def test_mesh_output_is_what_its_metrics_say(self):
-        # an STL carries the optimised voids alone (the fill lives in the
-        # layers): the figures describe that mesh, not a fill it lacks
+        # an STL carries every void the layers carve (the optimised ones
+        # and the fill, as pixels: tests/hollow/test_hollow_mesh.py): the
+        # figures describe that mesh
         out = os.path.join(self.tmp.name, "out.stl")
         m = hollow(self.tmp.name, "misc/cube.ascii.stl", fmt="stl", height_mm=12, rounds=1)
         h = m["hollow"]
-        self.assertFalse(h["fill_applied"])
-        self.assertIn("layer outputs", h["note"])
-        self.assertEqual(h["voids_fill"], 0)
-        self.assertGreaterEqual(h["voids_optimised"], 1)
+        self.assertTrue(h["fill_applied"])
+        self.assertGreaterEqual(h["voids"], 1)
         self.assertEqual(h["interior_overhang_mm2"], 0.0, h["verify"])
+        self.assertTrue(m["result_mesh"]["watertight"])
         vol = stl_volume_mm3(out)
         self.assertAlmostEqual(vol, m["part_volume_mm3"] - h["void_volume_mm3"],
-                               delta=1e-4 * m["part_volume_mm3"])
-        self.assertAlmostEqual(h["volume_reduction"], 1 - vol / m["part_volume_mm3"], delta=1e-4)
+                               delta=1e-2 * m["part_volume_mm3"])
+        self.assertAlmostEqual(h["volume_reduction"], 1 - vol / m["part_volume_mm3"], delta=1e-2)
         self.assertAlmostEqual(m["material_volume_mm3"], vol, delta=1e-4 * vol)
 
     def test_gcode_output_carries_the_hollowing(self):

@@ -1,0 +1,31 @@
+/* hmesh.h - the hollow engine's mesh output (hmesh.c): the part's own
+ * surface plus the closed surfaces of every void the layer output carves
+ * (docs/hollow.md "Mesh output").
+ */
+#ifndef INFILLD_HOLLOW_HMESH_H
+#define INFILLD_HOLLOW_HMESH_H
+
+#include <stddef.h>
+
+#include "engine/hollow/topdown.h"
+
+struct mesh;
+struct err;
+
+/* What the layers print, as one closed mesh.  res: the part (its first
+ * part_nv vertices and part_nt triangles) followed by the optimised voids'
+ * surfaces; fill: the top-down fill's void pixels, frag: beads painted
+ * solid (both may be empty; the pixels of fill->map, or of map when fill
+ * has no grid); layer_mm: print layers, layer k = slab [k, k + 1]
+ * layer_mm.  Layer k's void is fill's pixels, plus the pixels whose
+ * centres the part covers and res does not (the optimised voids), less
+ * frag's; its surface (engine/mesh/layers.h: stepped at the pixel and the
+ * layer, closed, every edge in two faces) is appended turned inward to the
+ * part's surface.  *out: a new mesh, caller frees; *void_triangles its
+ * share.  0, ERR_NOMEM, ERR_LIMIT or a slicer error. */
+int hl_mesh_build(const struct mesh *res, size_t part_nv, size_t part_nt,
+		  const struct hl_fill *fill, const struct hl_fill *frag,
+		  const struct raster_map *map, double layer_mm, struct mesh **out,
+		  size_t *void_triangles, struct err *e);
+
+#endif
