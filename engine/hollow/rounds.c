@@ -882,6 +882,19 @@ int hl_run(const struct mesh *part, const struct hl_config *c, struct progress *
 		}
 		res.s_fill = progress_now_s() - t0;
 	}
+	if (!res.voids && !res.note[0] && c->fill_map_set && c->rounds == 0) {
+		/* the pixel fill alone: its pixels are whole squares, so with
+		 * a reach under one pixel no solid pixel may hang over a void */
+		const struct raster_map *fm = &c->fill_map;
+		double pitch = 1 / sqrt(fabs(fm->a[0][0] * fm->a[1][1] - fm->a[0][1] * fm->a[1][0]));
+		double reach = c->print_layer_mm * tan(c->alpha_rad);
+		if (reach < pitch)
+			snprintf(res.note, sizeof res.note,
+				 "no support-free void: at this alpha a layer may overhang %.3f mm, less "
+				 "than the %.3f mm pixel, and the pixel fill cannot hang a pixel over a "
+				 "void; the optimiser's voids (rounds > 0) or a larger alpha can hollow it",
+				 reach, pitch);
+	}
 	if (!res.voids && !res.note[0])
 		snprintf(res.note, sizeof res.note,
 			 "too thin to hollow: no support-free void of at least %g mm3 fits inside a "
