@@ -5,9 +5,8 @@
  * Model of one layer.  A pixel of gray 255 is its whole square, a pixel
  * of gray 0 is empty, and a pixel of gray g in between is the part of
  * its square on the solid side of one straight edge: the edge's normal
- * is a gray gradient (3 x 3 isotropic Sobel weights 1, sqrt 2, 1), the
- * pixel's own or a grey neighbour's, whichever line best predicts the 8
- * neighbours' coverage, and its offset from the centre is the one at which the cut-off
+ * is the gray gradient there (3 x 3 isotropic Sobel weights 1, sqrt 2,
+ * 1), and its offset from the centre is the one at which the cut-off
  * part's area is g / 255 of the square (exact for a straight edge; the
  * inverse of the area of a square cut by a line).  A grey pixel with no
  * gradient (a speck alone) is a centred square of that area.  Pixels
