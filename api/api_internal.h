@@ -222,6 +222,7 @@ enum MHD_Result api_tenant_list(struct api_req *r);
 enum MHD_Result api_tenant_get(struct api_req *r);
 enum MHD_Result api_tenant_delete(struct api_req *r);
 enum MHD_Result api_tenant_rotate(struct api_req *r);
+enum MHD_Result api_job_layer(struct api_req *r);
 
 /* Uploads (meshes.c): called by the server as the body streams in. */
 enum MHD_Result api_upload_begin(struct api_req *r);

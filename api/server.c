@@ -39,6 +39,8 @@ static const struct route routes[] = {
 	 "/v1/jobs/{id}/events"},
 	{"GET", "/v1/jobs/{}/output", AUTH_TENANT, BODY_NONE, api_job_output,
 	 "/v1/jobs/{id}/output"},
+	{"GET", "/v1/jobs/{}/layers/{}", AUTH_TENANT, BODY_NONE, api_job_layer,
+	 "/v1/jobs/{id}/layers/{k}"},
 	{"POST", "/v1/tenants", AUTH_ADMIN, BODY_JSON, api_tenant_create, "/v1/tenants"},
 	{"GET", "/v1/tenants", AUTH_ADMIN, BODY_NONE, api_tenant_list, "/v1/tenants"},
 	{"GET", "/v1/tenants/{}", AUTH_ADMIN, BODY_NONE, api_tenant_get, "/v1/tenants/{name}"},
