@@ -224,6 +224,12 @@ enum MHD_Result api_tenant_delete(struct api_req *r);
 enum MHD_Result api_tenant_rotate(struct api_req *r);
 enum MHD_Result api_job_layer(struct api_req *r);
 
+/* ---- CORS (http.c; --cors-origin) ---- */
+/* Answer an OPTIONS preflight for a routed path: 204 with the methods in
+ * allow when the request's Origin is the configured one, else 204 without
+ * CORS headers (the browser then refuses the call). */
+enum MHD_Result api_cors_preflight(struct api_req *r, const char *allow);
+
 /* Uploads (meshes.c): called by the server as the body streams in. */
 enum MHD_Result api_upload_begin(struct api_req *r);
 int api_upload_feed(struct api_req *r, const char *data, size_t len);

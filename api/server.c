@@ -163,6 +163,8 @@ static enum MHD_Result start_request(struct api_req *r)
 	}
 	if (!r->route) {
 		r->route_index = NROUTES;
+		if (path_hit && !strcmp(r->method, "OPTIONS") && r->srv->cfg.cors_origin)
+			return api_cors_preflight(r, allow);
 		if (path_hit) {
 			unsigned st;
 			struct MHD_Response *resp = api_problem_response(
