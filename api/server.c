@@ -22,6 +22,8 @@
 #include <unistd.h>
 
 static const struct route routes[] = {
+	{"GET", "/", AUTH_NONE, BODY_NONE, api_web_index, "/"},
+	{"GET", "/web/{}", AUTH_NONE, BODY_NONE, api_web_asset, "/web/{file}"},
 	{"GET", "/livez", AUTH_NONE, BODY_NONE, api_livez, "/livez"},
 	{"GET", "/readyz", AUTH_NONE, BODY_NONE, api_readyz, "/readyz"},
 	{"GET", "/metrics", AUTH_NONE, BODY_NONE, api_metrics, "/metrics"},
