@@ -466,6 +466,7 @@ async function showResult(job) {
   const slider = $("layer");
   const isMesh = job.format === "stl" || job.format === "obj";
   $("result").hidden = false;
+  $("legend").hidden = job.format !== "gcode";
   slider.disabled = isMesh;
   if (isMesh) {
     $("layer-count").textContent = "0 (a mesh output has no layers)";

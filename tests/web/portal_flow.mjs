@@ -144,6 +144,24 @@ try {
   result.download_name = download.suggestedFilename();
   step("downloaded");
 
+  // A G-code job of the same part: its layers are drawings by role.
+  await page.locator("#f-format").selectOption("gcode");
+  result.gcode_printer = await page.locator("#f-printer").inputValue();
+  await page.locator("#p-height_mm").fill("50");
+  await page.getByRole("button", { name: "Submit job" }).click();
+  await page.waitForFunction((old) => document.getElementById("job-id").textContent !== old, result.job_id);
+  await page.locator("#job-state").filter({ hasText: /^(succeeded|failed|cancelled)$/ }).waitFor({ timeout: 240000 });
+  result.gcode_state = await page.locator("#job-state").innerText();
+  await page.locator("#layer-img[data-layer='0']").waitFor();
+  await page.locator("#layer").fill("100");
+  await page.locator("#layer-img[data-layer='100']").waitFor();
+  await page.waitForFunction(() => document.getElementById("layer-img").complete);
+  result.gcode_layer = await page.locator("#layer-img").evaluate((i) => [i.naturalWidth, i.naturalHeight]);
+  result.gcode_layers = await page.locator("#layer-count").innerText();
+  result.gcode_legend = await page.locator("#legend").isVisible();
+  step("G-code layer 100 shown");
+  await shot(page, "08-gcode-layer-100");
+
   result.jobs_listed_a = await page.locator("#jobs-table tbody tr").count();
   await ctxA.close();
 

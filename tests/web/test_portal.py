@@ -5,7 +5,8 @@ field, runs a solid SL1 job at height_mm=50 and watches it reach 100 %,
 moves the layer slider to layer 500 (the PNG received and the pixels
 shown must equal the archive's layer 500), downloads the archive (its
 SHA-256 must be the job's); tenant B sees none of A's jobs; the admin key
-sees the tenants and the queue.  The page's responses carry the strict
+sees the tenants and the queue.  A G-code job of the same part shows its
+layers as drawings with the role legend.  The page's responses carry the strict
 CSP and the browser reports no CSP violation or script error.
 Screenshots: BUILD/test-artifacts/portal/ (or $INFILLD_ARTIFACTS)."""
 import hashlib
@@ -115,15 +116,21 @@ def test_browser_flow():
     check(shown == b"".join(img.rows), "the pixels shown are the archive's layer 500")
     check(sum(shown) > 0, "layer 500 is not empty")
     # Tenant B: no jobs listed, A's job answers 404.
-    check(res["jobs_listed_a"] >= 1, "A lists its job")
     check(res["jobs_listed_b"] == 0, "B lists none of A's jobs")
     check(res["b_status_on_a_job"] == 404, "B gets 404 on A's job")
     # Admin: both tenants and the queue.
     check(sorted(res["admin_tenants"]) == ["alpha", "beta"], "admin tenants %s" %
           res["admin_tenants"])
     check("succeeded" in res["admin_queue"], "admin queue table: %s" % res["admin_queue"])
+    # The G-code job: a drawing per layer, the role legend.
+    check(res["gcode_printer"] == "generic-fdm", "gcode picks an FDM printer")
+    check(res["gcode_state"] == "succeeded", "gcode job %s" % res["gcode_state"])
+    check(int(res["gcode_layers"]) > 100 and max(res["gcode_layer"]) == 1024,
+          "gcode layer drawn: %s of %s" % (res["gcode_layer"], res["gcode_layers"]))
+    check(res["gcode_legend"], "role legend shown for G-code")
+    check(res["jobs_listed_a"] == 2, "A lists its two jobs: %d" % res["jobs_listed_a"])
     for n in ("01-signed-in", "02-uploaded", "03-field-error", "04-finished", "05-layer-500",
-              "06-tenant-b", "07-admin"):
+              "06-tenant-b", "07-admin", "08-gcode-layer-100"):
         check(os.path.getsize(os.path.join(ARTIFACTS, n + ".png")) > 1000, "screenshot " + n)
 
 
