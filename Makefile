@@ -147,13 +147,17 @@ FUZZ_SECONDS ?= 60
 # The lattice engine's parsers (lattice files, NRRD density grids) and what they need.
 FUZZ_LATTICE_SRC := engine/lattice/graph.c engine/lattice/file_bin.c engine/lattice/file_text.c \
 	engine/lattice/density.c
+# The G-code layer preview reader and what it needs (libpng for its PNG).
+FUZZ_GCODE_SRC := engine/output/gcode/gcode_preview.c engine/output/image/png_encode.c \
+	engine/output/toolpath/plan.c
 .PHONY: fuzz-build
 fuzz-build: $(FUZZ_BIN)
 build-fuzz/%: tests/fuzz/%.c $(wildcard tests/fuzz/*.h engine/*/*.h) $(ENGINE_SRC)
 	@mkdir -p $(@D)
 	@$(if $(Q),echo "  FUZZ    $<")
 	$(Q)clang -std=c11 -O1 -g -fsanitize=fuzzer,address,undefined $(DEFS) -I. $(PKG_CFLAGS) \
-		-Wall -Wextra -Werror -o $@ $< $(filter engine/core/% engine/geom/%.c engine/mesh/% $(FUZZ_LATTICE_SRC),$(FUZZ_ENGINE_SRC)) -lm
+		-Wall -Wextra -Werror -o $@ $< $(filter engine/core/% engine/geom/%.c engine/mesh/% $(FUZZ_LATTICE_SRC) $(FUZZ_GCODE_SRC),$(FUZZ_ENGINE_SRC)) \
+		$(shell pkg-config --libs libpng zlib 2>/dev/null) -lm
 fuzz: deps
 	@$(MAKE) --no-print-directory fuzz-build
 	@tests/fuzz/run.sh $(FUZZ_SECONDS)

@@ -24,6 +24,8 @@
 
 #define GP_MARGIN_PX 8
 #define GP_LINE_MAX 4096
+#define GP_COORD_MAX_MM 1e6  /* moves to farther XY are ignored (no printer is that large) */
+#define GP_WIDTH_MAX_MM 100.0
 #define GP_ROLE_TRAVEL TP_ROLE_COUNT     /* a move without extrusion */
 #define GP_ROLE_OTHER (TP_ROLE_COUNT + 1) /* extrusion of an unknown ;TYPE: */
 
@@ -115,6 +117,8 @@ static int move(struct gp_state *st, const char *args, int k, struct err *e)
 	}
 	if (x == st->x && y == st->y)
 		return 0; /* retraction, z move or feed change only */
+	if (!(fabs(x) <= GP_COORD_MAX_MM && fabs(y) <= GP_COORD_MAX_MM))
+		return 0; /* not a place on any bed: the nozzle stays */
 	extrudes = de > 0;
 	if (extrudes && st->layer >= 0) {
 		grow_bounds(st, st->x, st->y);
@@ -164,8 +168,10 @@ static int read_file(FILE *f, int k, struct gp_state *st, struct err *e)
 				st->layer++;
 			else if (!strncmp(line, ";TYPE:", 6))
 				st->role = role_of(line + 6);
-			else if (!strncmp(line, ";WIDTH:", 7))
-				st->width_mm = atof(line + 7);
+			else if (!strncmp(line, ";WIDTH:", 7)) {
+				double w = atof(line + 7);
+				st->width_mm = w > 0 && w <= GP_WIDTH_MAX_MM ? w : st->width_mm;
+			}
 			continue;
 		}
 		if ((line[0] == 'G' || line[0] == 'g') && (line[1] == '0' || line[1] == '1') &&
@@ -191,25 +197,40 @@ static int read_file(FILE *f, int k, struct gp_state *st, struct err *e)
 	return 0;
 }
 
-/* Pixels within r of segment (x0,y0)-(x1,y1), image coordinates. */
+/* v clamped to [lo, hi] before it becomes an int (far-off moves would
+ * overflow one). */
+static int clamp_px(double v, int lo, int hi)
+{
+	return v < lo ? lo : v > hi ? hi : (int)v;
+}
+
+/* Paint the pixels within r of segment (x0,y0)-(x1,y1), image
+ * coordinates (pixel centres at +0.5).  Row by row, only the columns
+ * where the segment, widened by r, can reach that row are tested, so the
+ * cost is about (length + 2r) * 2r pixels, not the segment's bounding
+ * box (a long diagonal infill line). */
 static void draw_capsule(uint8_t *rgba, int w, int h, double x0, double y0, double x1,
 			 double y1, double r, const uint8_t rgb[3])
 {
 	double dx = x1 - x0, dy = y1 - y0, len2 = dx * dx + dy * dy;
-	int ax = (int)floor(fmin(x0, x1) - r), bx = (int)ceil(fmax(x0, x1) + r);
-	int ay = (int)floor(fmin(y0, y1) - r), by = (int)ceil(fmax(y0, y1) + r);
+	int ay = clamp_px(floor(fmin(y0, y1) - r), 0, h), by = clamp_px(ceil(fmax(y0, y1) + r), -1, h - 1);
 
-	if (ax < 0)
-		ax = 0;
-	if (ay < 0)
-		ay = 0;
-	if (bx > w - 1)
-		bx = w - 1;
-	if (by > h - 1)
-		by = h - 1;
 	for (int py = ay; py <= by; py++) {
-		for (int px = ax; px <= bx; px++) {
-			double cx = px + 0.5 - x0, cy = py + 0.5 - y0;
+		double yc = py + 0.5, t0 = 0, t1 = 1, xa, xb;
+		if (dy != 0) {
+			double ta = (yc - r - y0) / dy, tb = (yc + r - y0) / dy;
+			t0 = fmax(fmin(ta, tb), 0);
+			t1 = fmin(fmax(ta, tb), 1);
+			if (t0 > t1)
+				continue;
+		} else if (fabs(yc - y0) > r) {
+			continue;
+		}
+		xa = fmin(x0 + t0 * dx, x0 + t1 * dx) - r;
+		xb = fmax(x0 + t0 * dx, x0 + t1 * dx) + r;
+		for (int px = clamp_px(floor(xa), 0, w), end = clamp_px(ceil(xb), -1, w - 1); px <= end;
+		     px++) {
+			double cx = px + 0.5 - x0, cy = yc - y0;
 			double t = len2 > 0 ? (cx * dx + cy * dy) / len2 : 0, qx, qy;
 			uint8_t *p;
 			t = t < 0 ? 0 : t > 1 ? 1 : t;
