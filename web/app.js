@@ -526,6 +526,7 @@ async function listJobs(cursor) {
     cell(tr, j.created_at);
     body.appendChild(tr);
   }
+  $("jobs-prev").disabled = state.cursors.length === 0;
   const next = $("jobs-next");
   next.disabled = !page.next_cursor;
   next.dataset.cursor = page.next_cursor || "";
@@ -600,6 +601,9 @@ function wire() {
   $("jobs-first").addEventListener("click", () => {
     state.cursors = [];
     listJobs(null);
+  });
+  $("jobs-prev").addEventListener("click", () => {
+    if (state.cursors.length) listJobs(state.cursors.pop());
   });
   $("jobs-next").addEventListener("click", () => {
     state.cursors.push(state.cursor);

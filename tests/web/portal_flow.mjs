@@ -163,6 +163,14 @@ try {
   await shot(page, "08-gcode-layer-100");
 
   result.jobs_listed_a = await page.locator("#jobs-table tbody tr").count();
+  // The state filter: both jobs succeeded, none is queued.
+  const rows = page.locator("#jobs-table tbody tr");
+  await page.locator("#jobs-state").selectOption("queued");
+  await page.waitForFunction(() => document.querySelectorAll("#jobs-table tbody tr").length === 0);
+  result.jobs_queued_a = await rows.count();
+  await page.locator("#jobs-state").selectOption("succeeded");
+  await page.waitForFunction(() => document.querySelectorAll("#jobs-table tbody tr").length > 0);
+  result.jobs_succeeded_a = await rows.count();
   await ctxA.close();
 
   // ---- tenant B: sees none of A's jobs ----

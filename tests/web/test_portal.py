@@ -129,6 +129,8 @@ def test_browser_flow():
           "gcode layer drawn: %s of %s" % (res["gcode_layer"], res["gcode_layers"]))
     check(res["gcode_legend"], "role legend shown for G-code")
     check(res["jobs_listed_a"] == 2, "A lists its two jobs: %d" % res["jobs_listed_a"])
+    check(res["jobs_queued_a"] == 0 and res["jobs_succeeded_a"] == 2, "state filter: %d queued, "
+          "%d succeeded" % (res["jobs_queued_a"], res["jobs_succeeded_a"]))
     for n in ("01-signed-in", "02-uploaded", "03-field-error", "04-finished", "05-layer-500",
               "06-tenant-b", "07-admin", "08-gcode-layer-100"):
         check(os.path.getsize(os.path.join(ARTIFACTS, n + ".png")) > 1000, "screenshot " + n)

@@ -17,7 +17,7 @@
 
 static int write_zip(const char *path, const char *const *names, int n)
 {
-	struct out_zip *z;
+	struct out_zip *z = NULL;
 	struct sink s;
 	struct err e;
 	int fd, rc;
@@ -30,6 +30,7 @@ static int write_zip(const char *path, const char *const *names, int n)
 		rc = out_zip_add(z, names[i], names[i], strlen(names[i]), &e);
 	if (!rc)
 		rc = out_zip_close(z, &e);
+	out_zip_free(z);
 	close(fd);
 	return rc;
 }
