@@ -30,12 +30,16 @@ done
 # Node.js + npm run the OpenAPI linter, ESLint and the browser test; use
 # the machine's if it has one (a newer node may come from elsewhere), else
 # Debian's.  The portal's browser test (tests/web/test_portal.py) drives
-# Debian's chromium through playwright-core (no browser download).  Both
-# are for the tests only: SKIP_NPM=1 (make run, container builds) skips them.
+# Debian's chromium through playwright-core (no browser download), with
+# one font for legible screenshots (chromium only recommends fonts).  All
+# of it is for the tests only: SKIP_NPM=1 (make run, container builds)
+# skips it.
 if [ "${SKIP_NPM-}" != 1 ]; then
 	command -v npm >/dev/null 2>&1 || missing+=(nodejs npm)
-	dpkg-query -W -f='${db:Status-Status}' chromium 2>/dev/null | grep -qx installed ||
-		missing+=(chromium)
+	for p in chromium fonts-dejavu-core; do
+		dpkg-query -W -f='${db:Status-Status}' "$p" 2>/dev/null | grep -qx installed ||
+			missing+=("$p")
+	done
 fi
 
 if [ ${#missing[@]} -gt 0 ]; then

@@ -46,7 +46,8 @@ async function signIn(page, key) {
 const browser = await chromium.launch({
   executablePath: "/usr/bin/chromium",
   headless: true,
-  args: ["--no-sandbox", "--use-angle=swiftshader", "--enable-unsafe-swiftshader"],
+  // Root in a container: no sandbox; a small /dev/shm: none; WebGL in software.
+  args: ["--no-sandbox", "--disable-dev-shm-usage", "--use-angle=swiftshader", "--enable-unsafe-swiftshader"],
 });
 try {
   // ---- tenant A: the whole flow ----
