@@ -178,7 +178,19 @@ try {
   const ctxB = await browser.newContext({ viewport: { width: 1200, height: 900 } });
   const pb = await ctxB.newPage();
   watch(pb, "B");
-  await signIn(pb, env.KEY_B);
+  // B signs in with the keyboard alone: Tab past the skip link to the key
+  // field (its focus ring must show), type, Enter.
+  await pb.goto(env.URL + "/");
+  await pb.keyboard.press("Tab");
+  await pb.keyboard.press("Tab");
+  result.b_focus = await pb.evaluate(() => {
+    const el = document.activeElement;
+    const st = getComputedStyle(el);
+    return { id: el.id, outline: st.outlineStyle, width: st.outlineWidth };
+  });
+  await pb.keyboard.type(env.KEY_B);
+  await pb.keyboard.press("Enter");
+  await pb.locator("#app").waitFor({ state: "visible" });
   await pb.locator("#tenant-ui").waitFor({ state: "visible" });
   await pb.waitForTimeout(500);
   result.jobs_listed_b = await pb.locator("#jobs-table tbody tr").count();

@@ -4,7 +4,8 @@ loopback.  Tenant A signs in, uploads femur.off, sees a server 422 at its
 field, runs a solid SL1 job at height_mm=50 and watches it reach 100 %,
 moves the layer slider to layer 500 (the PNG received and the pixels
 shown must equal the archive's layer 500), downloads the archive (its
-SHA-256 must be the job's); tenant B sees none of A's jobs; the admin key
+SHA-256 must be the job's); tenant B signs in with the keyboard alone
+and sees none of A's jobs; the admin key
 sees the tenants and the queue.  A G-code job of the same part shows its
 layers as drawings with the role legend.  The page's responses carry the strict
 CSP and the browser reports no CSP violation or script error.
@@ -116,6 +117,8 @@ def test_browser_flow():
     check(shown == b"".join(img.rows), "the pixels shown are the archive's layer 500")
     check(sum(shown) > 0, "layer 500 is not empty")
     # Tenant B: no jobs listed, A's job answers 404.
+    check(res["b_focus"]["id"] == "apikey" and res["b_focus"]["outline"] != "none",
+          "keyboard reaches the key field with a visible focus ring: %s" % res["b_focus"])
     check(res["jobs_listed_b"] == 0, "B lists none of A's jobs")
     check(res["b_status_on_a_job"] == 404, "B gets 404 on A's job")
     # Admin: both tenants and the queue.
