@@ -57,6 +57,13 @@ UNIT_BIN := $(patsubst tests/unit/%.c,$(BUILD)/tests/unit/%,$(UNIT_SRC))
 BENCH_SRC := $(sort $(wildcard tests/bench/bench_*.c))
 BENCH_BIN := $(patsubst tests/bench/%.c,$(BUILD)/tests/bench/%,$(BENCH_SRC))
 
+# The portal's files (web/), compiled into libapi.a by web/embed.sh so the
+# binary serves them wherever it runs; three.js is vendored under
+# web/vendor/ (from npm, committed), so building needs no npm.
+WEB_SRC := $(sort $(wildcard web/*.html web/*.js web/*.css)) web/vendor/three.module.min.js
+WEB_GEN := $(BUILD)/gen/web_files.c
+WEB_OBJ := $(BUILD)/obj/api/web_files.gen.c.o
+
 LIBS := $(BUILD)/libapi.a $(BUILD)/libdb.a $(BUILD)/libengine.a
 BIN := $(BUILD)/infilld
 
@@ -83,7 +90,15 @@ $(BUILD)/obj/%.cpp.o: %.cpp
 $(BUILD)/libengine.a: $(ENGINE_OBJ)
 	@mkdir -p $(@D)
 	$(Q)rm -f $@ && ar rcs $@ $^
-$(BUILD)/libapi.a: $(API_OBJ)
+$(WEB_GEN): $(WEB_SRC) web/embed.sh
+	@$(if $(Q),echo "  EMBED   web/ -> $@")
+	$(Q)web/embed.sh $@ $(WEB_SRC)
+$(WEB_OBJ): $(WEB_GEN)
+	@mkdir -p $(@D)
+	@$(if $(Q),echo "  CC      $<")
+	$(Q)$(CC) $(CFLAGS) -c $< -o $@
+
+$(BUILD)/libapi.a: $(API_OBJ) $(WEB_OBJ)
 	@mkdir -p $(@D)
 	$(Q)rm -f $@ && ar rcs $@ $^
 $(BUILD)/libdb.a: $(DB_OBJ)
@@ -132,13 +147,17 @@ FUZZ_SECONDS ?= 60
 # The lattice engine's parsers (lattice files, NRRD density grids) and what they need.
 FUZZ_LATTICE_SRC := engine/lattice/graph.c engine/lattice/file_bin.c engine/lattice/file_text.c \
 	engine/lattice/density.c
+# The G-code layer preview reader and what it needs (libpng for its PNG).
+FUZZ_GCODE_SRC := engine/output/gcode/gcode_preview.c engine/output/image/png_encode.c \
+	engine/output/toolpath/plan.c
 .PHONY: fuzz-build
 fuzz-build: $(FUZZ_BIN)
 build-fuzz/%: tests/fuzz/%.c $(wildcard tests/fuzz/*.h engine/*/*.h) $(ENGINE_SRC)
 	@mkdir -p $(@D)
 	@$(if $(Q),echo "  FUZZ    $<")
 	$(Q)clang -std=c11 -O1 -g -fsanitize=fuzzer,address,undefined $(DEFS) -I. $(PKG_CFLAGS) \
-		-Wall -Wextra -Werror -o $@ $< $(filter engine/core/% engine/geom/%.c engine/mesh/% $(FUZZ_LATTICE_SRC),$(FUZZ_ENGINE_SRC)) -lm
+		-Wall -Wextra -Werror -o $@ $< $(filter engine/core/% engine/geom/%.c engine/mesh/% $(FUZZ_LATTICE_SRC) $(FUZZ_GCODE_SRC),$(FUZZ_ENGINE_SRC)) \
+		$(shell pkg-config --libs libpng zlib 2>/dev/null) -lm
 fuzz: deps
 	@$(MAKE) --no-print-directory fuzz-build
 	@tests/fuzz/run.sh $(FUZZ_SECONDS)

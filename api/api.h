@@ -30,6 +30,8 @@ struct api_config {
 	int64_t min_free_bytes;    /* /readyz fails below this free disk */
 	int fault_injection;       /* accept "fault" in job bodies (tests only) */
 	int workers;               /* reported on /metrics */
+	const char *cors_origin;   /* NULL, or the origin whose pages may call the API
+				      (Access-Control-Allow-Origin; preflights answered) */
 };
 
 struct api_server;

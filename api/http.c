@@ -10,6 +10,46 @@
 #include <string.h>
 #include <time.h>
 
+/* --cors-origin: responses to that origin's requests may be read by its
+ * pages (no credentials: keys travel in headers, never cookies). */
+static int cors_allowed(struct api_req *r)
+{
+	const char *origin = r->srv->cfg.cors_origin ? api_header(r, "Origin") : NULL;
+
+	return origin && !strcmp(origin, r->srv->cfg.cors_origin);
+}
+
+static void cors_headers(struct api_req *r, struct MHD_Response *resp)
+{
+	if (!r->srv->cfg.cors_origin)
+		return;
+	MHD_add_response_header(resp, "Vary", "Origin");
+	if (!cors_allowed(r))
+		return;
+	MHD_add_response_header(resp, "Access-Control-Allow-Origin", r->srv->cfg.cors_origin);
+	MHD_add_response_header(resp, "Access-Control-Expose-Headers",
+				"ETag, Location, Retry-After, Repr-Digest, Content-Disposition, "
+				"Content-Range, X-Artifact-Length, X-Layer-Count, "
+				"Idempotent-Replayed");
+}
+
+enum MHD_Result api_cors_preflight(struct api_req *r, const char *allow)
+{
+	struct MHD_Response *resp = MHD_create_response_from_buffer(0, NULL,
+								    MHD_RESPMEM_PERSISTENT);
+
+	if (!resp)
+		return MHD_NO;
+	if (cors_allowed(r)) {
+		MHD_add_response_header(resp, "Access-Control-Allow-Methods", allow);
+		MHD_add_response_header(resp, "Access-Control-Allow-Headers",
+					"Authorization, X-Api-Key, Content-Type, Idempotency-Key, "
+					"Last-Event-ID, Range, If-None-Match, If-Range");
+		MHD_add_response_header(resp, "Access-Control-Max-Age", "600");
+	}
+	return api_queue(r, MHD_HTTP_NO_CONTENT, resp);
+}
+
 enum MHD_Result api_queue(struct api_req *r, unsigned status, struct MHD_Response *resp)
 {
 	enum MHD_Result ret;
@@ -17,6 +57,7 @@ enum MHD_Result api_queue(struct api_req *r, unsigned status, struct MHD_Respons
 	if (!resp)
 		return MHD_NO; /* out of memory: MHD closes the connection */
 	MHD_add_response_header(resp, "Cache-Control", "no-store");
+	cors_headers(r, resp);
 	/* Past 3/4 of the connection limit, keep-alive gives way: the next
 	 * request comes through the head gate again instead of holding a
 	 * slot while its head trickles in. */

@@ -22,6 +22,8 @@
 #include <unistd.h>
 
 static const struct route routes[] = {
+	{"GET", "/", AUTH_NONE, BODY_NONE, api_web_index, "/"},
+	{"GET", "/web/{}", AUTH_NONE, BODY_NONE, api_web_asset, "/web/{file}"},
 	{"GET", "/livez", AUTH_NONE, BODY_NONE, api_livez, "/livez"},
 	{"GET", "/readyz", AUTH_NONE, BODY_NONE, api_readyz, "/readyz"},
 	{"GET", "/metrics", AUTH_NONE, BODY_NONE, api_metrics, "/metrics"},
@@ -39,6 +41,8 @@ static const struct route routes[] = {
 	 "/v1/jobs/{id}/events"},
 	{"GET", "/v1/jobs/{}/output", AUTH_TENANT, BODY_NONE, api_job_output,
 	 "/v1/jobs/{id}/output"},
+	{"GET", "/v1/jobs/{}/layers/{}", AUTH_TENANT, BODY_NONE, api_job_layer,
+	 "/v1/jobs/{id}/layers/{k}"},
 	{"POST", "/v1/tenants", AUTH_ADMIN, BODY_JSON, api_tenant_create, "/v1/tenants"},
 	{"GET", "/v1/tenants", AUTH_ADMIN, BODY_NONE, api_tenant_list, "/v1/tenants"},
 	{"GET", "/v1/tenants/{}", AUTH_ADMIN, BODY_NONE, api_tenant_get, "/v1/tenants/{name}"},
@@ -161,6 +165,8 @@ static enum MHD_Result start_request(struct api_req *r)
 	}
 	if (!r->route) {
 		r->route_index = NROUTES;
+		if (path_hit && !strcmp(r->method, "OPTIONS") && r->srv->cfg.cors_origin)
+			return api_cors_preflight(r, allow);
 		if (path_hit) {
 			unsigned st;
 			struct MHD_Response *resp = api_problem_response(

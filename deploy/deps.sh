@@ -27,9 +27,20 @@ for p in "${PKGS[@]}"; do
 	}
 done
 
-# Node.js + npm run the OpenAPI linter; use the machine's if it has one
-# (a newer node may come from elsewhere), else Debian's.
-[ "${SKIP_NPM-}" = 1 ] || command -v npm >/dev/null 2>&1 || missing+=(nodejs npm)
+# Node.js + npm run the OpenAPI linter, ESLint and the browser test; use
+# the machine's if it has one (a newer node may come from elsewhere), else
+# Debian's.  The portal's browser test (tests/web/test_portal.py) drives
+# Debian's chromium through playwright-core (no browser download), with
+# one font for legible screenshots (chromium only recommends fonts).  All
+# of it is for the tests only: SKIP_NPM=1 (make run, container builds)
+# skips it.
+if [ "${SKIP_NPM-}" != 1 ]; then
+	command -v npm >/dev/null 2>&1 || missing+=(nodejs npm)
+	for p in chromium fonts-dejavu-core; do
+		dpkg-query -W -f='${db:Status-Status}' "$p" 2>/dev/null | grep -qx installed ||
+			missing+=("$p")
+	done
+fi
 
 if [ ${#missing[@]} -gt 0 ]; then
 	SUDO=
@@ -40,7 +51,9 @@ if [ ${#missing[@]} -gt 0 ]; then
 	$SUDO apt-get install -y -qq --no-install-recommends "${missing[@]}" >/dev/null
 fi
 
-# npm tools pinned by package-lock.json (OpenAPI linter), into node_modules/.
+# npm tools pinned by package-lock.json (OpenAPI linter, ESLint,
+# playwright-core; three.js, whose build the portal vendors in web/vendor/),
+# into node_modules/.
 # SKIP_NPM=1 (container builds) skips it: only the tests need it.
 ROOT=$(cd "$(dirname "$0")/.." && pwd)
 if [ "${SKIP_NPM-}" != 1 ] && [ -f "$ROOT/package-lock.json" ] &&

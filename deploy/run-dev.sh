@@ -18,6 +18,7 @@ infilld: starting on http://$LISTEN (data: $DATA)
   new tenant:  curl -s -H "Authorization: Bearer \$(cat $DATA/admin.key)" \\
                  -H 'Content-Type: application/json' -d '{"name":"me"}' http://$LISTEN/v1/tenants
   or:          $BIN tenant add me --data $DATA     (key on the last line)
+  web portal:  http://$LISTEN/   (sign in with a tenant key, or the admin key; docs/portal.md)
   walkthrough: docs/service.md
 MSG
 exec "$BIN" serve --listen "$LISTEN" --data "$DATA"

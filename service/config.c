@@ -47,7 +47,8 @@ const char *config_usage(void)
 	       "              [--head-timeout-s N] [--min-body-rate-kbps N] [--body-grace-s N]\n"
 	       "              [--lease-s N] [--max-attempts N] [--drain-s N] [--job-timeout-s N]\n"
 	       "              [--job-mem-mb N] [--job-cpu-s N] [--output-limit-mb N]\n"
-	       "              [--job-threads N] [--retention-days N] [--min-free-mb N]";
+	       "              [--job-threads N] [--retention-days N] [--min-free-mb N]\n"
+	       "              [--cors-origin ORIGIN]";
 }
 
 /* `serve --help`: the usage and what the HTTP limits mean (all options:
@@ -65,6 +66,8 @@ static void print_help(void)
 	       "  --min-body-rate-kbps N   a request body must average N kilobits/s once it has\n"
 	       "                           taken --body-grace-s (8; 0 = off), else it is closed\n"
 	       "  --body-grace-s N         (10)\n"
+	       "  --cors-origin ORIGIN     let pages of ORIGIN (scheme://host[:port]) call the API\n"
+	       "                           from a browser (CORS; off by default)\n"
 	       "See docs/operations.md for every option.\n",
 	       config_usage());
 }
@@ -95,6 +98,21 @@ static int parse_listen(struct service_config *c, const char *v)
 		strcpy(c->host, "127.0.0.1");
 	c->port = (int)port;
 	return 0;
+}
+
+/* An origin as browsers send it (RFC 6454): http:// or https://, a
+ * host of letters, digits, '-', '.', '[', ']', ':' (IPv6, port), no path. */
+static int origin_valid(const char *v)
+{
+	const char *h = !strncmp(v, "http://", 7) ? v + 7 : !strncmp(v, "https://", 8) ? v + 8 : NULL;
+
+	if (!h || !*h)
+		return 0;
+	for (; *h; h++)
+		if (!((*h >= 'a' && *h <= 'z') || (*h >= 'A' && *h <= 'Z') || (*h >= '0' && *h <= '9') ||
+		      strchr("-.[]:", *h)))
+			return 0;
+	return 1;
 }
 
 static void defaults(struct service_config *c)
@@ -180,6 +198,16 @@ int config_parse(struct service_config *c, int argc, char **argv, int extra_ok)
 				return 2;
 			}
 			snprintf(c->data_dir, sizeof c->data_dir, "%s", v);
+			continue;
+		}
+		if (!strcmp(name, "--cors-origin")) {
+			if (!origin_valid(v) || strlen(v) >= sizeof c->cors_origin) {
+				fprintf(stderr,
+					"infilld %s: --cors-origin wants scheme://host[:port] (no path), "
+					"got '%s'\n", argv[0], v);
+				return 2;
+			}
+			snprintf(c->cors_origin, sizeof c->cors_origin, "%s", v);
 			continue;
 		}
 		if (extra_ok && !strcmp(name, "--worker-name")) {

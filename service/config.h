@@ -35,6 +35,7 @@ struct service_config {
 	int min_free_mb;         /* /readyz */
 	int analyze_timeout_s, analyze_mem_mb;
 	int fault_injection;     /* env INFILLD_FAULT_INJECTION=1 (tests only) */
+	char cors_origin[256];   /* --cors-origin: the one other origin allowed to call the API */
 	char worker_name[32];    /* set for worker processes */
 	char self_exe[512];      /* this binary (re-executed for workers) */
 };

@@ -156,6 +156,7 @@ int cmd_serve(int argc, char **argv)
 	ac.min_free_bytes = (int64_t)c.min_free_mb << 20;
 	ac.fault_injection = c.fault_injection;
 	ac.workers = c.workers;
+	ac.cors_origin = c.cors_origin[0] ? c.cors_origin : NULL;
 	if (api_server_start(&ac, &srv, &e)) {
 		fprintf(stderr, "infilld serve: %s\n", e.msg);
 		db_close(db);

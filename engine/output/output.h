@@ -105,4 +105,16 @@ int out_mesh(struct out_writer *w, const struct mesh *m, struct err *e);
 int out_close(struct out_writer *w, struct metrics *m, struct err *e);
 void out_free(struct out_writer *w);
 
+struct buf;
+/* Layer k (from 0) of the output file at path, written in format f, as a
+ * PNG appended to png (the service's layer preview, docs/portal.md), and
+ * the number of layers the file holds in *count.  Resin formats (sl1,
+ * sl1s, zip) give the archive's own layer image, byte for byte; gcode
+ * draws layer k's moves coloured by role (gcode/gcode_preview.h).
+ * 0; ERR_NOTFOUND when the file has no layer k (*count set);
+ * ERR_UNSUPPORTED for mesh formats (they have no layers); ERR_IO,
+ * ERR_PARSE, ERR_LIMIT, ERR_NOMEM.  png->len is unchanged on failure. */
+int out_layer_png(const char *path, enum out_format f, int k, struct buf *png, int *count,
+		  struct err *e);
+
 #endif
