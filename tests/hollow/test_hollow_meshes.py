@@ -25,9 +25,12 @@ import json
 import os
 import subprocess
 import tempfile
+import sys
 import unittest
 
 ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__))))
+sys.path.insert(0, os.path.join(ROOT, "tests", "support"))
+from hollowcheck import optimised_slopes_ok  # noqa: E402
 BIN = os.environ.get("INFILLD_BIN", os.path.join(ROOT, "build", "infilld"))
 SHARED = os.environ.get("INFILLD_SHARED", os.path.join(ROOT, "..", "shared"))
 MESHES = os.path.join(SHARED, "meshes")
@@ -80,7 +83,7 @@ class HollowMeshTest(unittest.TestCase):
             self.assertEqual(h["groups_failed"], 0, h)
             self.assertGreaterEqual(h["voids_optimised"], 3, h)  # 5 measured
             self.assertEqual(h["voids_fill"], 0)
-            self.assertEqual(h["interior_overhang_mm2"], 0.0, v)
+            optimised_slopes_ok(self, v, 20)  # 17 px measured
             self.assertGreaterEqual(v["min_wall_mm"], 1.0 - 0.06, v)
             check_between(self, v, required=False)
             self.assertEqual(v["specks"], 0, v)
@@ -100,7 +103,14 @@ class HollowMeshTest(unittest.TestCase):
             self.assertEqual(p.returncode, 0, p.stderr)
             own_islands = json.loads(p.stdout)["islands"]
             res = {}
-            for a in (45, 30):
+            # alpha 30 allows 0.029 mm a layer, under the 0.047 mm pixel: no
+            # whole pixel may hang over a void, so the pixel fill alone
+            # closes no roof (tests/hollow/test_hollow.py, docs/hollow.md)
+            m, _ = run(tmp, "hollow", "alpha_deg=30", "rounds=0", "fill=true",
+                       "wall_mm=1.0", "wall_next_mm=0.8")
+            self.assertEqual(m["hollow"]["voids"], 0)
+            self.assertIn("less than the 0.047 mm pixel", m["hollow"]["note"])
+            for a in (45,):
                 m, _ = run(tmp, "hollow", f"alpha_deg={a}", "rounds=0", "fill=true",
                            "wall_mm=1.0", "wall_next_mm=0.8")
                 h = m["hollow"]
@@ -126,7 +136,6 @@ class HollowMeshTest(unittest.TestCase):
             self.assertLess(res[45]["verify"]["sliver_mm3"], 0.01, res[45]["verify"])
             # shelves (fins' vertical counterpart): 0.002 mm3 measured
             self.assertLess(res[45]["verify"]["shelf_mm3"], 0.01, res[45]["verify"])
-            self.assertLessEqual(res[30]["volume_reduction"], res[45]["volume_reduction"])
 
     def test_femur_fill(self):
         # leaning walls (the default) and standing ones (lean_walls=false)
@@ -147,8 +156,10 @@ class HollowMeshTest(unittest.TestCase):
                 self.assertGreater(h["volume_reduction"], 0.38)
                 # fins: 1.32 mm3 before they receded, 0.09 since (0.12 leaning)
                 self.assertLess(v["fin_mm3"], 0.3, v)
-                # slivers: 0.025 mm3 measured with leaning walls
-                self.assertLess(v["sliver_mm3"], 0.08, v)
+                # slivers: 0.103 mm3 measured with the exact slope rule
+                # (0.025 with a pixel of slack): fronts that may advance
+                # one pixel, not 1.98, a layer leave more of them
+                self.assertLess(v["sliver_mm3"], 0.15, v)
                 self.assertLess(v["shelf_mm3"], 0.02, v)  # 0.005 measured
                 check_between(self, v, required=True)
         # the wall between the head's and the trochanter's voids leans and
