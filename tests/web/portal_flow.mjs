@@ -172,6 +172,22 @@ try {
   await page.locator("#jobs-state").selectOption("succeeded");
   await page.waitForFunction(() => document.querySelectorAll("#jobs-table tbody tr").length > 0);
   result.jobs_succeeded_a = await rows.count();
+
+  // Cancel: a hollow job of the femur runs for seconds; the Cancel button
+  // ends it and the page shows the cancelled state.
+  await page.locator("#f-format").selectOption("sl1");
+  await page.locator("#f-engine").selectOption("hollow");
+  await page.locator("#p-height_mm").fill("50");
+  const before = await page.locator("#job-id").textContent();
+  await page.getByRole("button", { name: "Submit job" }).click();
+  await page.waitForFunction((old) => document.getElementById("job-id").textContent !== old, before);
+  await page.locator("#cancel").waitFor({ state: "visible" });
+  await page.locator("#cancel").click();
+  await page.locator("#job-state").filter({ hasText: /^(succeeded|failed|cancelled)$/ }).waitFor({ timeout: 120000 });
+  result.cancel_state = await page.locator("#job-state").innerText();
+  result.cancel_button_hidden = await page.locator("#cancel").isHidden();
+  step("cancelled");
+  await shot(page, "09-cancelled");
   await ctxA.close();
 
   // ---- tenant B: sees none of A's jobs ----

@@ -134,8 +134,11 @@ def test_browser_flow():
     check(res["jobs_listed_a"] == 2, "A lists its two jobs: %d" % res["jobs_listed_a"])
     check(res["jobs_queued_a"] == 0 and res["jobs_succeeded_a"] == 2, "state filter: %d queued, "
           "%d succeeded" % (res["jobs_queued_a"], res["jobs_succeeded_a"]))
+    # Cancel ends a running hollow job; the button goes away.
+    check(res["cancel_state"] == "cancelled", "cancelled job shows %s" % res["cancel_state"])
+    check(res["cancel_button_hidden"], "no Cancel button on a cancelled job")
     for n in ("01-signed-in", "02-uploaded", "03-field-error", "04-finished", "05-layer-500",
-              "06-tenant-b", "07-admin", "08-gcode-layer-100"):
+              "06-tenant-b", "07-admin", "08-gcode-layer-100", "09-cancelled"):
         check(os.path.getsize(os.path.join(ARTIFACTS, n + ".png")) > 1000, "screenshot " + n)
 
 
