@@ -265,6 +265,11 @@ json_t *api_job_json(const struct job_row *j);
 /* Load the tenant's job named by r->arg[0] (jobs.c); on failure a
  * problem is queued, *ret set, and -1 returned. */
 int api_load_job(struct api_req *r, struct job_row *j, enum MHD_Result *ret);
+/* The same for a job that must have succeeded: otherwise (-1, *ret set)
+ * a 409 not-ready problem saying waiting_msg (queued or running, with
+ * Retry-After) or failed_msg (failed, cancelled). */
+int api_load_done_job(struct api_req *r, struct job_row *j, enum MHD_Result *ret,
+		      const char *waiting_msg, const char *failed_msg);
 /* JSON of a mesh record (meshes.c). */
 struct mesh_rec;
 json_t *api_mesh_json(const struct mesh_rec *m);

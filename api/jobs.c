@@ -296,6 +296,27 @@ int api_load_job(struct api_req *r, struct job_row *j, enum MHD_Result *ret)
 	return load_job(r, j, ret);
 }
 
+int api_load_done_job(struct api_req *r, struct job_row *j, enum MHD_Result *ret,
+		      const char *waiting_msg, const char *failed_msg)
+{
+	struct MHD_Response *resp;
+	unsigned status;
+	int waiting;
+
+	if (load_job(r, j, ret))
+		return -1;
+	if (j->state == JOB_SUCCEEDED)
+		return 0;
+	waiting = j->state == JOB_QUEUED || j->state == JOB_RUNNING;
+	resp = api_problem_response(PROB_NOT_READY, r->url, NULL, waiting ? waiting_msg : failed_msg,
+				    &status);
+	if (resp && waiting)
+		MHD_add_response_header(resp, MHD_HTTP_HEADER_RETRY_AFTER, "2");
+	queue_job_row_fini(j);
+	*ret = api_queue(r, status, resp);
+	return -1;
+}
+
 enum MHD_Result api_job_get(struct api_req *r)
 {
 	struct job_row j;

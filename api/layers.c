@@ -33,21 +33,9 @@ enum MHD_Result api_job_layer(struct api_req *r)
 	long k;
 	int count = 0, rc;
 
-	if (api_load_job(r, &j, &ret))
+	if (api_load_done_job(r, &j, &ret, "the job is still running; its layers can be shown once it has succeeded",
+			      "the job did not succeed, so it has no layers"))
 		return ret;
-	if (j.state != JOB_SUCCEEDED) {
-		int waiting = j.state == JOB_QUEUED || j.state == JOB_RUNNING;
-		unsigned status;
-		resp = api_problem_response(PROB_NOT_READY, r->url, NULL,
-					    waiting ? "the job is still running; its layers can be "
-						      "shown once it has succeeded"
-						    : "the job did not succeed, so it has no layers",
-					    &status);
-		if (resp && waiting)
-			MHD_add_response_header(resp, MHD_HTTP_HEADER_RETRY_AFTER, "2");
-		queue_job_row_fini(&j);
-		return api_queue(r, status, resp);
-	}
 	err_clear(&e);
 	if (out_format_parse(j.format, &f, &e) != 0 || out_format_is_mesh(f)) {
 		queue_job_row_fini(&j);

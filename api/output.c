@@ -161,20 +161,9 @@ enum MHD_Result api_job_output(struct api_req *r)
 	uint64_t from, to;
 	int fd, rg;
 
-	if (api_load_job(r, &j, &ret))
+	if (api_load_done_job(r, &j, &ret, "the job is still running; follow its events",
+			      "the job did not succeed, so it has no output"))
 		return ret;
-	if (j.state != JOB_SUCCEEDED) {
-		int waiting = j.state == JOB_QUEUED || j.state == JOB_RUNNING;
-		unsigned status;
-		resp = api_problem_response(PROB_NOT_READY, r->url, NULL,
-					    waiting ? "the job is still running; follow its events"
-						    : "the job did not succeed, so it has no output",
-					    &status);
-		if (resp && waiting)
-			MHD_add_response_header(resp, MHD_HTTP_HEADER_RETRY_AFTER, "2");
-		queue_job_row_fini(&j);
-		return api_queue(r, status, resp);
-	}
 	if (!j.artifact[0]) {
 		int damaged = j.artifact_damaged_ms != 0;
 		queue_job_row_fini(&j);
