@@ -126,14 +126,15 @@ class HollowMeshTest(unittest.TestCase):
                 self.assertAlmostEqual(v["enclosed_void_mm3"], h["fill_volume_mm3"],
                                        delta=1e-3 * h["fill_volume_mm3"])
                 check_between(self, v, required=(a == 45))
-            self.assertGreater(res[45]["volume_reduction"], 0.48)
+            # 47.4 % at the exact slope rule (53.5 with a pixel of slack)
+            self.assertGreater(res[45]["volume_reduction"], 0.45)
             # fins (docs/verify.md): 0.14 mm3 while kept R pixels and
             # staircase patches stood to the floor, 0.03 since they recede
             self.assertLess(res[45]["verify"]["fin_mm3"], 0.08, res[45]["verify"])
             # slivers (fins standing free, not bumps on walls): 0.0016 mm3
-            # measured, 14 of 292 fin pixels
+            # measured with a pixel of slack, 0.0116 at the exact rule
             self.assertLessEqual(res[45]["verify"]["sliver_px"], res[45]["verify"]["fin_px"])
-            self.assertLess(res[45]["verify"]["sliver_mm3"], 0.01, res[45]["verify"])
+            self.assertLess(res[45]["verify"]["sliver_mm3"], 0.02, res[45]["verify"])
             # shelves (fins' vertical counterpart): 0.002 mm3 measured
             self.assertLess(res[45]["verify"]["shelf_mm3"], 0.01, res[45]["verify"])
 
@@ -154,12 +155,14 @@ class HollowMeshTest(unittest.TestCase):
                 self.assertAlmostEqual(v["enclosed_void_mm3"], h["fill_volume_mm3"],
                                        delta=1e-3 * h["fill_volume_mm3"])
                 self.assertGreater(h["volume_reduction"], 0.38)
-                # fins: 1.32 mm3 before they receded, 0.09 since (0.12 leaning)
-                self.assertLess(v["fin_mm3"], 0.3, v)
-                # slivers: 0.103 mm3 measured with the exact slope rule
-                # (0.025 with a pixel of slack): fronts that may advance
-                # one pixel, not 1.98, a layer leave more of them
-                self.assertLess(v["sliver_mm3"], 0.15, v)
+                # fins: 1.32 mm3 before they receded, 0.09 since (0.12
+                # leaning); 0.16 / 0.38 at the exact slope rule
+                self.assertLess(v["fin_mm3"], 0.5, v)
+                # slivers: 0.103 (leaning) / 0.166 mm3 (standing) measured
+                # with the exact slope rule (0.025 leaning with a pixel of
+                # slack): fronts that may advance one pixel, not 1.98, a
+                # layer leave more of them (issue 22)
+                self.assertLess(v["sliver_mm3"], 0.25, v)
                 self.assertLess(v["shelf_mm3"], 0.02, v)  # 0.005 measured
                 check_between(self, v, required=True)
         # the wall between the head's and the trochanter's voids leans and
