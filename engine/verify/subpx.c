@@ -83,28 +83,12 @@ static int sobel_normal(const struct verify_subpx_img *im, int x, int y, double 
 	return 1;
 }
 
-/* The straight edge of grey pixel (x, y) (coverage c): unit normal
- * (nx, ny) from solid to void by its Sobel gradient, and offset d in
- * pixels (solid where n.u <= d about its centre); 0 when the gradient
- * vanishes.  (Choosing instead, of its own and its grey neighbours'
- * normals, the line that best predicts the neighbours' coverage brought a
- * 20 degree wedge from 0.072 to 0.046 px but read the optimiser's void
- * corners 5 to 9 times more often over the tolerance: not used.) */
-static int pixel_line(const struct verify_subpx_img *im, int x, int y, double c, double *nx,
-		      double *ny, double *d)
-{
-	if (!sobel_normal(im, x, y, nx, ny))
-		return 0;
-	*d = edge_offset(*nx, *ny, c);
-	return 1;
-}
-
 void verify_subpx_region(const struct verify_subpx_img *im, int x, int y,
 			 struct verify_subpx_poly *out)
 {
 	static const double sq_x[4] = {-0.5, 0.5, 0.5, -0.5};
 	static const double sq_y[4] = {-0.5, -0.5, 0.5, 0.5};
-	double ux[8], uy[8], c, nx, ny, d;
+	double ux[8], uy[8], c, nx, ny;
 	int g = verify_subpx_gray(im, x, y), n = 4;
 
 	out->n = 0;
@@ -116,14 +100,14 @@ void verify_subpx_region(const struct verify_subpx_img *im, int x, int y,
 	}
 	c = g / 255.0;
 	if (g < 255) {
-		if (!pixel_line(im, x, y, c, &nx, &ny, &d)) {
+		if (!sobel_normal(im, x, y, &nx, &ny)) {
 			/* no direction: a centred square of the same area */
 			for (int i = 0; i < 4; i++) {
 				ux[i] = sq_x[i] * sqrt(c);
 				uy[i] = sq_y[i] * sqrt(c);
 			}
 		} else {
-			clip_half(ux, uy, &n, nx, ny, d);
+			clip_half(ux, uy, &n, nx, ny, edge_offset(nx, ny, c));
 		}
 	}
 	out->n = n;
