@@ -7,7 +7,7 @@
 #   make SANITIZE=1 test   the same under ASan + UBSan (separate build dir)
 #
 # Sources are discovered: engine/**.c|cpp -> libengine.a, api/*.c -> libapi.a,
-# db/*.c -> libdb.a, service/*.c -> the infilld binary; every
+# db/**.c -> libdb.a, service/*.c -> the infilld binary; every
 # tests/unit/<module>/test_*.c is its own test program.
 
 .SUFFIXES:
@@ -20,7 +20,7 @@ CC := gcc
 CXX := g++
 NPROC := $(shell nproc 2>/dev/null || echo 2)
 
-PKGS := libpng zlib libarchive jansson libmicrohttpd sqlite3 nettle polyclipping ipopt
+PKGS := libpng zlib libarchive jansson libmicrohttpd sqlite3 libpq nettle polyclipping ipopt
 # Evaluated lazily: pkg-config only runs once the packages are installed.
 PKG_CFLAGS = $(shell pkg-config --cflags $(PKGS) 2>/dev/null)
 PKG_LIBS = $(shell pkg-config --libs $(PKGS) 2>/dev/null) -ltet
@@ -42,7 +42,7 @@ LDLIBS = $(PKG_LIBS) -lm -lstdc++
 
 ENGINE_SRC := $(shell find engine -name '*.c' -o -name '*.cpp' | sort)
 API_SRC := $(sort $(wildcard api/*.c))
-DB_SRC := $(sort $(wildcard db/*.c))
+DB_SRC := $(shell find db -name '*.c' | sort)
 SERVICE_SRC := $(sort $(wildcard service/*.c))
 UNIT_SRC := $(sort $(wildcard tests/unit/*/test_*.c))
 TEST_SUPPORT_SRC := $(sort $(wildcard tests/support/*.c))

@@ -12,7 +12,7 @@ PKGS=(
 	gcc g++ make pkg-config clang libclang-rt-14-dev python3 python3-pil
 	libmicrohttpd-dev libjansson-dev libpng-dev zlib1g-dev libsqlite3-dev
 	libarchive-dev libpolyclipping-dev libtet1.5-dev coinor-libipopt-dev
-	liblapack-dev libblas-dev nettle-dev
+	liblapack-dev libblas-dev nettle-dev libpq-dev postgresql
 	curl ca-certificates wrk
 )
 
