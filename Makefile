@@ -7,7 +7,7 @@
 #   make SANITIZE=1 test   the same under ASan + UBSan (separate build dir)
 #
 # Sources are discovered: engine/**.c|cpp -> libengine.a, api/*.c -> libapi.a,
-# db/*.c -> libdb.a, service/*.c -> the infilld binary; every
+# db/**.c -> libdb.a, service/*.c -> the infilld binary; every
 # tests/unit/<module>/test_*.c is its own test program.
 
 .SUFFIXES:
@@ -42,7 +42,7 @@ LDLIBS = $(PKG_LIBS) -lm -lstdc++
 
 ENGINE_SRC := $(shell find engine -name '*.c' -o -name '*.cpp' | sort)
 API_SRC := $(sort $(wildcard api/*.c))
-DB_SRC := $(sort $(wildcard db/*.c))
+DB_SRC := $(shell find db -name '*.c' | sort)
 SERVICE_SRC := $(sort $(wildcard service/*.c))
 UNIT_SRC := $(sort $(wildcard tests/unit/*/test_*.c))
 TEST_SUPPORT_SRC := $(sort $(wildcard tests/support/*.c))
