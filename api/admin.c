@@ -154,7 +154,7 @@ enum MHD_Result api_tenant_delete(struct api_req *r)
 		return api_problem(r, PROB_NOT_FOUND, NULL, "no tenant '%s'", r->arg[0]);
 	if (rc)
 		return api_problem(r, PROB_UNAVAILABLE, NULL, "%s", e.msg);
-	store_tenant_dir(r->srv->cfg.data_dir, id, dir, sizeof dir);
+	store_tenant_dir(r->srv->cfg.store_dir, id, dir, sizeof dir);
 	if (store_remove_tree(dir, &e))
 		log_msg(LOG_WARN, "admin", "%s", e.msg);
 	log_msg(LOG_INFO, "admin", "tenant %s removed", r->arg[0]);

@@ -13,7 +13,10 @@ struct err;
 struct api_config {
 	const char *host;          /* listen address (IPv4/IPv6 literal) */
 	int port;                  /* 0 = ephemeral */
-	const char *data_dir;      /* db/store.h layout */
+	const char *db_url;        /* db_open() URL */
+	const char *store_dir;     /* uploads and artifacts, db/store.h layout; shared by
+				      every machine of a cluster */
+	int store_shared;          /* store_dir is another machine's too (--store) */
 	const char *self_exe;      /* this binary, for sandboxed mesh analysis */
 	int threads;               /* libmicrohttpd thread pool */
 	int max_connections;
@@ -29,7 +32,7 @@ struct api_config {
 	int analyze_mem_mb;
 	int64_t min_free_bytes;    /* /readyz fails below this free disk */
 	int fault_injection;       /* accept "fault" in job bodies (tests only) */
-	int workers;               /* reported on /metrics */
+	int workers;               /* this process's worker processes, on /metrics */
 	const char *cors_origin;   /* NULL, or the origin whose pages may call the API
 				      (Access-Control-Allow-Origin; preflights answered) */
 };

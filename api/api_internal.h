@@ -48,8 +48,12 @@ struct route {
 struct api_waiter {
 	struct MHD_Connection *conn;
 	struct api_waiter *next;
-	int queued;
+	int64_t job_seq;          /* the stream's job */
+	double parked_s;          /* CLOCK_MONOTONIC seconds */
 };
+
+#define API_NOTIFY_RING 256
+#define API_KEEPALIVE_S 15     /* an idle SSE stream sends a comment this often */
 
 struct analyze_task;
 struct submit_task;
@@ -69,10 +73,13 @@ struct api_server {
 	struct api_gate *gate;           /* accept loop and head gate (gate.c) */
 	atomic_llong gate_answers[3];    /* the gate's own 408, 503, other (400/431/501) */
 
-	/* Parked SSE streams: the ticker resumes them every ~200 ms. */
+	/* Parked SSE streams and the notifier that resumes them (notify.c). */
 	pthread_mutex_t wait_mu;
 	struct api_waiter *waiting;
-	pthread_t ticker;
+	uint64_t notify_gen, notify_all_gen;      /* under wait_mu */
+	int64_t notify_ring[API_NOTIFY_RING];     /* job seq of notification gen % ring */
+	struct db *notify_db;                     /* the notifier's own connection */
+	pthread_t notifier;
 	atomic_int stopping;
 	atomic_int quiesced; /* draining: new connections are closed at accept */
 
@@ -194,12 +201,19 @@ const char *api_query(struct api_req *r, const char *name);
  * characters: fit for names stored and shown in JSON. */
 int api_text_valid(const char *s);
 
-/* Park the request's connection until api_wake() or the ticker. */
+/* Park the request's connection until api_wake(). */
 void api_park(struct api_req *r);
 /* Resume a parked connection from any thread. */
 void api_wake(struct api_server *s, struct MHD_Connection *conn);
-/* Park a streaming response's connection from its content reader. */
-void api_park_stream(struct api_server *s, struct MHD_Connection *conn);
+/* SSE streams (notify.c): park a streaming response's connection from
+ * its content reader until job job_seq changes after generation seen_gen
+ * (read with api_notify_gen() before reading the job's events), or a
+ * keep-alive is due. */
+uint64_t api_notify_gen(struct api_server *s);
+void api_park_stream(struct api_server *s, struct MHD_Connection *conn, int64_t job_seq,
+		     uint64_t seen_gen);
+int api_notify_start(struct api_server *s, struct err *e);
+void api_notify_stop(struct api_server *s);
 
 /* ---- handlers ---- */
 enum MHD_Result api_livez(struct api_req *r);

@@ -3,9 +3,10 @@
  * Each job_events row is one SSE event ("id: n", "event: state|progress",
  * "data: <job snapshot>"); Last-Event-ID (or ?after=) resumes after n.
  * The stream ends after the event that makes the job final.  When nothing
- * is new the content reader parks the connection and the server's ticker
- * resumes it every 200 ms, so no thread waits; a comment line every 15 s
- * keeps proxies from closing an idle stream.
+ * is new the content reader parks the connection and the notifier
+ * (notify.c) resumes it when the job changes, on whichever machine, so no
+ * thread waits; a comment line every 15 s keeps proxies from closing an
+ * idle stream.
  */
 #include "api/api_internal.h"
 #include "db/queue.h"
@@ -16,14 +17,13 @@
 #include <string.h>
 #include <time.h>
 
-#define SSE_KEEPALIVE_S 15
-
 struct sse {
 	struct api_server *srv;
 	struct MHD_Connection *conn;
 	int64_t job_seq;
 	int64_t last_n;
 	int final;         /* job finished: end after flushing */
+	uint64_t seen_gen; /* notification generation before the last read */
 	struct buf out;    /* formatted, not yet sent */
 	size_t off;
 	time_t last_write;
@@ -48,6 +48,7 @@ static int sse_fill(struct sse *s)
 	struct err e;
 	int n, rc;
 
+	s->seen_gen = api_notify_gen(s->srv);
 	rc = queue_events(db, s->job_seq, s->last_n, 64, &ev, &n, &e);
 	if (rc) {
 		db_pool_put(s->srv->pool, db);
@@ -94,10 +95,10 @@ static ssize_t sse_read(void *cls, uint64_t pos, char *buf, size_t max)
 		if (s->out.len == 0) {
 			if (s->final)
 				return MHD_CONTENT_READER_END_OF_STREAM;
-			if (time(NULL) - s->last_write >= SSE_KEEPALIVE_S) {
+			if (time(NULL) - s->last_write >= API_KEEPALIVE_S) {
 				buf_append(&s->out, ": keepalive\n\n", 13);
 			} else {
-				api_park_stream(s->srv, s->conn);
+				api_park_stream(s->srv, s->conn, s->job_seq, s->seen_gen);
 				return 0;
 			}
 		}

@@ -20,7 +20,7 @@ enum MHD_Result api_livez(struct api_req *r)
 enum MHD_Result api_readyz(struct api_req *r)
 {
 	struct db *db = db_pool_get(r->srv->pool);
-	int64_t free_b = store_free_bytes(r->srv->cfg.data_dir);
+	int64_t free_b = store_free_bytes(r->srv->cfg.store_dir);
 	struct err e;
 	int rc;
 
@@ -29,9 +29,13 @@ enum MHD_Result api_readyz(struct api_req *r)
 	db_pool_put(r->srv->pool, db);
 	if (rc)
 		return api_problem(r, PROB_UNAVAILABLE, NULL, "database not writable: %s", e.msg);
+	/* The store (uploads, artifacts) may be another machine's file
+	 * system: a write that reaches the disk proves it is there. */
+	if (store_check(r->srv->cfg.store_dir, &e))
+		return api_problem(r, PROB_UNAVAILABLE, NULL, "%s", e.msg);
 	if (free_b >= 0 && free_b < r->srv->cfg.min_free_bytes)
 		return api_problem(r, PROB_UNAVAILABLE, NULL,
-				   "only %lld bytes free in the data directory (need %lld)",
+				   "only %lld bytes free in the store (need %lld)",
 				   (long long)free_b, (long long)r->srv->cfg.min_free_bytes);
 	return api_json(r, MHD_HTTP_OK,
 			json_pack("{s:s, s:I, s:i}", "status", "ready", "disk_free_bytes",

@@ -127,33 +127,10 @@ const char *api_query(struct api_req *r, const char *name)
 	return MHD_lookup_connection_value(r->conn, MHD_GET_ARGUMENT_KIND, name);
 }
 
-static void park_conn(struct api_server *s, struct MHD_Connection *conn)
-{
-	struct api_waiter *w = malloc(sizeof *w);
-
-	/* Registered before suspending, under the lock the ticker takes to
-	 * resume, so a wake-up can never be lost. */
-	pthread_mutex_lock(&s->wait_mu);
-	MHD_suspend_connection(conn);
-	if (w) {
-		w->conn = conn;
-		w->next = s->waiting;
-		s->waiting = w;
-	}
-	pthread_mutex_unlock(&s->wait_mu);
-	if (!w)
-		MHD_resume_connection(conn); /* cannot park: poll again */
-}
-
 void api_park(struct api_req *r)
 {
 	r->suspended = 1;
 	MHD_suspend_connection(r->conn);
-}
-
-void api_park_stream(struct api_server *s, struct MHD_Connection *conn)
-{
-	park_conn(s, conn);
 }
 
 void api_wake(struct api_server *s, struct MHD_Connection *conn)

@@ -48,7 +48,7 @@ enum MHD_Result api_job_layer(struct api_req *r)
 		return api_problem(r, PROB_GONE, NULL, "the output of job %s is no longer stored",
 				   r->arg[0]);
 	}
-	store_artifact_path(r->srv->cfg.data_dir, r->tenant.id, j.artifact, path, sizeof path);
+	store_artifact_path(r->srv->cfg.store_dir, r->tenant.id, j.artifact, path, sizeof path);
 	queue_job_row_fini(&j);
 	if (!*ks || strspn(ks, "0123456789") != strlen(ks) || strlen(ks) > 8 ||
 	    (k = atol(ks)) > LAYER_INDEX_MAX)

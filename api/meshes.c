@@ -247,7 +247,7 @@ enum MHD_Result api_upload_begin(struct api_req *r)
 	err_clear(&e);
 	db_make_id("m_", rnd, &e);
 	snprintf(tmpname, sizeof tmpname, "up-%s", rnd + 2);
-	store_tmp_path(r->srv->cfg.data_dir, tmpname, u->tmp, sizeof u->tmp);
+	store_tmp_path(r->srv->cfg.store_dir, tmpname, u->tmp, sizeof u->tmp);
 	u->fd = open(u->tmp, O_WRONLY | O_CREAT | O_EXCL | O_CLOEXEC, 0640);
 	if (u->fd < 0) {
 		log_msg(LOG_ERROR, "upload", "cannot create %s: %s", u->tmp, strerror(errno));
@@ -414,7 +414,7 @@ void api_upload_complete(struct api_req *r)
 	m.analysis = json_dumps(analysis, JSON_COMPACT);
 	m.created_ms = db_now_ms();
 	json_decref(analysis);
-	store_mesh_path(s->cfg.data_dir, r->tenant.id, m.id, m.format, final_path,
+	store_mesh_path(s->cfg.store_dir, r->tenant.id, m.id, m.format, final_path,
 			sizeof final_path);
 	if (!m.analysis || store_publish(u->tmp, final_path, &e)) {
 		free(m.analysis);
@@ -465,7 +465,7 @@ void api_upload_complete(struct api_req *r)
 	return;
 fail:
 	/* The reader names the temporary file; the client knows its own name. */
-	store_redact(detail, sizeof detail, s->cfg.data_dir, u->tmp, u->name);
+	store_redact(detail, sizeof detail, s->cfg.store_dir, u->tmp, u->name);
 	r->pending = api_problem_response_members(p, r->url, NULL, detail,
 						  api_problem_members(r, p), &r->pending_status);
 }
@@ -566,7 +566,7 @@ enum MHD_Result api_mesh_delete(struct api_req *r)
 		return api_problem(r, PROB_CONFLICT, NULL, "%s", e.msg);
 	if (rc)
 		return api_problem(r, PROB_UNAVAILABLE, NULL, "%s", e.msg);
-	store_mesh_path(r->srv->cfg.data_dir, r->tenant.id, m.id, m.format, path, sizeof path);
+	store_mesh_path(r->srv->cfg.store_dir, r->tenant.id, m.id, m.format, path, sizeof path);
 	unlink(path);
 	db_mesh_rec_fini(&m);
 	return api_queue(r, MHD_HTTP_NO_CONTENT,

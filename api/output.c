@@ -173,7 +173,7 @@ enum MHD_Result api_job_output(struct api_req *r)
 					   : "the output of job %s was deleted by retention",
 				   r->arg[0]);
 	}
-	store_artifact_path(r->srv->cfg.data_dir, r->tenant.id, j.artifact, path, sizeof path);
+	store_artifact_path(r->srv->cfg.store_dir, r->tenant.id, j.artifact, path, sizeof path);
 	fd = open(path, O_RDONLY | O_CLOEXEC);
 	if (fd < 0 || fstat(fd, &st) != 0) {
 		if (fd >= 0)

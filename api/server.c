@@ -1,8 +1,9 @@
 /* server.c - the libmicrohttpd daemon: hardening options, routing, auth,
- * body dispatch and the ticker that resumes parked SSE streams.
+ * body dispatch, start and stop.
  *
- * Threads: MHD's internal pool (epoll), the ticker, and the analysis
- * pool (analyze.c).  Handlers never block: slow work parks the
+ * Threads: MHD's internal pool (epoll), the gate (gate.c), the notifier
+ * that resumes parked SSE streams (notify.c), the committer (committer.c)
+ * and the analysis pool (analyze.c).  Handlers never block: slow work parks the
  * connection (MHD_suspend_connection) and a helper resumes it.  Request
  * bodies are read raw (MHD's POST processor is not used).
  */
@@ -322,29 +323,6 @@ static void on_completed(void *cls, struct MHD_Connection *conn, void **req_cls,
 	*req_cls = NULL;
 }
 
-static void *ticker_main(void *arg)
-{
-	struct api_server *s = arg;
-	struct timespec ts = {0, 200 * 1000 * 1000};
-
-	while (!atomic_load(&s->stopping)) {
-		struct api_waiter *w;
-
-		nanosleep(&ts, NULL);
-		pthread_mutex_lock(&s->wait_mu);
-		w = s->waiting;
-		s->waiting = NULL;
-		while (w) {
-			struct api_waiter *next = w->next;
-			MHD_resume_connection(w->conn);
-			free(w);
-			w = next;
-		}
-		pthread_mutex_unlock(&s->wait_mu);
-	}
-	return NULL;
-}
-
 static void mhd_log(void *cls, const char *fmt, va_list ap)
 {
 	char msg[512];
@@ -380,7 +358,6 @@ int api_server_start(const struct api_config *c, struct api_server **out, struct
 {
 	struct api_server *s = calloc(1, sizeof *s);
 	struct sockaddr_storage ss;
-	char db_path[STORE_PATH_MAX];
 	int rc;
 
 	if (!s)
@@ -409,22 +386,19 @@ int api_server_start(const struct api_config *c, struct api_server **out, struct
 			goto fail;
 		}
 	}
-	store_db_path(c->data_dir, db_path, sizeof db_path);
 	/* One connection per MHD thread, the analysis pool and the committer. */
-	if ((rc = db_pool_new(db_path, c->threads + 3, &s->pool, e)))
+	if ((rc = db_pool_new(c->db_url, c->threads + 3, &s->pool, e)))
 		goto fail;
 	if ((rc = api_analyze_start(s, e)) || (rc = api_committer_start(s, e)))
 		goto fail;
-	if (pthread_create(&s->ticker, NULL, ticker_main, s) != 0) {
-		rc = ERR_SET(e, ERR_IO, "cannot start the ticker thread");
+	if ((rc = api_notify_start(s, e)))
 		goto fail;
-	}
 	raise_fd_limit();
 	if ((rc = api_gate_start(s, &ss, e))) {
 		char why[sizeof e->msg];
 		snprintf(why, sizeof why, "%s", e->msg);
 		rc = ERR_SET(e, ERR_IO, "cannot listen on %s:%d: %s", c->host, c->port, why);
-		goto fail_ticker;
+		goto fail_notify;
 	}
 	/* No listen socket: the gate (gate.c) accepts, waits for whole
 	 * heads and hands connections over; it keeps the connection and
@@ -444,17 +418,16 @@ int api_server_start(const struct api_config *c, struct api_server **out, struct
 		MHD_OPTION_END);
 	if (!s->mhd) {
 		rc = ERR_SET(e, ERR_IO, "cannot start libmicrohttpd: %s", strerror(errno));
-		goto fail_ticker;
+		goto fail_notify;
 	}
 	if ((rc = api_gate_run(s, e))) {
 		MHD_stop_daemon(s->mhd);
-		goto fail_ticker;
+		goto fail_notify;
 	}
 	*out = s;
 	return 0;
-fail_ticker:
-	atomic_store(&s->stopping, 1);
-	pthread_join(s->ticker, NULL);
+fail_notify:
+	api_notify_stop(s);
 	api_gate_free(s);
 fail:
 	api_committer_stop(s);
@@ -488,17 +461,7 @@ void api_server_stop(struct api_server *s)
 {
 	if (!s)
 		return;
-	atomic_store(&s->stopping, 1);
-	pthread_join(s->ticker, NULL);
-	/* Resume whatever is still parked so MHD can close it. */
-	pthread_mutex_lock(&s->wait_mu);
-	while (s->waiting) {
-		struct api_waiter *w = s->waiting;
-		s->waiting = w->next;
-		MHD_resume_connection(w->conn);
-		free(w);
-	}
-	pthread_mutex_unlock(&s->wait_mu);
+	api_notify_stop(s);
 	api_analyze_stop(s);
 	api_committer_stop(s);
 	api_gate_stop(s);

@@ -1,166 +1,138 @@
-/* db.c - SQLite connection set-up, transactions, statement cache, the
- * connection pool and public ids (see db.h).
+/* db.c - the backend-independent part of the connection (see db.h): the
+ * URL that picks a backend, the calls into its ops, the connection pool
+ * and public ids.
  */
-#include "db/db_internal.h"
+#include "db/db_ops.h"
 #include "engine/core/err.h"
 
 #include <errno.h>
 #include <pthread.h>
+#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 #include <sys/random.h>
 #include <time.h>
 
-int db_fail(struct db *db, struct err *e, const char *what)
+/* ---- connection: the URL picks the backend ---- */
+
+/* The backend for url and what its open() takes, or NULL. */
+static const struct db_ops *backend_of(const char *url, const char **target)
 {
-	return ERR_SET(e, ERR_IO, "%s: %s", what, db && db->sq ? sqlite3_errmsg(db->sq) : "no database");
+	if (!url || !url[0])
+		return NULL;
+	if (!strncmp(url, "sqlite:", 7)) {
+		*target = url + 7;
+		return url[7] ? &db_sqlite_ops : NULL;
+	}
+	if (!strncmp(url, "postgresql://", 13) || !strncmp(url, "postgres://", 11)) {
+		*target = url;
+		return NULL; /* no PostgreSQL backend in this build yet */
+	}
+	if (strstr(url, "://"))
+		return NULL;
+	*target = url; /* a bare path */
+	return &db_sqlite_ops;
 }
 
-int db_exec(struct db *db, const char *sql, struct err *e)
+int db_url_valid(const char *url)
 {
-	char *msg = NULL;
+	const char *t;
 
-	if (sqlite3_exec(db->sq, sql, NULL, NULL, &msg) != SQLITE_OK) {
-		ERR_SET(e, ERR_IO, "sql failed: %s", msg ? msg : sqlite3_errmsg(db->sq));
-		sqlite3_free(msg);
-		return ERR_IO;
-	}
-	return 0;
+	return backend_of(url, &t) != NULL;
 }
 
-int db_open(const char *path, struct db **out, struct err *e)
+void db_url_redact(const char *url, char *buf, size_t len)
 {
-	struct db *db = calloc(1, sizeof *db);
-	int rc;
+	const char *scheme = url ? strstr(url, "://") : NULL;
+	const char *at = scheme ? strchr(scheme + 3, '@') : NULL;
+	const char *colon = at ? memchr(scheme + 3, ':', (size_t)(at - scheme - 3)) : NULL;
+	const char *p = url ? url : "";
+	size_t k = 0;
 
-	if (!db)
-		return ERR_SET(e, ERR_NOMEM, "out of memory opening the database");
-	rc = sqlite3_open_v2(path, &db->sq,
-			     SQLITE_OPEN_READWRITE | SQLITE_OPEN_CREATE | SQLITE_OPEN_NOMUTEX, NULL);
-	if (rc != SQLITE_OK) {
-		rc = ERR_SET(e, ERR_IO, "cannot open database %s: %s", path,
-			     db->sq ? sqlite3_errmsg(db->sq) : sqlite3_errstr(rc));
-		goto out;
+	if (!len)
+		return;
+	/* Passwords come as user:PASSWORD@ or as a password= parameter. */
+	while (*p && k + 13 < len) {
+		if (colon && p == colon + 1) {
+			memcpy(buf + k, "***", 3);
+			k += 3;
+			p = at;
+		} else if (!strncmp(p, "password=", 9) && p > url && (p[-1] == '?' || p[-1] == '&')) {
+			memcpy(buf + k, "password=***", 12);
+			k += 12;
+			p += 9 + strcspn(p + 9, "&");
+		} else {
+			buf[k++] = *p++;
+		}
 	}
-	sqlite3_busy_timeout(db->sq, DB_BUSY_TIMEOUT_MS);
-	/* WAL: readers never block the writer.  synchronous=FULL: a commit is
-	 * on disk before we acknowledge it (NORMAL could lose the last
-	 * transactions on power loss).  The WAL is checkpointed by SQLite's
-	 * auto-checkpoint at 1000 pages; journal_size_limit truncates it. */
-	rc = db_exec(db,
-		     "PRAGMA journal_mode=WAL;"
-		     "PRAGMA synchronous=FULL;"
-		     "PRAGMA foreign_keys=ON;"
-		     "PRAGMA journal_size_limit=67108864;"
-		     "PRAGMA temp_store=MEMORY;",
-		     e);
-	if (rc)
-		goto out;
-	rc = db_migrate(db, e);
-out:
-	if (rc) {
-		db_close(db);
-		return rc;
+	buf[k] = '\0';
+}
+
+int db_open(const char *url, struct db **out, struct err *e)
+{
+	const char *target = NULL;
+	const struct db_ops *ops = backend_of(url, &target);
+	char shown[256];
+
+	if (!ops) {
+		db_url_redact(url, shown, sizeof shown);
+		return ERR_FIELD(e, "db",
+				 "'%s' is not a database URL this build knows "
+				 "(sqlite:PATH or postgresql://...)",
+				 shown);
 	}
-	*out = db;
-	return 0;
+	return ops->open(target, out, e);
 }
 
 void db_close(struct db *db)
 {
-	if (!db)
-		return;
-	for (int i = 0; i < db->ncache; i++)
-		sqlite3_finalize(db->cache[i].st);
-	sqlite3_close_v2(db->sq);
-	free(db);
+	if (db)
+		db->ops->close(db);
+}
+
+const char *db_backend(const struct db *db)
+{
+	return db->ops->name;
 }
 
 int db_schema_version(struct db *db)
 {
-	sqlite3_stmt *st = db_stmt(db, "PRAGMA user_version", NULL);
-	int v = -1;
-
-	if (st && sqlite3_step(st) == SQLITE_ROW)
-		v = sqlite3_column_int(st, 0);
-	if (st)
-		sqlite3_reset(st);
-	return v;
+	return db->ops->schema_version(db);
 }
 
-sqlite3_stmt *db_stmt(struct db *db, const char *sql, struct err *e)
+int db_schema_latest(const struct db *db)
 {
-	sqlite3_stmt *st;
-
-	for (int i = 0; i < db->ncache; i++)
-		if (db->cache[i].sql == sql) {
-			st = db->cache[i].st;
-			sqlite3_reset(st);
-			sqlite3_clear_bindings(st);
-			return st;
-		}
-	if (sqlite3_prepare_v3(db->sq, sql, -1, SQLITE_PREPARE_PERSISTENT, &st, NULL) != SQLITE_OK) {
-		db_fail(db, e, "prepare");
-		return NULL;
-	}
-	if (db->ncache == DB_STMT_CACHE) {
-		/* Full: evict the oldest (statements are few and static). */
-		sqlite3_finalize(db->cache[0].st);
-		memmove(db->cache, db->cache + 1, sizeof db->cache[0] * (DB_STMT_CACHE - 1));
-		db->ncache--;
-	}
-	db->cache[db->ncache].sql = sql;
-	db->cache[db->ncache].st = st;
-	db->ncache++;
-	return st;
-}
-
-static int step_done(struct db *db, const char *sql, struct err *e)
-{
-	sqlite3_stmt *st = db_stmt(db, sql, e);
-	int rc;
-
-	if (!st)
-		return ERR_IO;
-	rc = sqlite3_step(st);
-	sqlite3_reset(st);
-	if (rc != SQLITE_DONE)
-		return db_fail(db, e, sql);
-	return 0;
+	return db->ops->schema_latest();
 }
 
 int db_begin(struct db *db, struct err *e)
 {
-	return step_done(db, "BEGIN IMMEDIATE", e);
+	return db->ops->begin(db, e);
 }
 
 int db_commit(struct db *db, struct err *e)
 {
-	int rc = step_done(db, "COMMIT", e);
-
-	if (rc)
-		db_rollback(db);
-	return rc;
+	return db->ops->commit(db, e);
 }
 
 void db_rollback(struct db *db)
 {
-	if (!sqlite3_get_autocommit(db->sq))
-		sqlite3_exec(db->sq, "ROLLBACK", NULL, NULL, NULL);
+	db->ops->rollback(db);
 }
 
 int db_check_writable(struct db *db, struct err *e)
 {
-	int rc = db_begin(db, e);
+	return db->ops->check_writable(db, e);
+}
 
-	if (rc)
-		return rc;
-	rc = step_done(db, "UPDATE meta SET value = value WHERE key = 'serve_seq'", e);
-	if (rc) {
-		db_rollback(db);
-		return rc;
-	}
-	return db_commit(db, e);
+int db_listen(struct db *db, struct err *e)
+{
+	return db->ops->listen(db, e);
+}
+
+int db_wait(struct db *db, int timeout_ms, int64_t *seqs, int cap, int *n, struct err *e)
+{
+	return db->ops->wait(db, timeout_ms, seqs, cap, n, e);
 }
 
 int64_t db_now_ms(void)
@@ -169,31 +141,6 @@ int64_t db_now_ms(void)
 
 	clock_gettime(CLOCK_REALTIME, &ts);
 	return (int64_t)ts.tv_sec * 1000 + ts.tv_nsec / 1000000;
-}
-
-const char *db_col_text(sqlite3_stmt *st, int col)
-{
-	const unsigned char *t = sqlite3_column_text(st, col);
-
-	return t ? (const char *)t : "";
-}
-
-void db_col_copy(sqlite3_stmt *st, int col, char *buf, size_t len)
-{
-	const char *t = db_col_text(st, col);
-	size_t n = strlen(t);
-
-	if (n >= len)
-		n = len - 1;
-	memcpy(buf, t, n);
-	buf[n] = '\0';
-}
-
-char *db_col_dup(sqlite3_stmt *st, int col)
-{
-	if (sqlite3_column_type(st, col) == SQLITE_NULL)
-		return NULL;
-	return strdup(db_col_text(st, col));
 }
 
 /* ---- ids ---- */
@@ -245,7 +192,7 @@ struct db_pool {
 	int nfree, size;
 };
 
-int db_pool_new(const char *path, int size, struct db_pool **out, struct err *e)
+int db_pool_new(const char *url, int size, struct db_pool **out, struct err *e)
 {
 	struct db_pool *p = calloc(1, sizeof *p);
 	int rc = 0;
@@ -258,7 +205,7 @@ int db_pool_new(const char *path, int size, struct db_pool **out, struct err *e)
 	pthread_cond_init(&p->cv, NULL);
 	p->size = size;
 	for (int i = 0; i < size; i++) {
-		rc = db_open(path, &p->free_v[i], e);
+		rc = db_open(url, &p->free_v[i], e);
 		if (rc)
 			break;
 		p->nfree++;

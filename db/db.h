@@ -1,10 +1,13 @@
-/* db.h - the service's SQLite database: connection, transactions, pool.
+/* db.h - the service's database: connection, transactions, pool.
  *
- * One file (DATA/infilld.db) in WAL mode holds tenants, keys, meshes, the
- * job queue and its events.  Every connection runs synchronous=FULL (a
- * job the client was told about survives power loss), a busy timeout and
- * foreign keys; every write is a BEGIN IMMEDIATE transaction.  The schema
- * is migrated on open (schema.c).  Design: docs/service.md.
+ * Two backends behind one API (db_ops.h), chosen by the URL given to
+ * db_open(): "sqlite:PATH" (the embedded default, one file in WAL mode,
+ * db/sqlite/) or "postgresql://..." / "postgres://..." (many machines,
+ * db/pg/).  Either holds tenants, keys, meshes, the job queue and its
+ * events with the same meaning; every acknowledged write is durable
+ * (SQLite synchronous=FULL, PostgreSQL synchronous_commit as the server
+ * sets it, on by default).  The schema is migrated on open.  Design:
+ * docs/service.md, docs/operations.md ("Many machines").
  */
 #ifndef INFILLD_DB_H
 #define INFILLD_DB_H
@@ -19,15 +22,23 @@ struct db;
 
 #define DB_BUSY_TIMEOUT_MS 5000
 
-/* Open (creating) the database at path and migrate it to the current
- * schema.  Caller frees with db_close().  ERR_IO on failure. */
-int db_open(const char *path, struct db **out, struct err *e);
+/* Open the database named by url ("sqlite:PATH", "postgresql://...";
+ * a bare path means sqlite:PATH), creating an SQLite file, and migrate it
+ * to the current schema.  Caller frees with db_close().  ERR_PARAM for an
+ * unknown scheme, ERR_IO when the database cannot be reached. */
+int db_open(const char *url, struct db **out, struct err *e);
 void db_close(struct db *db);
+/* "sqlite" or "postgresql". */
+const char *db_backend(const struct db *db);
+/* Nonzero when url names a database db_open() can try. */
+int db_url_valid(const char *url);
+/* url with any password replaced by "***" (for logs), into buf. */
+void db_url_redact(const char *url, char *buf, size_t len);
 
-/* Schema version after migrations (PRAGMA user_version). */
+/* Schema version after migrations. */
 int db_schema_version(struct db *db);
-/* Number of migrations this build knows (schema.c). */
-int db_schema_latest(void);
+/* Number of migrations this build knows for db's backend. */
+int db_schema_latest(const struct db *db);
 
 /* BEGIN IMMEDIATE / COMMIT / ROLLBACK.  db_rollback() never fails
  * (it is called on error paths). */
@@ -42,10 +53,24 @@ int64_t db_now_ms(void);
  * nothing.  0 or ERR_IO. */
 int db_check_writable(struct db *db, struct err *e);
 
+/* Job-change notifications (SSE across machines).  After db_listen(),
+ * db_wait() blocks up to timeout_ms for jobs whose events changed and
+ * puts their seqs in seqs[0..cap); *n = how many, 0 on timeout, or -1
+ * when the backend cannot name them (SQLite: it sleeps timeout_ms; more
+ * than cap at once): the caller then re-reads every job it watches.
+ * PostgreSQL: LISTEN/NOTIFY on one dedicated connection. */
+int db_listen(struct db *db, struct err *e);
+int db_wait(struct db *db, int timeout_ms, int64_t *seqs, int cap, int *n, struct err *e);
+
+/* Copy every row of src into dst, whose schema must be empty (no
+ * tenants, no jobs): `infilld migrate-db`.  One transaction on dst;
+ * *rows = rows copied.  ERR_PARAM when dst holds data. */
+int db_copy(struct db *src, struct db *dst, int64_t *rows, struct err *e);
+
 /* Fixed set of connections shared by threads (HTTP handlers). */
 struct db_pool;
 
-int db_pool_new(const char *path, int size, struct db_pool **out, struct err *e);
+int db_pool_new(const char *url, int size, struct db_pool **out, struct err *e);
 void db_pool_free(struct db_pool *p);
 /* Borrow a connection (waits while all are lent).  Return it with
  * db_pool_put().  Never fails once the pool exists. */

@@ -108,7 +108,8 @@ int queue_cancel(struct db *db, int64_t tenant_id, const char *id, struct job_ro
 int queue_claim(struct db *db, const char *worker, int64_t lease_ms, struct job_row *out,
 		int *got, struct err *e);
 
-/* The claim statement (static), for the EXPLAIN QUERY PLAN test. */
+/* The SQLite backend's claim statement (static), for its EXPLAIN QUERY
+ * PLAN test. */
 const char *queue_claim_sql(void);
 
 /* Fenced writes: return 1 when applied, 0 when the job is no longer

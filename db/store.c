@@ -141,6 +141,28 @@ int store_remove_tree(const char *path, struct err *e)
 	return 0;
 }
 
+int store_check(const char *store_dir, struct err *e)
+{
+	char probe[STORE_PATH_MAX], host[64] = "host";
+	int fd, rc = 0;
+
+	gethostname(host, sizeof host - 1);
+	host[sizeof host - 1] = '\0';
+	if (fmt_ok(snprintf(probe, sizeof probe, "%s/tmp/.probe-%s-%d", store_dir, host,
+			    (int)getpid()),
+		   sizeof probe))
+		return ERR_SET(e, ERR_LIMIT, "store path too long");
+	fd = open(probe, O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0600);
+	if (fd < 0)
+		return ERR_SET(e, ERR_IO, "store %s is not writable: %s", store_dir, strerror(errno));
+	if (write(fd, "ok\n", 3) != 3 || fsync(fd) != 0)
+		rc = ERR_SET(e, ERR_IO, "store %s cannot write durably: %s", store_dir,
+			     strerror(errno));
+	close(fd);
+	unlink(probe);
+	return rc;
+}
+
 int64_t store_free_bytes(const char *data_dir)
 {
 	struct statvfs sv;

@@ -54,6 +54,10 @@ void store_redact(char *msg, size_t cap, const char *data_dir, const char *path,
 #define STORE_OUTPUT_NAME_MAX 64
 void store_output_name(const char *mesh_name, const char *fallback, char *buf, size_t len);
 /* Free bytes available to us on the file system of data_dir, -1 on error. */
+/* Readiness of the store: create, write, fsync and remove a probe file
+ * in STORE/tmp (a name of this host and process).  0, or ERR_IO naming
+ * the store and the reason (a shared store that went away). */
+int store_check(const char *store_dir, struct err *e);
 int64_t store_free_bytes(const char *data_dir);
 
 #endif

@@ -8,12 +8,14 @@ set -euo pipefail
 # Ipopt's included: -llapack -lblas), every tool `make run`, `make test` and
 # the README's session call.  Installed with --no-install-recommends, so a
 # library that a -dev package only recommends must be listed here itself.
+# yamllint and python3-yaml check deploy/'s compose and Kubernetes files
+# (tests/service/test_deploy_lint.py).
 PKGS=(
 	gcc g++ make pkg-config clang libclang-rt-14-dev python3 python3-pil
 	libmicrohttpd-dev libjansson-dev libpng-dev zlib1g-dev libsqlite3-dev
 	libarchive-dev libpolyclipping-dev libtet1.5-dev coinor-libipopt-dev
 	liblapack-dev libblas-dev nettle-dev libpq-dev postgresql
-	curl ca-certificates wrk
+	curl ca-certificates wrk yamllint python3-yaml
 )
 
 missing=()

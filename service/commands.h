@@ -10,7 +10,8 @@ int cmd_engines(int argc, char **argv); /* cli_run.c */
 int cmd_verify(int argc, char **argv);  /* cli_verify.c */
 int cmd_fea(int argc, char **argv);     /* cli_fea.c */
 int cmd_serve(int argc, char **argv);     /* serve.c */
-int cmd_worker(int argc, char **argv);    /* worker.c (started by serve) */
+int cmd_worker(int argc, char **argv);    /* worker.c (cluster workers; serve's children) */
+int cmd_migrate_db(int argc, char **argv); /* migrate_cmd.c */
 int cmd_sandbox(int argc, char **argv);   /* sandbox.c (started by serve) */
 int cmd_tenant(int argc, char **argv);    /* tenant_cmd.c */
 int cmd_admin_key(int argc, char **argv); /* tenant_cmd.c */

@@ -1,7 +1,9 @@
 /* config.c - command-line options of serve and its workers (config.h). */
+#include "db/db.h"
 #include "service/config.h"
 
 #include <errno.h>
+#include <stddef.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -16,6 +18,7 @@ struct int_opt {
 #define OPT(n, field, lo, hi) {n, offsetof(struct service_config, field), lo, hi}
 static const struct int_opt int_opts[] = {
 	OPT("--workers", workers, 0, 256),
+	OPT("--slots", slots, 1, 256),
 	OPT("--http-threads", http_threads, 1, 64),
 	OPT("--max-connections", max_connections, 16, 100000),
 	OPT("--per-ip-connections", per_ip_connections, 1, 100000),
@@ -42,9 +45,10 @@ static const struct int_opt int_opts[] = {
 
 const char *config_usage(void)
 {
-	return "serve [--listen HOST:PORT] [--data DIR] [--workers N] [--http-threads N]\n"
-	       "              [--max-connections N] [--per-ip-connections N] [--conn-timeout-s N]\n"
-	       "              [--head-timeout-s N] [--min-body-rate-kbps N] [--body-grace-s N]\n"
+	return "serve [--listen HOST:PORT] [--data DIR] [--db URL] [--store DIR] [--workers N]\n"
+	       "              [--http-threads N] [--max-connections N] [--per-ip-connections N]\n"
+	       "              [--conn-timeout-s N]"
+	       " [--head-timeout-s N] [--min-body-rate-kbps N] [--body-grace-s N]\n"
 	       "              [--lease-s N] [--max-attempts N] [--drain-s N] [--job-timeout-s N]\n"
 	       "              [--job-mem-mb N] [--job-cpu-s N] [--output-limit-mb N]\n"
 	       "              [--job-threads N] [--retention-days N] [--min-free-mb N]\n"
@@ -115,7 +119,7 @@ static int origin_valid(const char *v)
 	return 1;
 }
 
-static void defaults(struct service_config *c)
+void config_defaults(struct service_config *c)
 {
 	long cores = sysconf(_SC_NPROCESSORS_ONLN);
 	const char *env;
@@ -127,6 +131,11 @@ static void defaults(struct service_config *c)
 	snprintf(c->data_dir, sizeof c->data_dir, "%s",
 		 (env = getenv("INFILLD_DATA")) && *env ? env : CONFIG_DEFAULT_DATA);
 	c->workers = cores > 0 ? (int)cores : 2;
+	c->slots = c->workers;
+	if ((env = getenv("INFILLD_DB")) && *env)
+		snprintf(c->db_url, sizeof c->db_url, "%s", env);
+	if ((env = getenv("INFILLD_STORE")) && *env)
+		snprintf(c->store_dir, sizeof c->store_dir, "%s", env);
 	c->http_threads = 4;
 	c->max_connections = 2048;
 	c->per_ip_connections = 256;
@@ -153,9 +162,62 @@ static void defaults(struct service_config *c)
 	c->self_exe[n > 0 ? n : 0] = '\0';
 }
 
+int config_resolve(struct service_config *c, const char *cmd)
+{
+	if (c->db_url[0] && !db_url_valid(c->db_url)) {
+		fprintf(stderr, "infilld %s: $INFILLD_DB wants sqlite:PATH or postgresql://...\n", cmd);
+		return 2;
+	}
+	if (!c->db_url[0] && (size_t)snprintf(c->db_url, sizeof c->db_url, "sqlite:%s/infilld.db",
+					      c->data_dir) >= sizeof c->db_url) {
+		fprintf(stderr, "infilld %s: --data path too long\n", cmd);
+		return 2;
+	}
+	c->store_shared = c->store_dir[0] && strcmp(c->store_dir, c->data_dir) != 0;
+	if (!c->store_dir[0])
+		snprintf(c->store_dir, sizeof c->store_dir, "%s", c->data_dir);
+	return 0;
+}
+
+int config_take_location(struct service_config *c, const char *cmd, int argc, char **argv,
+			 int *i)
+{
+	static const struct {
+		const char *name;
+		size_t off, len;
+	} opts[] = {
+		{"--data", offsetof(struct service_config, data_dir), sizeof c->data_dir},
+		{"--db", offsetof(struct service_config, db_url), sizeof c->db_url},
+		{"--store", offsetof(struct service_config, store_dir), sizeof c->store_dir},
+	};
+	const char *a = argv[*i];
+
+	for (size_t k = 0; k < sizeof opts / sizeof opts[0]; k++) {
+		size_t nl = strlen(opts[k].name);
+		const char *v;
+		if (strncmp(a, opts[k].name, nl) || (a[nl] && a[nl] != '='))
+			continue;
+		if (a[nl] == '=') {
+			v = a + nl + 1;
+		} else if (*i + 1 < argc) {
+			v = argv[++*i];
+		} else {
+			fprintf(stderr, "infilld %s: %s needs a value\n", cmd, opts[k].name);
+			return -1;
+		}
+		if (!*v || strlen(v) >= opts[k].len || (k == 1 && !db_url_valid(v))) {
+			fprintf(stderr, "infilld %s: bad %s '%s'\n", cmd, opts[k].name, v);
+			return -1;
+		}
+		snprintf((char *)c + opts[k].off, opts[k].len, "%s", v);
+		return 1;
+	}
+	return 0;
+}
+
 int config_parse(struct service_config *c, int argc, char **argv, int extra_ok)
 {
-	defaults(c);
+	config_defaults(c);
 	for (int i = 1; i < argc; i++) {
 		const char *a = argv[i], *v = NULL;
 		const char *eq = strchr(a, '=');
@@ -200,6 +262,24 @@ int config_parse(struct service_config *c, int argc, char **argv, int extra_ok)
 			snprintf(c->data_dir, sizeof c->data_dir, "%s", v);
 			continue;
 		}
+		if (!strcmp(name, "--db")) {
+			if (!db_url_valid(v) || strlen(v) >= sizeof c->db_url) {
+				fprintf(stderr,
+					"infilld %s: --db wants sqlite:PATH or postgresql://..., got "
+					"'%s'\n", argv[0], v);
+				return 2;
+			}
+			snprintf(c->db_url, sizeof c->db_url, "%s", v);
+			continue;
+		}
+		if (!strcmp(name, "--store")) {
+			if (!*v || strlen(v) >= sizeof c->store_dir) {
+				fprintf(stderr, "infilld %s: bad --store '%s'\n", argv[0], v);
+				return 2;
+			}
+			snprintf(c->store_dir, sizeof c->store_dir, "%s", v);
+			continue;
+		}
 		if (!strcmp(name, "--cors-origin")) {
 			if (!origin_valid(v) || strlen(v) >= sizeof c->cors_origin) {
 				fprintf(stderr,
@@ -235,6 +315,8 @@ int config_parse(struct service_config *c, int argc, char **argv, int extra_ok)
 			return 2;
 		}
 	}
+	if (config_resolve(c, argv[0]))
+		return 2;
 	if (c->job_threads == 0) {
 		long cores = sysconf(_SC_NPROCESSORS_ONLN);
 		int w = c->workers > 0 ? c->workers : 1;

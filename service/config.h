@@ -14,8 +14,12 @@
 struct service_config {
 	char host[64];
 	int port;
-	char data_dir[512];
-	int workers;             /* job worker processes */
+	char data_dir[512];      /* --data: this process's own directory (lock, default db) */
+	char db_url[1024];       /* --db (or $INFILLD_DB); default sqlite:DATA/infilld.db */
+	char store_dir[512];     /* --store (or $INFILLD_STORE): uploads, artifacts; default DATA */
+	int store_shared;        /* --store was given: other machines may use it too */
+	int workers;             /* serve: job worker processes (0 = API only) */
+	int slots;               /* worker: jobs at once (worker processes it starts) */
 	int http_threads;
 	int max_connections, per_ip_connections, conn_timeout_s;
 	int head_timeout_s;      /* deadline for a whole request head */
@@ -44,8 +48,21 @@ struct service_config {
 
 /* Defaults, then argv (argv[0] = command name).  Returns 0, 2 with a
  * message on stderr for a usage error, or CONFIG_HELP.  extra_ok: also accept the
- * internal --worker-name. */
+ * internal --worker-name.  After it, db_url and store_dir are set (from
+ * data_dir when not given). */
 int config_parse(struct service_config *c, int argc, char **argv, int extra_ok);
+/* Every option's default (environment included), before parsing. */
+void config_defaults(struct service_config *c);
+/* For the admin commands: when argv[*i] is --data, --db or --store (with
+ * its value, either form), store it in c, advance *i past it and return
+ * 1; 0 when it is another argument; -1 (message on stderr) for a bad or
+ * missing value.  Call config_resolve() after the last argument. */
+int config_take_location(struct service_config *c, const char *cmd, int argc, char **argv,
+			 int *i);
+/* The defaults that depend on other options: db_url from data_dir when
+ * empty, store_dir = data_dir when empty (store_shared = 0).  0, or 2
+ * with a message naming cmd on stderr.  config_parse() calls it. */
+int config_resolve(struct service_config *c, const char *cmd);
 /* Usage text of the serve options. */
 const char *config_usage(void);
 

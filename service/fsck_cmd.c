@@ -1,7 +1,8 @@
-/* fsck_cmd.c - `infilld fsck --data DIR [--quarantine]`: check every
+/* fsck_cmd.c - `infilld fsck [--data DIR] [--db URL] [--store DIR]
+ * [--quarantine]`: check every
  * artifact against the size and SHA-256 the database recorded when it was
  * published; report missing and damaged ones; with --quarantine move the
- * damaged files to DATA/quarantine/<tenant id>/ and mark their jobs, so
+ * damaged files to STORE/quarantine/<tenant id>/ and mark their jobs, so
  * downloads answer 410 (db/artifacts.h).  Exit 0 when all are intact, 1
  * when any is missing or damaged, 2 for usage.  Safe while serve runs.
  */
@@ -22,7 +23,8 @@
 #include <sys/stat.h>
 #include <unistd.h>
 
-static const char fsck_usage[] = "usage: infilld fsck [--data DIR] [--quarantine]\n";
+static const char fsck_usage[] =
+	"usage: infilld fsck [--data DIR] [--db URL] [--store DIR] [--quarantine]\n";
 
 /* Size and SHA-256 (hex) of path: 0, or -1 with errno when unreadable. */
 static int digest_file(const char *path, int64_t *bytes, char hex[65])
@@ -75,8 +77,8 @@ static int quarantine(struct db *db, const char *data, const struct artifact_rec
 
 int cmd_fsck(int argc, char **argv)
 {
-	const char *data = getenv("INFILLD_DATA") && *getenv("INFILLD_DATA") ? getenv("INFILLD_DATA")
-									   : CONFIG_DEFAULT_DATA;
+	struct service_config c;
+	const char *data;
 	char path[STORE_PATH_MAX];
 	int64_t after = 0;
 	long checked = 0, missing = 0, damaged = 0;
@@ -84,12 +86,14 @@ int cmd_fsck(int argc, char **argv)
 	struct db *db;
 	struct err e;
 
+	config_defaults(&c);
 	for (int i = 1; i < argc; i++) {
-		if (!strcmp(argv[i], "--data") && i + 1 < argc) {
-			data = argv[++i];
-		} else if (!strncmp(argv[i], "--data=", 7)) {
-			data = argv[i] + 7;
-		} else if (!strcmp(argv[i], "--quarantine")) {
+		int took = config_take_location(&c, "fsck", argc, argv, &i);
+		if (took < 0)
+			return 2;
+		if (took)
+			continue;
+		if (!strcmp(argv[i], "--quarantine")) {
 			quarantine_on = 1;
 		} else {
 			fputs(fsck_usage, stderr);
@@ -97,9 +101,15 @@ int cmd_fsck(int argc, char **argv)
 		}
 	}
 	err_clear(&e);
-	if (store_db_path(data, path, sizeof path) || access(path, F_OK) != 0 ||
-	    db_open(path, &db, &e)) {
-		fprintf(stderr, "infilld fsck: no database in %s%s%s\n", data, e.msg[0] ? ": " : "",
+	if (config_resolve(&c, "fsck"))
+		return 2;
+	data = c.store_dir;
+	/* Never create a database: fsck checks an existing installation. */
+	if ((!strncmp(c.db_url, "sqlite:", 7) && access(c.db_url + 7, F_OK) != 0) ||
+	    db_open(c.db_url, &db, &e)) {
+		char shown[256];
+		db_url_redact(c.db_url, shown, sizeof shown);
+		fprintf(stderr, "infilld fsck: no database at %s%s%s\n", shown, e.msg[0] ? ": " : "",
 			e.msg);
 		return 1;
 	}

@@ -30,15 +30,21 @@ static const struct command commands[] = {
 	 "              under a load case; docs/fea_cli.md)"},
 	{"serve", cmd_serve, NULL}, /* usage from config_usage() */
 	{"tenant", cmd_tenant,
-	 "tenant add NAME [--max-jobs N] [--max-upload-mb N] [--quota-gb N] [--data DIR]\n"
-	 "              tenant list | key-rotate NAME | remove NAME [--data DIR]"},
-	{"admin-key", cmd_admin_key, "admin-key [--data DIR]               (new admin key, shown once)"},
+	 "tenant add NAME [--max-jobs N] [--max-upload-mb N] [--quota-gb N] [LOCATION]\n"
+	 "              tenant list | key-rotate NAME | remove NAME [LOCATION]\n"
+	 "              (LOCATION: [--data DIR] [--db URL] [--store DIR], as serve takes them)"},
+	{"admin-key", cmd_admin_key, "admin-key [--data DIR] [--db URL]    (new admin key, shown once)"},
 	{"fsck", cmd_fsck,
-	 "fsck [--data DIR] [--quarantine]     (check artifacts against their recorded SHA-256;\n"
+	 "fsck [LOCATION] [--quarantine]       (check artifacts against their recorded SHA-256;\n"
 	 "              exit 1 when any is damaged or missing; --quarantine moves damaged ones\n"
-	 "              to DATA/quarantine/ and their downloads answer 410)"},
+	 "              to STORE/quarantine/ and their downloads answer 410)"},
+	{"worker", cmd_worker,
+	 "worker --db URL --store DIR [--data DIR] [--slots N] [serve's job options]\n"
+	 "              (claims and runs jobs, no HTTP: the workers of a cluster)"},
+	{"migrate-db", cmd_migrate_db,
+	 "migrate-db --from URL --to URL       (copy every row into an empty database, e.g.\n"
+	 "              sqlite:DATA/infilld.db to postgresql://...; docs/operations.md)"},
 	/* Internal: started by serve, not listed. */
-	{"worker", cmd_worker, ""},
 	{"sandbox", cmd_sandbox, ""},
 };
 

@@ -1,8 +1,11 @@
 /* serve.c - `infilld serve`: the HTTP front end (api/), the worker
- * processes (supervisor.c), the rescuer for expired leases, retention,
- * and graceful shutdown on SIGTERM/SIGINT.  One serve per data directory
- * (flock on DATA/serve.lock), so at start-up every job still marked
- * running is an orphan of a previous run and is re-queued at once.
+ * processes (supervisor.c; none with --workers 0, the API servers of a
+ * cluster), the rescuer for expired leases, retention, and graceful
+ * shutdown on SIGTERM/SIGINT.  One serve per data directory (flock on
+ * DATA/serve.lock).  With the SQLite backend the database is this
+ * machine's alone, so at start-up every job still marked running is an
+ * orphan of a previous run and is re-queued at once; with PostgreSQL other
+ * machines' workers may hold running jobs, and only expired leases are.
  */
 #include "api/api.h"
 #include "api/log.h"
@@ -24,25 +27,20 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/file.h>
+#include <sys/stat.h>
 #include <time.h>
 #include <unistd.h>
 
-static void requeue_worker(void *ctx, const char *name)
-{
-	struct db *db = ctx;
-	struct err e;
-	int n = 0;
+/* A shared store's tmp/ files younger than this may be another
+ * machine's uploads or outputs in progress (longer than any attempt). */
+#define SERVE_TMP_SHARED_AGE_S (24 * 3600)
 
-	err_clear(&e);
-	if (queue_rescue(db, name, &n, &e))
-		log_msg(LOG_ERROR, "serve", "re-queueing jobs of %s: %s", name, e.msg);
-	else if (n)
-		log_msg(LOG_WARN, "serve", "worker %s died holding %d job(s); re-queued", name, n);
-}
-
-/* Remove half-written files a crash left in DATA/tmp. */
-static void clean_tmp(const char *data_dir)
+/* Remove half-written files a crash left in STORE/tmp: all of them when
+ * the store is this serve's alone, else those older than min_age_s
+ * (another machine may be writing the younger ones). */
+static void clean_tmp(const char *data_dir, int64_t min_age_s)
 {
+	time_t now = time(NULL);
 	char dir[STORE_PATH_MAX], path[STORE_PATH_MAX];
 	struct dirent *d;
 	DIR *dp;
@@ -53,8 +51,12 @@ static void clean_tmp(const char *data_dir)
 	while ((d = readdir(dp)) != NULL) {
 		if (d->d_name[0] == '.')
 			continue;
-		if (snprintf(path, sizeof path, "%s%s", dir, d->d_name) < (int)sizeof path)
-			unlink(path);
+		struct stat st;
+		if (snprintf(path, sizeof path, "%s%s", dir, d->d_name) >= (int)sizeof path)
+			continue;
+		if (min_age_s > 0 && (stat(path, &st) != 0 || now - st.st_mtime < min_age_s))
+			continue;
+		unlink(path);
 	}
 	closedir(dp);
 }
@@ -75,7 +77,7 @@ static void retention(const struct service_config *c, struct db *db)
 	}
 	for (int i = 0; i < n; i++) {
 		char path[STORE_PATH_MAX];
-		store_artifact_path(c->data_dir, v[i].tenant_id, v[i].name, path, sizeof path);
+		store_artifact_path(c->store_dir, v[i].tenant_id, v[i].name, path, sizeof path);
 		unlink(path);
 	}
 	if (n)
@@ -90,7 +92,7 @@ int cmd_serve(int argc, char **argv)
 	struct api_config ac;
 	struct api_server *srv = NULL;
 	struct supervisor sup;
-	char db_path[STORE_PATH_MAX], lock_path[STORE_PATH_MAX];
+	char lock_path[STORE_PATH_MAX], shown_db[256];
 	sigset_t set;
 	struct db *db = NULL;
 	struct err e;
@@ -102,7 +104,7 @@ int cmd_serve(int argc, char **argv)
 	if (getenv("INFILLD_LOG") && !strcmp(getenv("INFILLD_LOG"), "debug"))
 		log_set_level(LOG_DEBUG);
 	err_clear(&e);
-	if (store_init(c.data_dir, &e)) {
+	if (store_init(c.data_dir, &e) || store_init(c.store_dir, &e)) {
 		fprintf(stderr, "infilld serve: %s\n", e.msg);
 		return 1;
 	}
@@ -113,15 +115,15 @@ int cmd_serve(int argc, char **argv)
 			lock_fd < 0 ? strerror(errno) : "lock held");
 		return 1;
 	}
-	store_db_path(c.data_dir, db_path, sizeof db_path);
-	if (db_open(db_path, &db, &e)) {
-		fprintf(stderr, "infilld serve: %s\n", e.msg);
+	db_url_redact(c.db_url, shown_db, sizeof shown_db);
+	if (db_open(c.db_url, &db, &e)) {
+		fprintf(stderr, "infilld serve: %s: %s\n", shown_db, e.msg);
 		return 1;
 	}
-	if (queue_rescue(db, "*", &n, &e) == 0 && n)
+	if (!strcmp(db_backend(db), "sqlite") && queue_rescue(db, "*", &n, &e) == 0 && n)
 		log_msg(LOG_WARN, "serve", "%d job(s) were running when the service stopped; re-queued",
 			n);
-	clean_tmp(c.data_dir);
+	clean_tmp(c.store_dir, c.store_shared ? SERVE_TMP_SHARED_AGE_S : 0);
 	if (c.fault_injection)
 		log_msg(LOG_WARN, "serve",
 			"INFILLD_FAULT_INJECTION=1: jobs may ask to crash (test use only)");
@@ -139,7 +141,9 @@ int cmd_serve(int argc, char **argv)
 	memset(&ac, 0, sizeof ac);
 	ac.host = c.host;
 	ac.port = c.port;
-	ac.data_dir = c.data_dir;
+	ac.db_url = c.db_url;
+	ac.store_dir = c.store_dir;
+	ac.store_shared = c.store_shared;
 	ac.self_exe = c.self_exe;
 	ac.threads = c.http_threads;
 	ac.max_connections = c.max_connections;
@@ -162,11 +166,11 @@ int cmd_serve(int argc, char **argv)
 		db_close(db);
 		return 1;
 	}
-	supervisor_init(&sup, &c, argc, argv);
+	supervisor_init(&sup, &c, c.workers, argc, argv);
 	supervisor_start_due(&sup);
-	printf("infilld %s: listening on http://%s%s%s:%d (data %s, %d workers)\n", INFILLD_VERSION,
-	       strchr(c.host, ':') ? "[" : "", c.host, strchr(c.host, ':') ? "]" : "",
-	       api_server_port(srv), c.data_dir, c.workers);
+	printf("infilld %s: listening on http://%s%s%s:%d (data %s, db %s, store %s, %d workers)\n",
+	       INFILLD_VERSION, strchr(c.host, ':') ? "[" : "", c.host, strchr(c.host, ':') ? "]" : "",
+	       api_server_port(srv), c.data_dir, shown_db, c.store_dir, c.workers);
 	fflush(stdout);
 	log_msg(LOG_INFO, "serve", "listening on port %d", api_server_port(srv));
 
@@ -175,7 +179,7 @@ int cmd_serve(int argc, char **argv)
 		int sig = sigtimedwait(&set, NULL, &ts);
 		if (sig == SIGTERM || sig == SIGINT)
 			break;
-		supervisor_reap(&sup, requeue_worker, db);
+		supervisor_reap(&sup, supervisor_requeue, db);
 		supervisor_start_due(&sup);
 		api_server_set_workers_alive(srv, supervisor_alive(&sup));
 		/* Rescuer: leases that ran out (a hung or stopped worker). */

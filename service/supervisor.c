@@ -1,10 +1,12 @@
-/* supervisor.c - worker processes of serve (see supervisor.h).  Workers
- * are this binary re-executed as `infilld worker ... --worker-name wN`
+/* supervisor.c - worker processes of serve and of a cluster's `infilld
+ * worker` (see supervisor.h).  Workers are this binary re-executed as
+ * `infilld worker ... --worker-name HOST-wN-PID`
  * (posix_spawn, so nothing of the multi-threaded server leaks into them).
  */
 #define _GNU_SOURCE /* environ */
 #include "service/supervisor.h"
 #include "api/log.h"
+#include "db/queue.h"
 #include "service/config.h"
 
 #include <errno.h>
@@ -25,16 +27,22 @@ static double mono_s(void)
 	return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
 }
 
-void supervisor_init(struct supervisor *s, const struct service_config *cfg, int argc,
+void supervisor_init(struct supervisor *s, const struct service_config *cfg, int n, int argc,
 		     char **argv)
 {
+	char host[64] = "host";
+
+	/* Names are unique across the machines of a cluster: the rescuer
+	 * re-queues a dead worker's jobs by name. */
+	gethostname(host, sizeof host - 1);
+	host[sizeof host - 1] = '\0';
 	memset(s, 0, sizeof *s);
 	s->cfg = cfg;
 	s->argc = argc;
 	s->argv = argv;
-	s->n = cfg->workers < SUPERVISOR_MAX_WORKERS ? cfg->workers : SUPERVISOR_MAX_WORKERS;
+	s->n = n < SUPERVISOR_MAX_WORKERS ? n : SUPERVISOR_MAX_WORKERS;
 	for (int i = 0; i < s->n; i++)
-		snprintf(s->w[i].name, sizeof s->w[i].name, "w%d-%d", i, (int)getpid());
+		snprintf(s->w[i].name, sizeof s->w[i].name, "%.12s-w%d-%d", host, i, (int)getpid());
 }
 
 static void spawn_one(struct supervisor *s, int i)
@@ -146,4 +154,18 @@ void supervisor_stop(struct supervisor *s, double wait_s)
 			waitpid(s->w[i].pid, NULL, 0);
 			s->w[i].pid = 0;
 		}
+}
+
+void supervisor_requeue(void *ctx, const char *name)
+{
+	struct db *db = ctx;
+	struct err e;
+	int n = 0;
+
+	err_clear(&e);
+	if (queue_rescue(db, name, &n, &e))
+		log_msg(LOG_ERROR, "supervisor", "re-queueing jobs of %s: %s", name, e.msg);
+	else if (n)
+		log_msg(LOG_WARN, "supervisor", "worker %s died holding %d job(s); re-queued", name,
+			n);
 }

@@ -1,4 +1,5 @@
-/* supervisor.h - the worker processes of `serve`: start N, restart the
+/* supervisor.h - the worker processes of `serve` and of a cluster's
+ * `infilld worker`: start N, restart the
  * ones that die (with a back-off against crash loops), stop them all.
  */
 #ifndef INFILLD_SERVICE_SUPERVISOR_H
@@ -23,7 +24,9 @@ struct supervisor {
 	} w[SUPERVISOR_MAX_WORKERS];
 };
 
-void supervisor_init(struct supervisor *s, const struct service_config *cfg, int argc,
+/* n workers (at most SUPERVISOR_MAX_WORKERS), each started with argv's
+ * options. */
+void supervisor_init(struct supervisor *s, const struct service_config *cfg, int n, int argc,
 		     char **argv);
 /* Start every worker that is due (not running, back-off over). */
 void supervisor_start_due(struct supervisor *s);
@@ -31,6 +34,9 @@ void supervisor_start_due(struct supervisor *s);
  * jobs at once).  Returns the number reaped. */
 int supervisor_reap(struct supervisor *s, void (*dead)(void *ctx, const char *name), void *ctx);
 int supervisor_alive(const struct supervisor *s);
+/* The dead() of supervisor_reap() for ctx = a struct db *: re-queue (or
+ * fail) what the dead worker held, at once rather than at lease expiry. */
+void supervisor_requeue(void *ctx, const char *name);
 /* SIGTERM all, wait up to wait_s, then SIGKILL what is left. */
 void supervisor_stop(struct supervisor *s, double wait_s);
 

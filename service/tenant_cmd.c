@@ -1,6 +1,7 @@
 /* tenant_cmd.c - `infilld tenant add|list|key-rotate|remove` and
- * `infilld admin-key`: tenant administration on the data directory
- * (safe while serve runs: SQLite serialises the writes).  A new key is
+ * `infilld admin-key`: tenant administration on the database of --db
+ * (default: the data directory's SQLite file) and, for remove, the store
+ * (safe while serve runs: the database serialises the writes).  A new key is
  * printed once, alone on the last line of stdout, for scripts.
  */
 #include "db/db.h"
@@ -15,20 +16,23 @@
 #include <string.h>
 
 static const char tenant_usage[] =
-	"usage: infilld tenant add NAME [--max-jobs N] [--max-upload-mb N] [--quota-gb N] [--data DIR]\n"
-	"       infilld tenant list [--data DIR]\n"
-	"       infilld tenant key-rotate NAME [--data DIR]\n"
-	"       infilld tenant remove NAME [--data DIR]\n";
+	"usage: infilld tenant add NAME [--max-jobs N] [--max-upload-mb N] [--quota-gb N] [LOCATION]\n"
+	"       infilld tenant list [LOCATION]\n"
+	"       infilld tenant key-rotate NAME [LOCATION]\n"
+	"       infilld tenant remove NAME [LOCATION]\n"
+	"LOCATION: [--data DIR] [--db URL] [--store DIR], as serve takes them\n";
 
-static int open_db(const char *data, struct db **db)
+/* The database of c (creating the directories an SQLite default needs). */
+static int open_db(struct service_config *c, const char *cmd, struct db **db)
 {
-	char path[STORE_PATH_MAX];
 	struct err e;
 
 	err_clear(&e);
-	if (store_init(data, &e) || store_db_path(data, path, sizeof path) ||
-	    db_open(path, db, &e)) {
-		fprintf(stderr, "infilld: %s\n", e.msg[0] ? e.msg : "cannot open the data directory");
+	if (config_resolve(c, cmd))
+		return 2;
+	if ((!strncmp(c->db_url, "sqlite:", 7) && store_init(c->data_dir, &e)) ||
+	    db_open(c->db_url, db, &e)) {
+		fprintf(stderr, "infilld %s: %s\n", cmd, e.msg[0] ? e.msg : "cannot open the database");
 		return 1;
 	}
 	return 0;
@@ -51,14 +55,14 @@ static int parse_num(const char *opt, const char *v, long long lo, long long hi,
 int cmd_tenant(int argc, char **argv)
 {
 	const char *sub = argc > 1 ? argv[1] : NULL, *name = NULL;
-	const char *data = getenv("INFILLD_DATA") && *getenv("INFILLD_DATA") ? getenv("INFILLD_DATA")
-									   : CONFIG_DEFAULT_DATA;
+	struct service_config c;
 	struct tenant_limits l;
 	struct db *db;
 	struct err e;
 	char key[API_KEY_MAX];
 	int rc = 0;
 
+	config_defaults(&c);
 	db_tenant_limits_default(&l);
 	if (!sub || !strcmp(sub, "-h") || !strcmp(sub, "--help")) {
 		fputs(tenant_usage, sub ? stdout : stderr);
@@ -67,6 +71,11 @@ int cmd_tenant(int argc, char **argv)
 	for (int i = 2; i < argc; i++) {
 		const char *a = argv[i];
 		long long x;
+		int took = config_take_location(&c, "tenant", argc, argv, &i);
+		if (took < 0)
+			return 2;
+		if (took)
+			continue;
 		if (a[0] != '-') {
 			if (name) {
 				fprintf(stderr, "infilld tenant: unexpected argument '%s'\n%s", a, tenant_usage);
@@ -79,9 +88,7 @@ int cmd_tenant(int argc, char **argv)
 			fprintf(stderr, "infilld tenant: %s needs a value\n", a);
 			return 2;
 		}
-		if (!strcmp(a, "--data")) {
-			data = argv[++i];
-		} else if (!strcmp(a, "--max-jobs")) {
+		if (!strcmp(a, "--max-jobs")) {
 			if ((rc = parse_num(a, argv[++i], 1, 1024, &x)))
 				return rc;
 			l.max_jobs = (int)x;
@@ -107,8 +114,8 @@ int cmd_tenant(int argc, char **argv)
 		fprintf(stderr, "infilld tenant: unknown sub-command '%s'\n%s", sub, tenant_usage);
 		return 2;
 	}
-	if (open_db(data, &db))
-		return 1;
+	if ((rc = open_db(&c, "tenant", &db)))
+		return rc;
 	err_clear(&e);
 	if (!strcmp(sub, "add")) {
 		struct tenant t;
@@ -137,7 +144,7 @@ int cmd_tenant(int argc, char **argv)
 		int64_t id;
 		if (!(rc = db_tenant_remove(db, name, &id, &e))) {
 			char dir[STORE_PATH_MAX];
-			store_tenant_dir(data, id, dir, sizeof dir);
+			store_tenant_dir(c.store_dir, id, dir, sizeof dir);
 			store_remove_tree(dir, &e);
 			printf("tenant %s removed with its meshes, jobs and outputs\n", name);
 		}
@@ -152,22 +159,23 @@ int cmd_tenant(int argc, char **argv)
 
 int cmd_admin_key(int argc, char **argv)
 {
-	const char *data = getenv("INFILLD_DATA") && *getenv("INFILLD_DATA") ? getenv("INFILLD_DATA")
-									   : CONFIG_DEFAULT_DATA;
+	struct service_config c;
 	char key[API_KEY_MAX];
 	struct db *db;
 	struct err e;
+	int rc;
 
+	config_defaults(&c);
 	for (int i = 1; i < argc; i++) {
-		if (!strcmp(argv[i], "--data") && i + 1 < argc) {
-			data = argv[++i];
-		} else {
-			fprintf(stderr, "usage: infilld admin-key [--data DIR]\n");
+		int took = config_take_location(&c, "admin-key", argc, argv, &i);
+		if (took <= 0) {
+			if (!took)
+				fprintf(stderr, "usage: infilld admin-key [--data DIR] [--db URL]\n");
 			return 2;
 		}
 	}
-	if (open_db(data, &db))
-		return 1;
+	if ((rc = open_db(&c, "admin-key", &db)))
+		return rc;
 	err_clear(&e);
 	if (db_admin_key_rotate(db, key, &e)) {
 		fprintf(stderr, "infilld admin-key: %s\n", e.msg);

@@ -1,5 +1,6 @@
-/* worker.c - `infilld worker` (started by serve, not by people): claims
- * jobs from the queue and runs each attempt in a forked job process
+/* worker.c - `infilld worker`.  With --worker-name (a child of serve's or
+ * of a cluster worker's supervisor) it claims jobs from the queue and
+ * runs each attempt in a forked job process
  * (jobproc.c), relaying its progress to the database, renewing the lease,
  * enforcing the wall-clock limit, stopping it on cancellation, and
  * recording how it ended.  Every write is fenced by (job, attempt).
@@ -15,6 +16,7 @@
 #include "service/commands.h"
 #include "service/config.h"
 #include "service/jobproc.h"
+#include "service/supervisor.h"
 
 #include <errno.h>
 #include <fcntl.h>
@@ -142,7 +144,7 @@ static void finish(struct attempt *a, int status)
 	int rc;
 
 	err_clear(&e);
-	store_tmp_path(c->data_dir, "", tmp, sizeof tmp);
+	store_tmp_path(c->store_dir, "", tmp, sizeof tmp);
 	snprintf(tmp + strlen(tmp), sizeof tmp - strlen(tmp), "%s-a%d.part", j->id, j->attempt);
 	if (a->lost) {
 		unlink(tmp);
@@ -156,7 +158,7 @@ static void finish(struct attempt *a, int status)
 		if (out_format_parse(j->format, &fmt, &e) != 0)
 			fmt = OUT_ZIP;
 		snprintf(name, sizeof name, "%s-a%d%s", j->id, j->attempt, out_format_extension(fmt));
-		store_artifact_path(c->data_dir, j->tenant_id, name, final_path, sizeof final_path);
+		store_artifact_path(c->store_dir, j->tenant_id, name, final_path, sizeof final_path);
 		rc = store_publish(tmp, final_path, &e);
 		if (rc) {
 			f.type = "io";
@@ -237,7 +239,7 @@ fail:
 	if (f.message != redacted) {
 		snprintf(redacted, sizeof redacted, "%s", f.message);
 		store_redact(redacted, sizeof redacted, NULL, tmp, "the output");
-		store_redact(redacted, sizeof redacted, c->data_dir, a->mesh_path, a->mesh_name);
+		store_redact(redacted, sizeof redacted, c->store_dir, a->mesh_path, a->mesh_name);
 		f.message = redacted;
 	}
 	rc = queue_fail(a->db, j->seq, j->attempt, &f, &e);
@@ -324,11 +326,11 @@ static void run_attempt(const struct service_config *c, struct db *db, struct jo
 		queue_fail(db, j->seq, j->attempt, &f, &e);
 		return;
 	}
-	store_mesh_path(c->data_dir, j->tenant_id, m.id, m.format, mesh_path, sizeof mesh_path);
+	store_mesh_path(c->store_dir, j->tenant_id, m.id, m.format, mesh_path, sizeof mesh_path);
 	a.mesh_path = mesh_path;
 	snprintf(a.mesh_name, sizeof a.mesh_name, "%s", m.name);
 	db_mesh_rec_fini(&m);
-	store_tmp_path(c->data_dir, "", tmp, sizeof tmp);
+	store_tmp_path(c->store_dir, "", tmp, sizeof tmp);
 	snprintf(tmp + strlen(tmp), sizeof tmp - strlen(tmp), "%s-a%d.part", j->id, j->attempt);
 	if (pipe2(p, O_CLOEXEC) != 0) {
 		struct job_failure f = {"io", "cannot create a pipe", "", 1};
@@ -379,20 +381,39 @@ static void run_attempt(const struct service_config *c, struct db *db, struct jo
 	free(a.metrics);
 }
 
-int cmd_worker(int argc, char **argv)
+/* Is the store there to write to?  Probed at most every 2 s (a file
+ * create + fsync on a network file system is not free); a worker whose
+ * store is gone claims nothing until it is back. */
+static int store_usable(const struct service_config *c)
 {
-	struct service_config c;
-	char db_path[STORE_PATH_MAX];
+	static double last_s = -1e9;
+	static int ok = 1;
+	double now = mono_s();
+
+	if (now - last_s >= 2.0) {
+		struct err e;
+		int was = ok;
+		err_clear(&e);
+		ok = store_check(c->store_dir, &e) == 0;
+		if (!ok && was)
+			log_msg(LOG_ERROR, "worker", "%s; not claiming jobs until it is back", e.msg);
+		else if (ok && !was)
+			log_msg(LOG_INFO, "worker", "store %s is back", c->store_dir);
+		last_s = now;
+	}
+	return ok;
+}
+
+/* One worker process: claim, run, repeat (started by a supervisor). */
+static int worker_child(struct service_config *c)
+{
 	struct sigaction sa;
 	struct db *db;
 	struct err e;
 	pid_t parent = getppid();
-	int rc = config_parse(&c, argc, argv, 1);
 
-	if (rc)
-		return rc;
-	/* Die with the server: a worker without its supervisor would run
-	 * jobs nobody watches. */
+	/* Die with the supervisor: a worker without it would run jobs nobody
+	 * watches. */
 	prctl(PR_SET_PDEATHSIG, SIGTERM);
 	if (getppid() != parent)
 		return 1;
@@ -401,23 +422,23 @@ int cmd_worker(int argc, char **argv)
 	sigaction(SIGTERM, &sa, NULL);
 	sigaction(SIGINT, &sa, NULL);
 	signal(SIGPIPE, SIG_IGN);
-	store_db_path(c.data_dir, db_path, sizeof db_path);
 	err_clear(&e);
-	if (db_open(db_path, &db, &e)) {
+	if (db_open(c->db_url, &db, &e)) {
 		log_msg(LOG_ERROR, "worker", "%s", e.msg);
 		return 1;
 	}
-	log_msg(LOG_DEBUG, "worker", "%s ready", c.worker_name);
+	log_msg(LOG_DEBUG, "worker", "%s ready", c->worker_name);
 	while (!worker_stopping) {
 		struct job_row j;
 		int got = 0;
 
-		if (queue_claim(db, c.worker_name, (int64_t)c.lease_s * 1000, &j, &got, &e)) {
+		if (store_usable(c) &&
+		    queue_claim(db, c->worker_name, (int64_t)c->lease_s * 1000, &j, &got, &e)) {
 			log_msg(LOG_WARN, "worker", "claim: %s", e.msg);
 			got = 0;
 		}
 		if (got) {
-			run_attempt(&c, db, &j);
+			run_attempt(c, db, &j);
 			queue_job_row_fini(&j);
 			continue;
 		}
@@ -430,4 +451,64 @@ int cmd_worker(int argc, char **argv)
 	}
 	db_close(db);
 	return 0;
+}
+
+/* `infilld worker` as people start it on a cluster's machines: --slots
+ * worker processes (supervisor.c), the rescuer for expired leases, no
+ * HTTP; SIGTERM drains like serve's. */
+static int worker_main(struct service_config *c, int argc, char **argv)
+{
+	struct supervisor sup;
+	char shown[256];
+	sigset_t set;
+	struct db *db;
+	struct err e;
+	int n;
+
+	err_clear(&e);
+	if (store_init(c->data_dir, &e) || store_init(c->store_dir, &e)) {
+		fprintf(stderr, "infilld worker: %s\n", e.msg);
+		return 1;
+	}
+	db_url_redact(c->db_url, shown, sizeof shown);
+	if (db_open(c->db_url, &db, &e)) {
+		fprintf(stderr, "infilld worker: %s: %s\n", shown, e.msg);
+		return 1;
+	}
+	sigemptyset(&set);
+	sigaddset(&set, SIGTERM);
+	sigaddset(&set, SIGINT);
+	sigaddset(&set, SIGCHLD);
+	sigaddset(&set, SIGHUP);
+	sigprocmask(SIG_BLOCK, &set, NULL);
+	signal(SIGPIPE, SIG_IGN);
+	supervisor_init(&sup, c, c->slots, argc, argv);
+	supervisor_start_due(&sup);
+	printf("infilld %s: worker with %d slot(s) (db %s, store %s)\n", INFILLD_VERSION, c->slots,
+	       shown, c->store_dir);
+	fflush(stdout);
+	for (;;) {
+		struct timespec ts = {1, 0};
+		int sig = sigtimedwait(&set, NULL, &ts);
+		if (sig == SIGTERM || sig == SIGINT)
+			break;
+		supervisor_reap(&sup, supervisor_requeue, db);
+		supervisor_start_due(&sup);
+		if (queue_rescue(db, NULL, &n, &e) == 0 && n)
+			log_msg(LOG_WARN, "worker", "%d job lease(s) expired; re-queued or failed", n);
+	}
+	log_msg(LOG_INFO, "worker", "stopping: draining jobs for up to %d s", c->drain_s);
+	supervisor_stop(&sup, c->drain_s + 10.0);
+	db_close(db);
+	return 0;
+}
+
+int cmd_worker(int argc, char **argv)
+{
+	struct service_config c;
+	int rc = config_parse(&c, argc, argv, 1);
+
+	if (rc)
+		return rc == CONFIG_HELP ? 0 : rc;
+	return c.worker_name[0] ? worker_child(&c) : worker_main(&c, argc, argv);
 }

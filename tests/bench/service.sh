@@ -1,7 +1,10 @@
 #!/usr/bin/env bash
 # service.sh BUILD - service benchmarks (printed figures):
 #   submissions/s and status reads/s (wrk over loopback keep-alive),
-#   claim latency at 10k and 100k queued jobs (bench_claim.c on libdb),
+#   the queue straight on libdb (bench_queue.c): submissions/s, claim
+#   latency and claims/s of 4 claimers at 10k and 100k queued jobs on
+#   SQLite, and at 100k on PostgreSQL (started here, pgserver.py),
+#   status reads/s through 2 API servers on one PostgreSQL (cluster_http.py),
 #   1 GB artifact download throughput with the server's RSS growth.
 set -euo pipefail
 BUILD=${1:?usage: service.sh BUILD}
@@ -11,11 +14,9 @@ BIN="$ROOT/$BUILD/infilld"
 TMP=${BENCH_TMP:-$ROOT/$BUILD/bench}/service
 rm -rf "$TMP" && mkdir -p "$TMP"
 
-# -- claim latency (C, straight on the queue) --
-gcc -std=c11 -O2 -D_POSIX_C_SOURCE=200809L -D_DEFAULT_SOURCE -I. $(pkg-config --cflags sqlite3) \
-	-o "$TMP/bench_claim" tests/bench/bench_claim.c "$BUILD/libdb.a" "$BUILD/libengine.a" \
-	$(pkg-config --libs sqlite3 nettle) -lm -lpthread
-for n in 10000 100000; do "$TMP/bench_claim" "$TMP/claim.db" "$n"; done
+# -- the queue (C, straight on libdb), both backends --
+for n in 10000 100000; do "$BUILD/tests/bench/bench_queue" "sqlite:$TMP/queue.db" "$n"; done
+python3 tests/bench/cluster_http.py "$BIN" "$TMP" "$BUILD/tests/bench/bench_queue"
 
 # -- HTTP figures --
 python3 tests/bench/service_http.py "$BIN" "$TMP"

@@ -6,7 +6,7 @@
  * edit a migration that has shipped.  Times are milliseconds since the
  * Unix epoch.  Table design: docs/service.md ("Queue and storage").
  */
-#include "db/db_internal.h"
+#include "db/sqlite/sq_internal.h"
 #include "engine/core/err.h"
 
 #include <stdio.h>
@@ -95,41 +95,41 @@ static const char *const migrations[] = {
 	"ALTER TABLE jobs ADD COLUMN mesh_name TEXT;",
 };
 
-int db_schema_latest(void)
+int sq_schema_latest(void)
 {
 	return (int)(sizeof migrations / sizeof migrations[0]);
 }
 
-int db_migrate(struct db *db, struct err *e)
+int sq_migrate(struct db *db, struct err *e)
 {
-	int latest = db_schema_latest();
+	int latest = sq_schema_latest();
 
 	for (;;) {
 		int v, rc;
 		char pragma[48];
 
-		rc = db_begin(db, e);
+		rc = sq_begin(db, e);
 		if (rc)
 			return rc;
-		v = db_schema_version(db);
+		v = sq_schema_version(db);
 		if (v < 0 || v > latest) {
-			db_rollback(db);
+			sq_rollback(db);
 			return ERR_SET(e, ERR_UNSUPPORTED,
 				       "database schema version %d is newer than this build's %d", v,
 				       latest);
 		}
 		if (v == latest) {
-			db_rollback(db);
+			sq_rollback(db);
 			return 0;
 		}
 		snprintf(pragma, sizeof pragma, "PRAGMA user_version = %d", v + 1);
-		rc = db_exec(db, migrations[v], e);
+		rc = sq_exec(db, migrations[v], e);
 		if (!rc)
-			rc = db_exec(db, pragma, e);
+			rc = sq_exec(db, pragma, e);
 		if (!rc)
-			rc = db_commit(db, e);
+			rc = sq_commit(db, e);
 		if (rc) {
-			db_rollback(db);
+			sq_rollback(db);
 			err_prefix(e, "migrating the schema to version %d", v + 1);
 			return rc;
 		}
