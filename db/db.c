@@ -26,7 +26,7 @@ static const struct db_ops *backend_of(const char *url, const char **target)
 	}
 	if (!strncmp(url, "postgresql://", 13) || !strncmp(url, "postgres://", 11)) {
 		*target = url;
-		return NULL; /* no PostgreSQL backend in this build yet */
+		return &db_pg_ops;
 	}
 	if (strstr(url, "://"))
 		return NULL;

@@ -142,5 +142,6 @@ void db_key_hash(const char *key, unsigned char hash[DB_KEY_HASH_LEN]);
 int db_key_hash_eq(const void *stored, size_t len, const unsigned char hash[DB_KEY_HASH_LEN]);
 
 extern const struct db_ops db_sqlite_ops;
+extern const struct db_ops db_pg_ops;
 
 #endif

@@ -171,14 +171,16 @@ int pgdb_copy_in(struct db *db, const struct db_table *t, const struct db_val *v
 
 int pgdb_copy_done(struct db *db, struct err *e)
 {
-	/* setval(..., false): the next id handed out is max + 1. */
+	/* setval(..., false): the next id handed out is max + 1; serve_seq's
+	 * last value becomes the highest position copied (tenants added later
+	 * start there, tenants.c). */
 	static const char sql[] =
 		"SELECT setval(pg_get_serial_sequence('tenants', 'id'),"
 		" coalesce((SELECT max(id) FROM tenants), 0) + 1, false);"
 		"SELECT setval(pg_get_serial_sequence('jobs', 'seq'),"
 		" coalesce((SELECT max(seq) FROM jobs), 0) + 1, false);"
-		"SELECT setval('serve_seq', coalesce((SELECT max(served_seq) FROM tenants), 0) + 1,"
-		" false)";
+		"SELECT setval('serve_seq', m, true)"
+		" FROM (SELECT max(served_seq) AS m FROM tenants) s WHERE m >= 1";
 
 	return pgdb_exec(db, sql, e);
 }

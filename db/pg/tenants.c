@@ -31,13 +31,15 @@ static void read_tenant_at(const PGresult *r, int i, int c0, struct tenant *t)
 int pgdb_tenant_add(struct db *db, const char *name, const struct tenant_limits *l,
 		    struct tenant *out, char *key, struct err *e)
 {
-	/* A new tenant starts at the current round-robin position (not ahead
-	 * of tenants waiting since long ago). */
+	/* A new tenant starts at the current round-robin position, the last
+	 * value serve_seq handed out (0 before the first claim): not ahead
+	 * of tenants waiting since long ago. */
 	static const char sql[] =
 		"INSERT INTO tenants(name, key_id, key_hash, max_jobs, max_upload_bytes,"
 		" quota_bytes, served_seq, created_at)"
 		" VALUES ($1::text, $2::text, $3::bytea, $4::int, $5::bigint, $6::bigint,"
-		"  (SELECT last_value FROM serve_seq), $7::bigint)"
+		"  (SELECT CASE WHEN is_called THEN last_value ELSE 0 END FROM serve_seq),"
+		"  $7::bigint)"
 		" RETURNING " TENANT_COLS;
 	char key_id[DB_KEY_ID_LEN + 1], k[API_KEY_MAX];
 	unsigned char hash[DB_KEY_HASH_LEN];
