@@ -113,8 +113,6 @@ int pgdb_copy_out(struct db *db, const struct db_table *t,
 out:
 	/* The connection may now be idle or broken; best effort. */
 	PQclear(PQexec(c, "SET statement_timeout = '60s'"));
-	if (rc)
-		err_prefix(e, "copying %s", t->name);
 	return rc;
 }
 
@@ -164,8 +162,6 @@ int pgdb_copy_in(struct db *db, const struct db_table *t, const struct db_val *v
 	}
 	for (int i = 0; i < t->ncols; i++)
 		free(texts[i]);
-	if (rc)
-		err_prefix(e, "copying %s", t->name);
 	return rc;
 }
 

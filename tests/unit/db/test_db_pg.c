@@ -517,6 +517,81 @@ static void test_reconnect(void)
 	db_close(db);
 }
 
+/* migrate-db: SQLite -> PostgreSQL keeps every row, the keys work, and
+ * new ids come after the copied ones; PostgreSQL -> SQLite back. */
+static void test_copy(void)
+{
+	struct db *sq = NULL, *db = fresh(), *back = NULL;
+	struct job_artifact art = {"x.sl1", 77, "ab", "part.stl"};
+	struct job_row j, k, *v;
+	struct job_event *ev;
+	struct tenant t;
+	char tmpl[] = "/tmp/infilld-test-copy-XXXXXX", sq_url[128], mesh[DB_ID_MAX];
+	char key[API_KEY_MAX], admin[API_KEY_MAX], cmd[200];
+	struct tenant_limits l;
+	struct err e;
+	int64_t rows, a, seq1;
+	int rp, got, n, more;
+
+	REQUIRE(db);
+	REQUIRE(mkdtemp(tmpl));
+	snprintf(sq_url, sizeof sq_url, "sqlite:%s/src.db", tmpl);
+	REQUIRE_OK(db_open(sq_url, &sq, &e), &e);
+	db_tenant_limits_default(&l);
+	REQUIRE_OK(db_tenant_add(sq, "c", &l, &t, key, &e), &e);
+	a = t.id;
+	REQUIRE_OK(db_admin_key_rotate(sq, admin, &e), &e);
+	REQUIRE_OK(add_mesh(sq, a, 1000, mesh, &e), &e);
+	REQUIRE_OK(submit(sq, a, mesh, "idem-1", "h", &j, &rp, &e), &e);
+	seq1 = j.seq;
+	queue_job_row_fini(&j);
+	REQUIRE_OK(submit(sq, a, mesh, NULL, NULL, &j, &rp, &e), &e);
+	queue_job_row_fini(&j);
+	REQUIRE_OK(queue_claim(sq, "w", 30000, &j, &got, &e), &e);
+	REQUIRE(got);
+	CHECK_EQ_INT(queue_succeed(sq, j.seq, j.attempt, &art, "{\"layers\":2}", &e), 1);
+	queue_job_row_fini(&j);
+	REQUIRE_OK(db_copy(sq, db, &rows, &e), &e);
+	/* tenant, admin key, mesh, 2 jobs, 4 events, 1 bucket, 1 sum */
+	CHECK_EQ_INT(rows, 11);
+	REQUIRE_OK(db_tenant_auth(db, key, &t, &e), &e);
+	CHECK_EQ_INT(t.id, a);
+	CHECK_EQ_INT(t.used_bytes, 1077);
+	CHECK_EQ_INT(db_admin_auth(db, admin, &e), 0);
+	REQUIRE_OK(queue_get_seq(db, seq1, &k, &e), &e);
+	CHECK_EQ_INT(k.state, JOB_SUCCEEDED);
+	CHECK_STR(k.mesh_name, "part.stl");
+	CHECK_EQ_INT(k.layers_total, 2);
+	queue_job_row_fini(&k);
+	REQUIRE_OK(queue_events(db, seq1, 0, 10, &ev, &n, &e), &e);
+	CHECK_EQ_INT(n, 3);
+	queue_events_free(ev, n);
+	/* The idempotency key came along; new rows get new ids. */
+	REQUIRE_OK(submit(db, a, mesh, "idem-1", "h", &j, &rp, &e), &e);
+	CHECK_EQ_INT(rp, 1);
+	queue_job_row_fini(&j);
+	REQUIRE_OK(submit(db, a, mesh, NULL, NULL, &j, &rp, &e), &e);
+	CHECK_INT(j.seq, >, seq1 + 1);
+	queue_job_row_fini(&j);
+	CHECK_INT(add_tenant(db, "d", 1, 0), >, a);
+	/* And back into a new SQLite file. */
+	snprintf(sq_url, sizeof sq_url, "sqlite:%s/back.db", tmpl);
+	REQUIRE_OK(db_open(sq_url, &back, &e), &e);
+	REQUIRE_OK(db_copy(db, back, &rows, &e), &e);
+	REQUIRE_OK(db_tenant_auth(back, key, &t, &e), &e);
+	REQUIRE_OK(queue_list(back, a, -1, 0, 100, &v, &n, &more, &e), &e);
+	CHECK_EQ_INT(n, 3);
+	queue_job_rows_free(v, n);
+	/* A target that holds data is refused. */
+	CHECK_EQ_INT(db_copy(sq, db, &rows, &e), ERR_PARAM);
+	db_close(back);
+	db_close(sq);
+	db_close(db);
+	snprintf(cmd, sizeof cmd, "rm -rf '%s'", tmpl);
+	if (system(cmd) != 0)
+		fprintf(stderr, "cleanup failed\n");
+}
+
 /* test_db_pg.py's restart test: connections made before the server
  * restarted work after it. */
 static int restart_phase(void)
@@ -586,5 +661,6 @@ int main(int argc, char **argv)
 	RUN(test_quota_race);
 	RUN(test_notify);
 	RUN(test_reconnect);
+	RUN(test_copy);
 	return harness_report();
 }
