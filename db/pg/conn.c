@@ -124,7 +124,7 @@ static void notice_discard(void *arg, const char *message)
 static int session_setup(struct db_pg *d, struct err *e)
 {
 	static const char sql[] = "SET lock_timeout = '10s';"
-				  "SET statement_timeout = '60s';"
+				  "SET statement_timeout = " PGDB_STATEMENT_TIMEOUT ";"
 				  "SET idle_in_transaction_session_timeout = '60s';"
 				  "SET client_min_messages = warning";
 	PGresult *r;

@@ -112,7 +112,7 @@ int pgdb_copy_out(struct db *db, const struct db_table *t,
 	}
 out:
 	/* The connection may now be idle or broken; best effort. */
-	PQclear(PQexec(c, "SET statement_timeout = '60s'"));
+	PQclear(PQexec(c, "SET statement_timeout = " PGDB_STATEMENT_TIMEOUT));
 	return rc;
 }
 

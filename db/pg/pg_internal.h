@@ -11,7 +11,7 @@
 
 #include "db/db_ops.h"
 
-#define PGDB_STMT_CACHE 64
+#define PGDB_STMT_CACHE 96 /* the static statements of db/pg/ (about 60) */
 #define PGDB_MAX_PARAMS 40 /* jobs has 31 columns (copy_in) */
 
 struct pgdb_stmt_slot {
@@ -34,6 +34,10 @@ struct db_pg {
 };
 
 #define PGC(db) (((struct db_pg *)(db))->c)
+
+/* Session statement_timeout (a stuck lock wait fails sooner: lock_timeout
+ * 10 s, conn.c); copy_out lifts it while it streams a table. */
+#define PGDB_STATEMENT_TIMEOUT "'300s'"
 
 /* Statement parameters, all sent as text (or binary for bytea/raw text):
  * values are borrowed from the caller until the statement ran, except

@@ -65,9 +65,8 @@ static int tenant_lock(struct db *db, int64_t tenant_id, int wait, struct err *e
 	return held;
 }
 
-/* Release it (outside or inside a live transaction).  A lock that cannot
- * be released would stop every claim of the tenant: then the session is
- * reset, which drops it. */
+/* Release it (outside or inside a live transaction); when that fails,
+ * pgdb_claim() releases all (release_all()). */
 static void tenant_unlock(struct db *db, int64_t tenant_id)
 {
 	static const char sql[] = "SELECT pg_advisory_unlock($1::bigint)";
@@ -78,7 +77,19 @@ static void tenant_unlock(struct db *db, int64_t tenant_id)
 	pgdb_p_i64(&p, PGDB_LOCK_CLAIM(tenant_id));
 	if ((r = pgdb_q(db, sql, &p, "unlocking tenant", NULL)))
 		PQclear(r);
-	else if (!pgdb_in_tx(db))
+}
+
+/* After a failed claim (rolled back): no claim lock may stay with the
+ * session, or every claim of that tenant would wait for it; the claim
+ * locks are the only session-level locks db/pg takes.  When even this
+ * fails, a new session drops them. */
+static void release_all(struct db *db)
+{
+	PGresult *r = pgdb_q(db, "SELECT pg_advisory_unlock_all()", NULL, "unlocking", NULL);
+
+	if (r)
+		PQclear(r);
+	else
 		pgdb_reconnect(db, NULL);
 }
 
@@ -229,6 +240,8 @@ int pgdb_claim(struct db *db, const char *worker, int64_t lease_ms, struct job_r
 	*got = 0;
 	for (int round = 0; round < CLAIM_ROUNDS && more && !rc; round++)
 		rc = claim_round(db, worker, now, lease_ms, excl, &nexcl, &more, &seq, e);
+	if (rc < 0)
+		release_all(db);
 	if (rc <= 0)
 		return rc;
 	if ((rc = pgdb_get_seq(db, seq, out, e)))
