@@ -1,7 +1,10 @@
 """svc.py - helpers for the service tests: start the real `infilld serve`
-on loopback (ephemeral port, temp data directory, real SQLite file), make
-tenants with the real CLI, talk HTTP with http.client, read SSE, and check
-responses against openapi.yaml's schemas (oas.py).  Stdlib only."""
+on loopback (ephemeral port, temp data directory, a real SQLite file, or
+with INFILLD_TEST_BACKEND=postgresql a database of its own in a real
+PostgreSQL started for the test process by tests/support/pgserver.py),
+make tenants with the real CLI, talk HTTP with http.client, read SSE, and
+check responses against openapi.yaml's schemas (oas.py).  Stdlib only."""
+import atexit
 import http.client
 import json
 import os
@@ -17,6 +20,29 @@ ROOT = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)
 BIN = os.environ.get("INFILLD_BIN", os.path.join(ROOT, "build", "infilld"))
 SHARED = os.environ.get("INFILLD_SHARED", os.path.join(ROOT, "..", "shared"))
 FEMUR = os.path.join(SHARED, "meshes", "femur.off")
+
+
+BACKEND = os.environ.get("INFILLD_TEST_BACKEND", "sqlite")
+_pg = None
+_dbs = {}
+
+
+def db_url_for(data):
+    """The --db of a data directory: None (serve's SQLite default) or, on
+    the PostgreSQL backend, a fresh database per data directory (kept for
+    a Server restarted on the same directory)."""
+    global _pg
+    if BACKEND != "postgresql":
+        return None
+    if _pg is None:
+        sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..",
+                                        "support"))
+        from pgserver import PgServer
+        _pg = PgServer()
+        atexit.register(_pg.stop)
+    if data not in _dbs:
+        _dbs[data] = _pg.createdb("t%d" % (len(_dbs) + 1))
+    return _dbs[data]
 
 
 def fail(msg):
@@ -41,11 +67,13 @@ class Server:
         self.proc = None
         self.port = None
         self.log_path = os.path.join(self.data, "serve.log")
+        self.db_url = db_url_for(self.data)
+        self.db_args = ["--db", self.db_url] if self.db_url else []
 
     def cli(self, *args):
         """Run an infilld sub-command on this data directory; stdout."""
-        out = subprocess.run([BIN, *args, "--data", self.data], capture_output=True, text=True,
-                             timeout=60)
+        out = subprocess.run([BIN, *args, "--data", self.data, *self.db_args],
+                             capture_output=True, text=True, timeout=60)
         if out.returncode != 0:
             fail("infilld %s failed (%d): %s" % (" ".join(args), out.returncode, out.stderr))
         return out.stdout
@@ -61,7 +89,7 @@ class Server:
         log = open(self.log_path, "a")
         self.proc = subprocess.Popen(
             [BIN, "serve", "--listen", "127.0.0.1:%d" % port, "--data", self.data,
-             "--workers", str(self.workers), *self.extra],
+             *self.db_args, "--workers", str(self.workers), *self.extra],
             stdout=subprocess.PIPE, stderr=log, text=True, env=self.env)
         line = self.proc.stdout.readline()
         m = re.search(r"listening on http://127\.0\.0\.1:(\d+)", line)
