@@ -21,6 +21,7 @@ enum MHD_Result api_readyz(struct api_req *r)
 {
 	struct db *db = db_pool_get(r->srv->pool);
 	int64_t free_b = store_free_bytes(r->srv->cfg.store_dir);
+	const char *backend = db_backend(db); /* static string */
 	struct err e;
 	int rc;
 
@@ -38,8 +39,8 @@ enum MHD_Result api_readyz(struct api_req *r)
 				   "only %lld bytes free in the store (need %lld)",
 				   (long long)free_b, (long long)r->srv->cfg.min_free_bytes);
 	return api_json(r, MHD_HTTP_OK,
-			json_pack("{s:s, s:I, s:i}", "status", "ready", "disk_free_bytes",
-				  (json_int_t)free_b, "workers_alive",
+			json_pack("{s:s, s:s, s:I, s:i}", "status", "ready", "database", backend,
+				  "disk_free_bytes", (json_int_t)free_b, "workers_alive",
 				  atomic_load(&r->srv->workers_alive)));
 }
 

@@ -381,16 +381,18 @@ static void run_attempt(const struct service_config *c, struct db *db, struct jo
 	free(a.metrics);
 }
 
-/* Is the store there to write to?  Probed at most every 2 s (a file
- * create + fsync on a network file system is not free); a worker whose
- * store is gone claims nothing until it is back. */
-static int store_usable(const struct service_config *c)
+/* Is the store there to write to?  Probed when idle at most every 2 s (a
+ * file create + fsync on a network file system is not free) and after
+ * every attempt (recheck), since a store that vanished shows first as an
+ * attempt failing; a worker whose store is gone claims nothing until it
+ * is back. */
+static int store_usable(const struct service_config *c, int recheck)
 {
 	static double last_s = -1e9;
 	static int ok = 1;
 	double now = mono_s();
 
-	if (now - last_s >= 2.0) {
+	if (recheck || now - last_s >= 2.0) {
 		struct err e;
 		int was = ok;
 		err_clear(&e);
@@ -411,6 +413,7 @@ static int worker_child(struct service_config *c)
 	struct db *db;
 	struct err e;
 	pid_t parent = getppid();
+	int ran = 0;
 
 	/* Die with the supervisor: a worker without it would run jobs nobody
 	 * watches. */
@@ -432,11 +435,12 @@ static int worker_child(struct service_config *c)
 		struct job_row j;
 		int got = 0;
 
-		if (store_usable(c) &&
+		if (store_usable(c, ran) &&
 		    queue_claim(db, c->worker_name, (int64_t)c->lease_s * 1000, &j, &got, &e)) {
 			log_msg(LOG_WARN, "worker", "claim: %s", e.msg);
 			got = 0;
 		}
+		ran = got;
 		if (got) {
 			run_attempt(c, db, &j);
 			queue_job_row_fini(&j);
