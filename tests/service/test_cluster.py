@@ -302,6 +302,35 @@ def test_cap_and_fairness():
         check(0.25 <= n / total <= 0.42, "tenant %s got %d of %d claims" % (t, n, total))
 
 
+def test_sse_across_servers():
+    """A job submitted through api1, run by some worker, streamed from
+    api2: its events reach the stream (LISTEN/NOTIFY) in order to the end."""
+    t = "cogs"
+    st, data = call(apis["api1"][1], "POST", "/v1/jobs",
+                    {"mesh_id": mesh[t], "engine": "solid", "format": "sl1",
+                     "params": {"height_mm": 40}}, keys[t])
+    check(st == 202, "submit: %d" % st)
+    jid = json.loads(data)["id"]
+    c = http.client.HTTPConnection("127.0.0.1", apis["api2"][1], timeout=120)
+    c.request("GET", "/v1/jobs/%s/events" % jid, headers={"Authorization": "Bearer " + keys[t]})
+    r = c.getresponse()
+    check(r.status == 200, "events: %d" % r.status)
+    ids, states, progress = [], [], 0
+    for raw in r:
+        line = raw.decode().rstrip("\n")
+        if line.startswith("id: "):
+            ids.append(int(line[4:]))
+        elif line.startswith("data: "):
+            d = json.loads(line[6:])
+            states.append(d["state"])
+            progress = max(progress, d["progress"])
+    c.close()
+    check(ids == sorted(ids) and len(set(ids)) == len(ids), "event ids in order: %s" % ids)
+    check(states[-1] == "succeeded" and "running" in states and progress == 1.0,
+          "the stream saw the job run and end: %s" % states)
+    print("  %d events streamed from api2 for a job submitted through api1" % len(ids))
+
+
 def teardown():
     for name, p in list(workers.items()):
         p.send_signal(signal.SIGTERM)
@@ -331,6 +360,7 @@ def cleanup():
 if __name__ == "__main__":
     try:
         setup()
-        run([test_cluster_run, test_artifacts_identical, test_cap_and_fairness, teardown])
+        run([test_cluster_run, test_artifacts_identical, test_cap_and_fairness,
+             test_sse_across_servers, teardown])
     finally:
         cleanup()
