@@ -120,12 +120,16 @@ static void notice_discard(void *arg, const char *message)
 /* Settings of every session, after connecting and after each reconnect:
  * a lock or a statement that waits this long is a stuck peer (ERR_IO
  * rather than a hung worker), and a transaction left open by a stalled
- * process is ended by the server. */
+ * process is ended by the server.  Prepared statements keep one generic
+ * plan (force_generic_plan): statistics of a queue change faster than
+ * ANALYZE follows, and custom plans made on them chose full-index walks
+ * past finished jobs (bench_queue: 51 ms candidate lists at 100k jobs). */
 static int session_setup(struct db_pg *d, struct err *e)
 {
 	static const char sql[] = "SET lock_timeout = '10s';"
 				  "SET statement_timeout = " PGDB_STATEMENT_TIMEOUT ";"
 				  "SET idle_in_transaction_session_timeout = '60s';"
+				  "SET plan_cache_mode = force_generic_plan;"
 				  "SET client_min_messages = warning";
 	PGresult *r;
 	int rc = 0;

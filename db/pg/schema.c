@@ -93,6 +93,13 @@ static const char *const migrations[] = {
 	"  PRIMARY KEY (state, le));"
 	"CREATE TABLE job_duration_sums("
 	"  state TEXT PRIMARY KEY, count BIGINT NOT NULL, sum_s DOUBLE PRECISION NOT NULL);",
+	/* 2: the claim's index.  The candidate tenants' EXISTS and the pick
+	 * of a tenant's oldest runnable job walk only queued rows, in queue
+	 * order, run_after read from the index: without it the planner
+	 * walked (tenant_id, seq) or the primary key past every finished job
+	 * (2-3 ms per claim at 100k jobs, EXPLAIN ANALYZE in bench). */
+	"CREATE INDEX jobs_queued ON jobs(tenant_id, seq) INCLUDE (run_after)"
+	" WHERE state = 'queued';",
 };
 
 int pgdb_schema_latest(void)

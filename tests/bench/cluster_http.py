@@ -44,7 +44,8 @@ def main():
         c = http.client.HTTPConnection("127.0.0.1", procs[0][1], timeout=30)
         with open(FEMUR, "rb") as f:
             c.request("POST", "/v1/meshes?format=off&name=femur.off", f.read(),
-                      {"Authorization": "Bearer " + key})
+                      {"Authorization": "Bearer " + key,
+                       "Content-Type": "application/octet-stream"})
         mesh = json.loads(c.getresponse().read())["id"]
         c.request("POST", "/v1/jobs", json.dumps({"mesh_id": mesh}),
                   {"Authorization": "Bearer " + key, "Content-Type": "application/json"})
