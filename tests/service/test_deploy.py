@@ -72,6 +72,61 @@ def test_container_entrypoint():
         shutil.rmtree(d, ignore_errors=True)
 
 
+# In debian:bookworm-slim before anything is installed (apt needs them).
+BASE_PACKAGES = {"libc6", "libgcc-s1", "libstdc++6"}
+
+
+def runtime_packages(dockerfile_text):
+    """The packages the Dockerfile's last stage installs."""
+    last = dockerfile_text.split("\nFROM ")[-1]
+    m = re.search(r"--no-install-recommends(.*?)&&", last, re.S)
+    check(m, "no apt-get install in the runtime stage")
+    return set(w for w in m.group(1).replace("\\", " ").split() if not w.startswith("-"))
+
+
+def missing_runtime_libs(binary, packages):
+    """NEEDED libraries of binary whose Debian package is neither installed
+    by packages, nor a dependency of one of them, nor in the base image."""
+    have = set(packages) | BASE_PACKAGES
+    for pkg in packages:
+        deps = subprocess.run(["dpkg-query", "-W", "-f", "${Depends}", pkg],
+                              capture_output=True, text=True).stdout
+        have |= {d.split()[0] for d in deps.replace("|", ",").split(",") if d.strip()}
+    needed = re.findall(r"\(NEEDED\).*\[(.+)\]",
+                        subprocess.run(["readelf", "-d", binary], capture_output=True,
+                                       text=True).stdout)
+    cache = subprocess.run(["ldconfig", "-p"], capture_output=True, text=True).stdout
+    missing = []
+    for lib in needed:
+        m = re.search(r"^\s+%s \(libc6,x86-64\) => (\S+)" % re.escape(lib), cache, re.M)
+        check(m, "%s not in the linker cache" % lib)
+        path = os.path.realpath(m.group(1))
+        owner = None
+        for cand in (path, path.replace("/usr/lib/", "/lib/", 1), m.group(1),
+                     m.group(1).replace("/lib/", "/usr/lib/", 1)):
+            out = subprocess.run(["dpkg", "-S", cand], capture_output=True, text=True)
+            if out.returncode == 0:
+                owner = out.stdout.split(":")[0]
+                break
+        check(owner, "no package owns %s" % path)
+        if owner not in have:
+            missing.append("%s (%s)" % (lib, owner))
+    return missing
+
+
+def test_container_libraries():
+    # Every library the binary links must be in the runtime image, or the
+    # container dies at start ("error while loading shared libraries").
+    with open(os.path.join(ROOT, "deploy", "Dockerfile")) as f:
+        text = f.read()
+    pkgs = runtime_packages(text)
+    missing = missing_runtime_libs(BIN, pkgs)
+    check(not missing, "deploy/Dockerfile's runtime stage lacks %s" % missing)
+    # The check itself: without libpq5 it must complain.
+    check(any("libpq" in x for x in missing_runtime_libs(BIN, pkgs - {"libpq5"})),
+          "the library check misses a package taken away")
+
+
 def test_run_dev():
     d = tempfile.mkdtemp(prefix="infilld-dev-")
     env = dict(os.environ, INFILLD_DATA=d, INFILLD_LISTEN="127.0.0.1:0")
@@ -88,4 +143,5 @@ def test_run_dev():
 
 
 if __name__ == "__main__":
-    run([test_systemd_execstart, test_container_entrypoint, test_run_dev])
+    run([test_systemd_execstart, test_container_entrypoint, test_container_libraries,
+         test_run_dev])
