@@ -100,5 +100,7 @@ int db_copy(struct db *src, struct db *dst, int64_t *rows, struct err *e)
 		return rc;
 	}
 	*rows = c.rows;
-	return 0;
+	/* A bulk load leaves the planner's statistics describing an empty
+	 * database until the next automatic ANALYZE. */
+	return db_analyze(dst, e);
 }

@@ -125,6 +125,11 @@ int db_check_writable(struct db *db, struct err *e)
 	return db->ops->check_writable(db, e);
 }
 
+int db_analyze(struct db *db, struct err *e)
+{
+	return db->ops->analyze(db, e);
+}
+
 int db_listen(struct db *db, struct err *e)
 {
 	return db->ops->listen(db, e);

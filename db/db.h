@@ -67,6 +67,10 @@ int db_wait(struct db *db, int timeout_ms, int64_t *seqs, int cap, int *n, struc
  * *rows = rows copied.  ERR_PARAM when dst holds data. */
 int db_copy(struct db *src, struct db *dst, int64_t *rows, struct err *e);
 
+/* Refresh the query planner's statistics (ANALYZE), as after a bulk
+ * load: db_copy() runs it on its target.  0 or ERR_IO. */
+int db_analyze(struct db *db, struct err *e);
+
 /* Fixed set of connections shared by threads (HTTP handlers). */
 struct db_pool;
 

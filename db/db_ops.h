@@ -121,6 +121,8 @@ struct db_ops {
 	int (*copy_in)(struct db *db, const struct db_table *t, const struct db_val *v,
 		       struct err *e);
 	int (*copy_done)(struct db *db, struct err *e);
+	/* Refresh the planner's statistics (after a bulk load). */
+	int (*analyze)(struct db *db, struct err *e);
 };
 
 struct db {

@@ -38,55 +38,50 @@ int store_mkdirs(const char *path, struct err *e)
 	return 0;
 }
 
-int store_init(const char *data_dir, struct err *e)
+int store_init(const char *store_dir, struct err *e)
 {
 	char p[STORE_PATH_MAX];
-	int rc = store_mkdirs(data_dir, e);
+	int rc = store_mkdirs(store_dir, e);
 
 	if (rc)
 		return rc;
-	if (fmt_ok(snprintf(p, sizeof p, "%s/tmp", data_dir), sizeof p) ||
+	if (fmt_ok(snprintf(p, sizeof p, "%s/tmp", store_dir), sizeof p) ||
 	    (rc = store_mkdirs(p, e)))
 		return rc ? rc : ERR_SET(e, ERR_LIMIT, "data directory path too long");
-	if (fmt_ok(snprintf(p, sizeof p, "%s/tenants", data_dir), sizeof p))
+	if (fmt_ok(snprintf(p, sizeof p, "%s/tenants", store_dir), sizeof p))
 		return ERR_SET(e, ERR_LIMIT, "data directory path too long");
 	return store_mkdirs(p, e);
 }
 
-int store_db_path(const char *data_dir, char *buf, size_t len)
+int store_tmp_path(const char *store_dir, const char *name, char *buf, size_t len)
 {
-	return fmt_ok(snprintf(buf, len, "%s/infilld.db", data_dir), len);
+	return fmt_ok(snprintf(buf, len, "%s/tmp/%s", store_dir, name), len);
 }
 
-int store_tmp_path(const char *data_dir, const char *name, char *buf, size_t len)
+int store_tenant_dir(const char *store_dir, int64_t tenant_id, char *buf, size_t len)
 {
-	return fmt_ok(snprintf(buf, len, "%s/tmp/%s", data_dir, name), len);
+	return fmt_ok(snprintf(buf, len, "%s/tenants/%lld", store_dir, (long long)tenant_id), len);
 }
 
-int store_tenant_dir(const char *data_dir, int64_t tenant_id, char *buf, size_t len)
-{
-	return fmt_ok(snprintf(buf, len, "%s/tenants/%lld", data_dir, (long long)tenant_id), len);
-}
-
-int store_mesh_path(const char *data_dir, int64_t tenant_id, const char *mesh_id,
+int store_mesh_path(const char *store_dir, int64_t tenant_id, const char *mesh_id,
 		    const char *format, char *buf, size_t len)
 {
-	return fmt_ok(snprintf(buf, len, "%s/tenants/%lld/meshes/%s.%s", data_dir,
+	return fmt_ok(snprintf(buf, len, "%s/tenants/%lld/meshes/%s.%s", store_dir,
 			       (long long)tenant_id, mesh_id, format),
 		      len);
 }
 
-int store_artifact_dir(const char *data_dir, int64_t tenant_id, char *buf, size_t len)
+int store_artifact_dir(const char *store_dir, int64_t tenant_id, char *buf, size_t len)
 {
-	return fmt_ok(snprintf(buf, len, "%s/tenants/%lld/artifacts", data_dir,
+	return fmt_ok(snprintf(buf, len, "%s/tenants/%lld/artifacts", store_dir,
 			       (long long)tenant_id),
 		      len);
 }
 
-int store_artifact_path(const char *data_dir, int64_t tenant_id, const char *name, char *buf,
+int store_artifact_path(const char *store_dir, int64_t tenant_id, const char *name, char *buf,
 			size_t len)
 {
-	return fmt_ok(snprintf(buf, len, "%s/tenants/%lld/artifacts/%s", data_dir,
+	return fmt_ok(snprintf(buf, len, "%s/tenants/%lld/artifacts/%s", store_dir,
 			       (long long)tenant_id, name),
 		      len);
 }
@@ -163,11 +158,11 @@ int store_check(const char *store_dir, struct err *e)
 	return rc;
 }
 
-int64_t store_free_bytes(const char *data_dir)
+int64_t store_free_bytes(const char *store_dir)
 {
 	struct statvfs sv;
 
-	if (statvfs(data_dir, &sv) != 0)
+	if (statvfs(store_dir, &sv) != 0)
 		return -1;
 	return (int64_t)sv.f_bavail * (int64_t)sv.f_frsize;
 }
@@ -194,7 +189,7 @@ static void replace_all(char *msg, size_t cap, const char *what, const char *wit
 	}
 }
 
-void store_redact(char *msg, size_t cap, const char *data_dir, const char *path,
+void store_redact(char *msg, size_t cap, const char *store_dir, const char *path,
 		  const char *name)
 {
 	char abs_dir[STORE_PATH_MAX];
@@ -205,10 +200,10 @@ void store_redact(char *msg, size_t cap, const char *data_dir, const char *path,
 		if (base && base[1])
 			replace_all(msg, cap, base + 1, name ? name : "the file");
 	}
-	if (data_dir && data_dir[0]) {
-		if (realpath(data_dir, abs_dir))
+	if (store_dir && store_dir[0]) {
+		if (realpath(store_dir, abs_dir))
 			replace_all(msg, cap, abs_dir, "DATA");
-		replace_all(msg, cap, data_dir, "DATA");
+		replace_all(msg, cap, store_dir, "DATA");
 	}
 }
 

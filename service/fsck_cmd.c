@@ -1,9 +1,9 @@
 /* fsck_cmd.c - `infilld fsck [--data DIR] [--db URL] [--store DIR]
- * [--quarantine]`: check every
- * artifact against the size and SHA-256 the database recorded when it was
- * published; report missing and damaged ones; with --quarantine move the
- * damaged files to STORE/quarantine/<tenant id>/ and mark their jobs, so
- * downloads answer 410 (db/artifacts.h).  Exit 0 when all are intact, 1
+ * [--quarantine]`: check every artifact against the size and SHA-256 the
+ * database recorded when it was published; report missing and damaged
+ * ones; with --quarantine move the damaged files to
+ * STORE/quarantine/<tenant id>/ and mark their jobs, so downloads answer
+ * 410 (db/artifacts.h).  Exit 0 when all are intact, 1
  * when any is missing or damaged, 2 for usage.  Safe while serve runs.
  */
 #include "db/artifacts.h"

@@ -554,6 +554,11 @@ int pgdb_wait(struct db *db, int timeout_ms, int64_t *seqs, int cap, int *n, str
 	return 0;
 }
 
+static int pgdb_analyze(struct db *db, struct err *e)
+{
+	return pgdb_exec(db, "ANALYZE", e);
+}
+
 const struct db_ops db_pg_ops = {
 	.name = "postgresql",
 	.open = pgdb_open,
@@ -602,4 +607,5 @@ const struct db_ops db_pg_ops = {
 	.copy_out = pgdb_copy_out,
 	.copy_in = pgdb_copy_in,
 	.copy_done = pgdb_copy_done,
+	.analyze = pgdb_analyze,
 };

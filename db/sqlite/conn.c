@@ -226,6 +226,11 @@ static int sq_copy_done(struct db *db, struct err *e)
 	return 0;
 }
 
+static int sq_analyze(struct db *db, struct err *e)
+{
+	return sq_exec(db, "ANALYZE", e);
+}
+
 static int sq_schema_latest_of(void)
 {
 	return sq_schema_latest();
@@ -279,4 +284,5 @@ const struct db_ops db_sqlite_ops = {
 	.copy_out = sq_copy_out,
 	.copy_in = sq_copy_in,
 	.copy_done = sq_copy_done,
+	.analyze = sq_analyze,
 };
