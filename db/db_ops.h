@@ -82,8 +82,14 @@ struct db_ops {
 	int (*artifact_quarantine)(struct db *db, int64_t seq, struct err *e);
 
 	/* queue.h */
-	int (*submit_batch)(struct db *db, const struct job_new *v, int n, struct job_submit *res,
-			    struct err *e);
+	/* One submission inside the caller's transaction and savepoint
+	 * (queue_submit_batch() in db/queue.c holds both): 0 with *seq, or
+	 * the error queue_submit() reports. */
+	int (*submit_one)(struct db *db, const struct job_new *jn, int64_t *seq, int *replayed,
+			  struct err *e);
+	/* end = 0: open the savepoint of one submission; end = 1: close it,
+	 * undoing its writes first when undo. */
+	int (*savepoint)(struct db *db, int end, int undo, struct err *e);
 	int (*get)(struct db *db, int64_t tenant_id, const char *id, struct job_row *out,
 		   struct err *e);
 	int (*get_seq)(struct db *db, int64_t seq, struct job_row *out, struct err *e);

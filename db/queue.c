@@ -65,7 +65,39 @@ int64_t queue_backoff_ms(int attempts_done)
 int queue_submit_batch(struct db *db, const struct job_new *v, int n, struct job_submit *res,
 		       struct err *e)
 {
-	return db->ops->submit_batch(db, v, n, res, e);
+	int rc;
+
+	for (int i = 0; i < n; i++) {
+		res[i].rc = ERR_IO;
+		res[i].replayed = 0;
+		res[i].seq = 0;
+		err_clear(&res[i].err);
+	}
+	if ((rc = db_begin(db, e)))
+		goto fail;
+	for (int i = 0; i < n; i++) {
+		/* A savepoint per submission: one bad request never undoes the
+		 * others of its batch. */
+		if ((rc = db->ops->savepoint(db, 0, 0, e)))
+			goto out;
+		res[i].rc = db->ops->submit_one(db, &v[i], &res[i].seq, &res[i].replayed, &res[i].err);
+		if ((rc = db->ops->savepoint(db, 1, res[i].rc != 0, e)))
+			goto out;
+	}
+	/* One commit, one fsync for the whole batch (group commit). */
+	if ((rc = db_commit(db, e)))
+		goto fail;
+	return 0;
+out:
+	db_rollback(db);
+fail:
+	/* The transaction failed: nothing of the batch is stored. */
+	for (int i = 0; i < n; i++)
+		if (!res[i].rc || res[i].rc == ERR_IO) {
+			res[i].rc = rc;
+			res[i].err = *e;
+		}
+	return rc;
 }
 
 int queue_submit(struct db *db, const struct job_new *jn, struct job_row *out, int *replayed,

@@ -130,13 +130,7 @@ int cmd_serve(int argc, char **argv)
 
 	/* Signals are taken synchronously by this thread; every thread
 	 * started from here inherits the mask. */
-	sigemptyset(&set);
-	sigaddset(&set, SIGTERM);
-	sigaddset(&set, SIGINT);
-	sigaddset(&set, SIGCHLD);
-	sigaddset(&set, SIGHUP);
-	pthread_sigmask(SIG_BLOCK, &set, NULL);
-	signal(SIGPIPE, SIG_IGN);
+	supervisor_block_signals(&set);
 
 	memset(&ac, 0, sizeof ac);
 	ac.host = c.host;

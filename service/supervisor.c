@@ -10,6 +10,7 @@
 #include "service/config.h"
 
 #include <errno.h>
+#include <pthread.h>
 #include <signal.h>
 #include <spawn.h>
 #include <stdio.h>
@@ -168,4 +169,15 @@ void supervisor_requeue(void *ctx, const char *name)
 	else if (n)
 		log_msg(LOG_WARN, "supervisor", "worker %s died holding %d job(s); re-queued", name,
 			n);
+}
+
+void supervisor_block_signals(sigset_t *set)
+{
+	sigemptyset(set);
+	sigaddset(set, SIGTERM);
+	sigaddset(set, SIGINT);
+	sigaddset(set, SIGCHLD);
+	sigaddset(set, SIGHUP);
+	pthread_sigmask(SIG_BLOCK, set, NULL);
+	signal(SIGPIPE, SIG_IGN);
 }

@@ -5,6 +5,7 @@
 #ifndef INFILLD_SERVICE_SUPERVISOR_H
 #define INFILLD_SERVICE_SUPERVISOR_H
 
+#include <signal.h>
 #include <sys/types.h>
 
 struct service_config;
@@ -37,6 +38,10 @@ int supervisor_alive(const struct supervisor *s);
 /* The dead() of supervisor_reap() for ctx = a struct db *: re-queue (or
  * fail) what the dead worker held, at once rather than at lease expiry. */
 void supervisor_requeue(void *ctx, const char *name);
+/* Block SIGTERM, SIGINT, SIGCHLD and SIGHUP (in *set, for sigtimedwait()
+ * by the supervising thread; threads started later inherit the mask) and
+ * ignore SIGPIPE. */
+void supervisor_block_signals(sigset_t *set);
 /* SIGTERM all, wait up to wait_s, then SIGKILL what is left. */
 void supervisor_stop(struct supervisor *s, double wait_s);
 

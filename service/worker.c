@@ -479,13 +479,7 @@ static int worker_main(struct service_config *c, int argc, char **argv)
 		fprintf(stderr, "infilld worker: %s: %s\n", shown, e.msg);
 		return 1;
 	}
-	sigemptyset(&set);
-	sigaddset(&set, SIGTERM);
-	sigaddset(&set, SIGINT);
-	sigaddset(&set, SIGCHLD);
-	sigaddset(&set, SIGHUP);
-	sigprocmask(SIG_BLOCK, &set, NULL);
-	signal(SIGPIPE, SIG_IGN);
+	supervisor_block_signals(&set);
 	supervisor_init(&sup, c, c->slots, argc, argv);
 	supervisor_start_due(&sup);
 	printf("infilld %s: worker with %d slot(s) (db %s, store %s)\n", INFILLD_VERSION, c->slots,

@@ -158,8 +158,9 @@ int pgdb_artifact_list(struct db *db, int64_t after_seq, int limit, struct artif
 int pgdb_artifact_quarantine(struct db *db, int64_t seq, struct err *e);
 
 /* queue.c */
-int pgdb_submit_batch(struct db *db, const struct job_new *v, int n, struct job_submit *res,
-		      struct err *e);
+int pgdb_submit_one(struct db *db, const struct job_new *jn, int64_t *seq, int *replayed,
+		    struct err *e);
+int pgdb_savepoint(struct db *db, int end, int undo, struct err *e);
 int pgdb_get(struct db *db, int64_t tenant_id, const char *id, struct job_row *out,
 	     struct err *e);
 int pgdb_get_seq(struct db *db, int64_t seq, struct job_row *out, struct err *e);

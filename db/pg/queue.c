@@ -158,8 +158,8 @@ static int idem_lookup(struct db *db, const struct job_new *jn, int64_t *seq, in
 	return 1;
 }
 
-static int submit_one(struct db *db, const struct job_new *jn, int64_t *seq, int *replayed,
-		      struct err *e)
+int pgdb_submit_one(struct db *db, const struct job_new *jn, int64_t *seq, int *replayed,
+		    struct err *e)
 {
 	/* FOR SHARE: the mesh cannot be deleted before this commits
 	 * (meshes.c). */
@@ -223,45 +223,6 @@ static int submit_one(struct db *db, const struct job_new *jn, int64_t *seq, int
 		return rc < 0 ? rc : 0;
 	}
 	return pgdb_add_event(db, *seq, "state", e);
-}
-
-int pgdb_submit_batch(struct db *db, const struct job_new *v, int n, struct job_submit *res,
-		      struct err *e)
-{
-	int rc;
-
-	for (int i = 0; i < n; i++) {
-		res[i].rc = ERR_IO;
-		res[i].replayed = 0;
-		res[i].seq = 0;
-		err_clear(&res[i].err);
-	}
-	if ((rc = pgdb_begin(db, e)))
-		goto fail;
-	for (int i = 0; i < n; i++) {
-		/* A savepoint per submission: one bad request never undoes the
-		 * others of its batch. */
-		if ((rc = pgdb_exec(db, "SAVEPOINT one", e)))
-			goto out;
-		res[i].rc = submit_one(db, &v[i], &res[i].seq, &res[i].replayed, &res[i].err);
-		if ((rc = pgdb_exec(db, res[i].rc ? "ROLLBACK TO SAVEPOINT one; RELEASE one"
-						  : "RELEASE one",
-				    e)))
-			goto out;
-	}
-	/* One commit, one WAL flush for the whole batch (group commit). */
-	if ((rc = pgdb_commit(db, e)))
-		goto fail;
-	return 0;
-out:
-	pgdb_rollback(db);
-fail:
-	for (int i = 0; i < n; i++)
-		if (!res[i].rc || res[i].rc == ERR_IO) {
-			res[i].rc = rc;
-			res[i].err = *e;
-		}
-	return rc;
 }
 
 static int get_by(struct db *db, const char *sql, const struct pgdb_params *p,
@@ -543,4 +504,11 @@ int pgdb_artifact_referenced(struct db *db, const char *job_id, const char *name
 	ref = PQntuples(r) > 0;
 	PQclear(r);
 	return ref;
+}
+
+int pgdb_savepoint(struct db *db, int end, int undo, struct err *e)
+{
+	return pgdb_exec(db,
+			 !end ? "SAVEPOINT one" : undo ? "ROLLBACK TO SAVEPOINT one; RELEASE one" : "RELEASE one",
+			 e);
 }

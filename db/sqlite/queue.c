@@ -172,8 +172,8 @@ int sq_get_seq(struct db *db, int64_t seq, struct job_row *out, struct err *e)
 
 /* One submission inside the caller's transaction: *seq of the new or
  * replayed job. */
-static int submit_one(struct db *db, const struct job_new *jn, int64_t *seq, int *replayed,
-		      struct err *e)
+int sq_submit_one(struct db *db, const struct job_new *jn, int64_t *seq, int *replayed,
+		  struct err *e)
 {
 	static const char idem_sql[] =
 		"SELECT seq, request_hash FROM jobs WHERE tenant_id = ?1 AND idem_key = ?2";
@@ -243,43 +243,6 @@ static int submit_one(struct db *db, const struct job_new *jn, int64_t *seq, int
 	if (rc != SQLITE_ROW)
 		return sq_fail(db, e, "queueing job");
 	return add_event(db, *seq, "state", e);
-}
-
-int sq_submit_batch(struct db *db, const struct job_new *v, int n, struct job_submit *res,
-		       struct err *e)
-{
-	int rc;
-
-	for (int i = 0; i < n; i++) {
-		res[i].rc = ERR_IO;
-		res[i].replayed = 0;
-		res[i].seq = 0;
-		err_clear(&res[i].err);
-	}
-	if ((rc = sq_begin(db, e)))
-		return rc;
-	for (int i = 0; i < n; i++) {
-		/* A savepoint per submission: one bad request never undoes the
-		 * others of its batch. */
-		if ((rc = sq_exec(db, "SAVEPOINT one", e)))
-			goto out;
-		res[i].rc = submit_one(db, &v[i], &res[i].seq, &res[i].replayed, &res[i].err);
-		if ((rc = sq_exec(db, res[i].rc ? "ROLLBACK TO one; RELEASE one" : "RELEASE one", e)))
-			goto out;
-	}
-	/* One commit, one fsync for the whole batch (group commit). */
-	if ((rc = sq_commit(db, e)))
-		goto fail;
-	return 0;
-out:
-	sq_rollback(db);
-fail:
-	for (int i = 0; i < n; i++)
-		if (!res[i].rc) {
-			res[i].rc = rc;
-			res[i].err = *e;
-		}
-	return rc;
 }
 
 int sq_list(struct db *db, int64_t tenant_id, int state, int64_t before_seq, int limit,
@@ -891,4 +854,10 @@ int sq_artifact_referenced(struct db *db, const char *job_id, const char *name)
 	rc = sqlite3_step(st);
 	sqlite3_reset(st);
 	return rc != SQLITE_DONE;
+}
+
+int sq_savepoint(struct db *db, int end, int undo, struct err *e)
+{
+	return sq_exec(db, !end ? "SAVEPOINT one" : undo ? "ROLLBACK TO one; RELEASE one" : "RELEASE one",
+		       e);
 }
