@@ -37,7 +37,7 @@
 #include "engine/geom/pointgrid.h"
 #include "engine/geom/poisson.h"
 #include "engine/geom/raster.h"
-#include "engine/output/image/png_decode.h"
+#include "engine/output/image/image.h"
 
 #include <math.h>
 #include <string.h>

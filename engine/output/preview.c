@@ -9,7 +9,7 @@
 #include "engine/core/err.h"
 #include "engine/core/sink.h"
 #include "engine/output/gcode/gcode_preview.h"
-#include "engine/output/resin/sl1_read.h"
+#include "engine/output/resin/resin.h"
 
 int out_layer_png(const char *path, enum out_format f, int k, struct buf *png, int *count,
 		  struct err *e)

@@ -1,6 +1,6 @@
 /* archive.c - verify_archive(): the layer checker on a written SL1/SL1S or
  * plain zip of PNG layers, read back with libarchive and
- * engine/output/image/png_decode.h.
+ * engine/output/image/image.h.
  *
  * Entries are read once in archive order: config.ini and prusaslicer.ini
  * are parsed, layer PNGs (every *.png outside thumbnail/) kept compressed
@@ -20,7 +20,7 @@
 
 #include "engine/core/err.h"
 #include "engine/core/mem.h"
-#include "engine/output/image/png_decode.h"
+#include "engine/output/image/image.h"
 #include "engine/output/printer/printer.h"
 
 #define VA_MAX_ENTRY (64u << 20)  /* largest entry read (bytes) */

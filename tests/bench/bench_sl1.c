@@ -17,7 +17,7 @@
 #include "engine/core/progress.h"
 #include "engine/core/sink.h"
 #include "engine/geom/path.h"
-#include "engine/output/image/png_encode.h"
+#include "engine/output/image/image.h"
 #include "engine/output/printer/printer_kinds.h"
 #include "engine/output/writer.h"
 #include "engine/slice/layer.h"

@@ -19,7 +19,7 @@
 
 #include "engine/core/err.h"
 #include "engine/core/mem.h"
-#include "engine/output/image/png_encode.h"
+#include "engine/output/image/image.h"
 #include "engine/output/toolpath/toolpath.h"
 
 #define GP_MARGIN_PX 8

@@ -19,7 +19,7 @@
 #include "engine/engine.h"
 #include "engine/geom/raster.h"
 #include "engine/output/gcode/gcode_int.h"
-#include "engine/output/image/thumbnail.h"
+#include "engine/output/image/image.h"
 #include "engine/output/writer.h"
 
 #include <math.h>

@@ -1,6 +1,6 @@
 /* png_decode.c - PNG to 8-bit gray through libpng's simplified API
- * (png_decode.h). */
-#include "engine/output/image/png_decode.h"
+ * (image.h). */
+#include "engine/output/image/image.h"
 #include "engine/core/err.h"
 #include "engine/geom/raster.h"
 

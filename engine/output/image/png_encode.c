@@ -1,4 +1,4 @@
-/* png_encode.c - PNG encoders (see png_encode.h): a run-length deflate
+/* png_encode.c - PNG encoders (see image.h): a run-length deflate
  * coder for 8-bit gray layer images, libpng for the container and for
  * RGBA thumbnails.
  *
@@ -7,7 +7,7 @@
  * per-block dynamic Huffman codes; zlib wrapper (RFC 1950) with an
  * Adler-32 computed per run in closed form.  Design: docs/formats.md.
  */
-#include "engine/output/image/png_encode.h"
+#include "engine/output/image/image.h"
 #include "engine/core/err.h"
 #include "engine/core/mem.h"
 #include "engine/core/sink.h"

@@ -1,4 +1,4 @@
-/* thumbnail.c - software-rendered part previews (see thumbnail.h).
+/* thumbnail.c - software-rendered part previews (see image.h).
  *
  * One orthographic camera for every preview: it looks from the
  * front-right-top (azimuth 45 degrees between +x and -y, elevation 30
@@ -6,13 +6,12 @@
  * sample centres of a 2x2 supersampled canvas with a float z-buffer, and
  * shaded two-sided Lambert (ambient 0.25) in resin orange.
  */
-#include "engine/output/image/thumbnail.h"
+#include "engine/output/image/image.h"
 #include "engine/core/err.h"
 #include "engine/core/mem.h"
 #include "engine/geom/path.h"
 #include "engine/geom/raster.h"
 #include "engine/mesh/mesh.h"
-#include "engine/output/image/png_encode.h"
 #include "engine/slice/layer.h"
 #include "engine/slice/slice.h"
 

@@ -1,10 +1,10 @@
 /* sl1_ini.c - config.ini, prusaslicer.ini, manifest.json, jobDir and the
- * print-time model of resin archives (see sl1_ini.h, docs/formats.md).
+ * print-time model of resin archives (see resin_int.h, docs/formats.md).
  *
  * Values are written `key = value` without quotes, as PrusaSlicer does;
  * the firmware reads them with a TOML reader that accepts that form.
  */
-#include "engine/output/resin/sl1_ini.h"
+#include "engine/output/resin/resin_int.h"
 #include "engine/core/err.h"
 #include "engine/core/sink.h"
 #include "engine/engine.h" /* INFILLD_VERSION */

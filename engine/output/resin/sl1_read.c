@@ -4,7 +4,7 @@
  * over the entry headers, not over the data).  Layer names are those
  * sl1.c writes: "<jobDir>%05d.png" (SL1, SL1S), "%d.png" from 1 (zip).
  */
-#include "engine/output/resin/sl1_read.h"
+#include "engine/output/resin/resin.h"
 
 #include <archive.h>
 #include <archive_entry.h>

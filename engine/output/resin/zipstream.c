@@ -1,9 +1,9 @@
 /* zipstream.c - streaming zip archives through libarchive (see
- * zipstream.h).  libarchive calls zip_write_cb() with its output blocks;
+ * resin.h).  libarchive calls zip_write_cb() with its output blocks;
  * the callback forwards them to the sink and keeps the sink's error
  * record, which is what callers get back instead of libarchive's text.
  */
-#include "engine/output/resin/zipstream.h"
+#include "engine/output/resin/resin.h"
 #include "engine/core/err.h"
 #include "engine/core/mem.h"
 #include "engine/core/sink.h"

@@ -21,7 +21,7 @@
 #include "engine/core/sink.h"
 #include "engine/geom/raster.h"
 #include "engine/hybrid/structure.h"
-#include "engine/output/image/png_encode.h"
+#include "engine/output/image/image.h"
 
 static uint64_t rng = 0x853c49e6748fea9bULL;
 static double uni(void)

@@ -9,7 +9,7 @@
 #include "engine/core/err.h"
 #include "engine/core/mem.h"
 #include "engine/core/sink.h"
-#include "engine/output/image/png_encode.h"
+#include "engine/output/image/image.h"
 #include "harness.h"
 
 #include <png.h>

@@ -11,7 +11,7 @@
 #include "engine/core/err.h"
 #include "engine/core/sink.h"
 #include "engine/output/output.h"
-#include "engine/output/resin/zipstream.h"
+#include "engine/output/resin/resin.h"
 #include "harness.h"
 #include "sl1_fixture.h"
 

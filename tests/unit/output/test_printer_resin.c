@@ -5,7 +5,7 @@
 #include "engine/core/err.h"
 #include "engine/core/sink.h"
 #include "engine/output/printer/printer_kinds.h"
-#include "engine/output/resin/sl1_ini.h"
+#include "engine/output/resin/resin_int.h"
 #include "harness.h"
 
 static const struct printer *profile(const char *name)

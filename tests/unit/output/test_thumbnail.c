@@ -11,7 +11,7 @@
 #include "engine/core/sink.h"
 #include "engine/geom/raster.h"
 #include "engine/mesh/mesh.h"
-#include "engine/output/image/thumbnail.h"
+#include "engine/output/image/image.h"
 #include "engine/slice/layer.h"
 #include "engine/slice/slice.h"
 #include "harness.h"

@@ -1,4 +1,4 @@
-/* sl1_ini.h - internal: the text records of resin archives and the
+/* resin_int.h - internal to engine/output/resin/ (sl1_ini.c): the text records of resin archives and the
  * print-time model.
  *
  * config.ini (what the SL1/SL1S firmware reads), prusaslicer.ini (what
@@ -7,8 +7,8 @@
  * and time model behind printTime.  Key by key: docs/formats.md.  Not
  * included outside engine/output/.
  */
-#ifndef INFILLD_SL1_INI_H
-#define INFILLD_SL1_INI_H
+#ifndef INFILLD_OUTPUT_RESIN_INT_H
+#define INFILLD_OUTPUT_RESIN_INT_H
 
 #include <stddef.h>
 
