@@ -60,6 +60,14 @@ const char *config_usage(void)
 static void print_help(void)
 {
 	printf("usage: infilld %s\n\n"
+	       "Where things live (defaults):\n"
+	       "  --data DIR               this process's directory ($INFILLD_DATA, var/infilld)\n"
+	       "  --db URL                 sqlite:PATH or postgresql://... ($INFILLD_DB,\n"
+	       "                           sqlite:DATA/infilld.db)\n"
+	       "  --store DIR              uploads and artifacts, shared by a cluster's machines\n"
+	       "                           ($INFILLD_STORE, DATA)\n"
+	       "  --workers N              worker processes; 0 = API only (cluster workers run\n"
+	       "                           `infilld worker --db URL --store DIR --slots N`)\n\n"
 	       "HTTP limits (defaults):\n"
 	       "  --max-connections N      connections libmicrohttpd serves at once (2048); past it,\n"
 	       "                           503 + Retry-After (16 more for GET /livez, /readyz)\n"
