@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # run.sh BUILD [sanitize] [SUITE...] - run the test suites, each test its own process.
 #
-# Suites: unit (tests/unit/*/test_* programs), py (tests/*/test_*.py: CLI,
+# Suites: unit (tests/unit/*/test_* programs; test_*_pg ones need a
+# PostgreSQL, so tests/service/test_db_pg.py starts one and runs them), py (tests/*/test_*.py: CLI,
 # output-format and service tests that drive the real binary), fuzz (a
 # short libFuzzer run per parser).  Default: all.  Tests run in parallel,
 # one log each under BUILD/test-logs/; failures print the log's tail.
@@ -43,7 +44,8 @@ for s in "${SUITES[@]}"; do
 	case $s in
 	unit)
 		while IFS= read -r f; do list+=("$f"); done < <(
-			find "$BUILD/tests/unit" -type f -name 'test_*' -perm -u+x ! -name '*.o' ! -name '*.d' 2>/dev/null | sort) ;;
+			find "$BUILD/tests/unit" -type f -name 'test_*' -perm -u+x ! -name '*.o' ! -name '*.d' \
+				! -name 'test_*_pg' 2>/dev/null | sort) ;;
 	py)
 		while IFS= read -r f; do list+=("$f"); done < <(
 			find tests -path tests/unit -prune -o -type f -name 'test_*.py' -print | sort) ;;

@@ -649,9 +649,9 @@ int main(int argc, char **argv)
 {
 	url = getenv("INFILLD_TEST_DB_URL");
 	if (!url || !*url) {
-		fprintf(stderr, "test_db_pg: INFILLD_TEST_DB_URL not set, nothing to test "
-				"(tests/service/test_db_pg.py runs it on a PostgreSQL)\n");
-		return 0;
+		fprintf(stderr, "test_db_pg: INFILLD_TEST_DB_URL not set: run it through "
+				"tests/service/test_db_pg.py, which starts a PostgreSQL\n");
+		return 2;
 	}
 	if (argc > 1 && !strcmp(argv[1], "restart"))
 		return restart_phase();
