@@ -44,7 +44,7 @@ int hl_win_init(struct hl_win *s, size_t np);
 /* The geometry of the rule, mm (pixel pitches px along x, py along y). */
 struct hl_geo {
 	double dd;    /* design shrink per layer: layer tan(alpha - margin) */
-	double dg;    /* discrete reach: the verifier's layer tan(alpha) + 1 px, less 2 % px */
+	double dg;    /* discrete reach a layer, px: layer tan(alpha) exactly (the verifier's rule) */
 	double wall;  /* wall_next_mm between fill voids */
 	double birth; /* inside distance of the free region a new void needs */
 	int mv;       /* layers in wall_next: the vertical wall between voids */

@@ -124,7 +124,6 @@ struct hollow_state {
 	struct hl_fill frag;         /* beads of the optimised voids, painted solid */
 	struct hl_config cfg;
 	int objective;
-	int fill_not_applied;        /* fill=true asked, but the output is a mesh */
 	/* mesh outputs: the checker's and the fill's grid is a resin printer's
 	 * own pixels (own_map), so the mesh reslices to the same pixels */
 	int own_is_printer;
@@ -553,14 +552,7 @@ static int hollow_metrics(void *state, struct metrics *m, struct err *e)
 		rc |= metrics_int(m, "hollow.mesh.void_triangles", (long long)s->result_void_nt);
 		rc |= metrics_num(m, "hollow.mesh.seconds", s->t_mesh);
 	}
-	if (s->fill_not_applied) {
-		/* say so: the same job as SL1 or G-code would hollow far more */
-		char note[sizeof o->note + 160];
-		snprintf(note, sizeof note, "%s%sfill=true applies to layer outputs (sl1, zip, "
-			 "gcode) only: this mesh carries the optimised voids alone",
-			 o->note, o->note[0] ? "; " : "");
-		rc |= metrics_str(m, "hollow.note", note);
-	} else if (o->note[0]) {
+	if (o->note[0]) {
 		rc |= metrics_str(m, "hollow.note", o->note);
 	}
 	if (o->has_com) {

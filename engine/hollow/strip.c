@@ -126,9 +126,10 @@ int hl_strip(const double *pa, double za, size_t na, uint32_t ida, const double 
 		}
 	}
 	{
-		/* longest cross edge considered: a quarter of the larger loop's
-		 * size (rule 2 of the grouping keeps neighbours within a factor
-		 * two in area), at least 3 mm */
+		/* longest cross edge considered: a quarter of loop a's bounding
+		 * box (its larger side), at least 3 mm; rule 2 of the grouping
+		 * keeps the two loops within a factor two in area, so either
+		 * loop gives about the same reach */
 		double lo[2] = {INFINITY, INFINITY}, hi[2] = {-INFINITY, -INFINITY}, r;
 		for (i = 0; i < na; i++)
 			for (int a = 0; a < 2; a++) {
