@@ -182,8 +182,14 @@ def test_cluster_run():
         check(jid not in acked, "job %s acknowledged twice" % jid)
         acked[jid] = (t, idem)
         if k == 150 and not killed_worker:
-            # A machine dies: the worker, its job processes, all at once.
-            os.killpg(workers["w1"].pid, signal.SIGKILL)
+            # A machine dies: the worker, its job processes, all at once,
+            # while it holds a job (its worker process is HOST-w0-PID).
+            pid = workers["w1"].pid
+            deadline = time.time() + 60
+            while time.time() < deadline and not sql(
+                    "SELECT 1 FROM jobs WHERE state = 'running' AND worker LIKE '%%-%d'" % pid):
+                time.sleep(0.01)
+            os.killpg(pid, signal.SIGKILL)
             workers.pop("w1").wait()
             killed_worker = True
         if k == 250 and not killed_api:
