@@ -12,6 +12,7 @@
 #include "api/log.h"
 #include "api/upload.h"
 #include "engine/core/err.h"
+#include "engine/core/progress.h"
 
 #include <errno.h>
 #include <fcntl.h>
@@ -33,14 +34,6 @@ struct analyze_task {
 
 #define ANALYZE_OUT_MAX (4u << 20)
 #define ANALYZE_ERR_MAX 4096u
-
-static double now_s(void)
-{
-	struct timespec ts;
-
-	clock_gettime(CLOCK_MONOTONIC, &ts);
-	return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
-}
 
 int api_analyze_run(const struct api_config *c, const char *path, struct analyze_result *res)
 {
@@ -81,12 +74,12 @@ int api_analyze_run(const struct api_config *c, const char *path, struct analyze
 		rc = -1;
 		goto out;
 	}
-	deadline = now_s() + c->analyze_timeout_s + 5;
+	deadline = progress_now_s() + c->analyze_timeout_s + 5;
 	{
 		struct pollfd pf[2] = {{out_p[0], POLLIN, 0}, {err_p[0], POLLIN, 0}};
 		int open_n = 2;
 		while (open_n > 0) {
-			double left = deadline - now_s();
+			double left = deadline - progress_now_s();
 			int n;
 			if (left <= 0) {
 				kill(pid, SIGKILL);

@@ -16,7 +16,6 @@ struct api_config {
 	const char *db_url;        /* db_open() URL */
 	const char *store_dir;     /* uploads and artifacts, db/store.h layout; shared by
 				      every machine of a cluster */
-	int store_shared;          /* store_dir is another machine's too (--store) */
 	const char *self_exe;      /* this binary, for sandboxed mesh analysis */
 	int threads;               /* libmicrohttpd thread pool */
 	int max_connections;

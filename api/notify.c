@@ -19,20 +19,13 @@
 #include "api/api_internal.h"
 #include "api/log.h"
 #include "engine/core/err.h"
+#include "engine/core/progress.h"
 
 #include <stdlib.h>
 #include <time.h>
 
 #define NOTIFY_WAIT_MS 200
 #define NOTIFY_BATCH 64
-
-static double mono_s(void)
-{
-	struct timespec ts;
-
-	clock_gettime(CLOCK_MONOTONIC, &ts);
-	return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
-}
 
 uint64_t api_notify_gen(struct api_server *s)
 {
@@ -67,7 +60,7 @@ void api_park_stream(struct api_server *s, struct MHD_Connection *conn, int64_t 
 	if (w && !changed_since(s, job_seq, seen_gen)) {
 		w->conn = conn;
 		w->job_seq = job_seq;
-		w->parked_s = mono_s();
+		w->parked_s = progress_now_s();
 		w->next = s->waiting;
 		s->waiting = w;
 		w = NULL;
@@ -83,7 +76,7 @@ void api_park_stream(struct api_server *s, struct MHD_Connection *conn, int64_t 
 static void wake(struct api_server *s, const int64_t *seqs, int n)
 {
 	struct api_waiter **pp = &s->waiting;
-	double now = mono_s();
+	double now = progress_now_s();
 
 	if (n < 0)
 		s->notify_all_gen = ++s->notify_gen;
@@ -121,9 +114,9 @@ static void *notifier_main(void *arg)
 		if (!listening || db_wait(s->notify_db, NOTIFY_WAIT_MS, seqs, NOTIFY_BATCH, &n, &e)) {
 			/* Database unreachable: notifications may be lost, so wake
 			 * everything (each stream reads for itself) and listen anew. */
-			if (mono_s() - last_fail_s > 60) {
+			if (progress_now_s() - last_fail_s > 60) {
 				log_msg(LOG_WARN, "http", "job notifications: %s", e.msg);
-				last_fail_s = mono_s();
+				last_fail_s = progress_now_s();
 			}
 			listening = 0;
 			n = -1;

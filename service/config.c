@@ -187,40 +187,63 @@ int config_resolve(struct service_config *c, const char *cmd)
 	return 0;
 }
 
+/* --data, --db, --store: where things live (serve, worker and the admin
+ * commands take them alike). */
+static const struct {
+	const char *name;
+	size_t off, len;
+} location_opts[] = {
+#define LOC(n, field) \
+	{n, offsetof(struct service_config, field), sizeof(((struct service_config *)0)->field)}
+	LOC("--data", data_dir),
+	LOC("--db", db_url),
+	LOC("--store", store_dir),
+#undef LOC
+};
+
+/* Location option k (location_opts) := v.  0, or -1 with a message. */
+static int set_location(struct service_config *c, const char *cmd, size_t k, const char *v)
+{
+	if (k == 1 && !db_url_valid(v)) {
+		fprintf(stderr, "infilld %s: --db wants sqlite:PATH or postgresql://..., got '%s'\n",
+			cmd, v);
+		return -1;
+	}
+	if (!*v || strlen(v) >= location_opts[k].len) {
+		fprintf(stderr, "infilld %s: bad %s '%s'\n", cmd, location_opts[k].name, v);
+		return -1;
+	}
+	snprintf((char *)c + location_opts[k].off, location_opts[k].len, "%s", v);
+	return 0;
+}
+
+/* Index in location_opts of option name, or -1. */
+static int location_index(const char *name, size_t len)
+{
+	for (size_t k = 0; k < sizeof location_opts / sizeof location_opts[0]; k++)
+		if (strlen(location_opts[k].name) == len && !strncmp(name, location_opts[k].name, len))
+			return (int)k;
+	return -1;
+}
+
 int config_take_location(struct service_config *c, const char *cmd, int argc, char **argv,
 			 int *i)
 {
-	static const struct {
-		const char *name;
-		size_t off, len;
-	} opts[] = {
-		{"--data", offsetof(struct service_config, data_dir), sizeof c->data_dir},
-		{"--db", offsetof(struct service_config, db_url), sizeof c->db_url},
-		{"--store", offsetof(struct service_config, store_dir), sizeof c->store_dir},
-	};
-	const char *a = argv[*i];
+	const char *a = argv[*i], *eq = strchr(a, '=');
+	int k = location_index(a, eq ? (size_t)(eq - a) : strlen(a));
+	const char *v;
 
-	for (size_t k = 0; k < sizeof opts / sizeof opts[0]; k++) {
-		size_t nl = strlen(opts[k].name);
-		const char *v;
-		if (strncmp(a, opts[k].name, nl) || (a[nl] && a[nl] != '='))
-			continue;
-		if (a[nl] == '=') {
-			v = a + nl + 1;
-		} else if (*i + 1 < argc) {
-			v = argv[++*i];
-		} else {
-			fprintf(stderr, "infilld %s: %s needs a value\n", cmd, opts[k].name);
-			return -1;
-		}
-		if (!*v || strlen(v) >= opts[k].len || (k == 1 && !db_url_valid(v))) {
-			fprintf(stderr, "infilld %s: bad %s '%s'\n", cmd, opts[k].name, v);
-			return -1;
-		}
-		snprintf((char *)c + opts[k].off, opts[k].len, "%s", v);
-		return 1;
+	if (k < 0)
+		return 0;
+	if (eq) {
+		v = eq + 1;
+	} else if (*i + 1 < argc) {
+		v = argv[++*i];
+	} else {
+		fprintf(stderr, "infilld %s: %s needs a value\n", cmd, location_opts[k].name);
+		return -1;
 	}
-	return 0;
+	return set_location(c, cmd, (size_t)k, v) ? -1 : 1;
 }
 
 int config_parse(struct service_config *c, int argc, char **argv, int extra_ok)
@@ -262,30 +285,9 @@ int config_parse(struct service_config *c, int argc, char **argv, int extra_ok)
 			}
 			continue;
 		}
-		if (!strcmp(name, "--data")) {
-			if (!*v || strlen(v) >= sizeof c->data_dir) {
-				fprintf(stderr, "infilld %s: bad --data '%s'\n", argv[0], v);
+		if (location_index(name, strlen(name)) >= 0) {
+			if (set_location(c, argv[0], (size_t)location_index(name, strlen(name)), v))
 				return 2;
-			}
-			snprintf(c->data_dir, sizeof c->data_dir, "%s", v);
-			continue;
-		}
-		if (!strcmp(name, "--db")) {
-			if (!db_url_valid(v) || strlen(v) >= sizeof c->db_url) {
-				fprintf(stderr,
-					"infilld %s: --db wants sqlite:PATH or postgresql://..., got "
-					"'%s'\n", argv[0], v);
-				return 2;
-			}
-			snprintf(c->db_url, sizeof c->db_url, "%s", v);
-			continue;
-		}
-		if (!strcmp(name, "--store")) {
-			if (!*v || strlen(v) >= sizeof c->store_dir) {
-				fprintf(stderr, "infilld %s: bad --store '%s'\n", argv[0], v);
-				return 2;
-			}
-			snprintf(c->store_dir, sizeof c->store_dir, "%s", v);
 			continue;
 		}
 		if (!strcmp(name, "--cors-origin")) {

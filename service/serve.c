@@ -38,20 +38,20 @@
 /* Remove half-written files a crash left in STORE/tmp: all of them when
  * the store is this serve's alone, else those older than min_age_s
  * (another machine may be writing the younger ones). */
-static void clean_tmp(const char *data_dir, int64_t min_age_s)
+static void clean_tmp(const char *store_dir, int64_t min_age_s)
 {
 	time_t now = time(NULL);
 	char dir[STORE_PATH_MAX], path[STORE_PATH_MAX];
+	struct stat st;
 	struct dirent *d;
 	DIR *dp;
 
-	store_tmp_path(data_dir, "", dir, sizeof dir);
+	store_tmp_path(store_dir, "", dir, sizeof dir);
 	if (!(dp = opendir(dir)))
 		return;
 	while ((d = readdir(dp)) != NULL) {
 		if (d->d_name[0] == '.')
 			continue;
-		struct stat st;
 		if (snprintf(path, sizeof path, "%s%s", dir, d->d_name) >= (int)sizeof path)
 			continue;
 		if (min_age_s > 0 && (stat(path, &st) != 0 || now - st.st_mtime < min_age_s))
@@ -137,7 +137,6 @@ int cmd_serve(int argc, char **argv)
 	ac.port = c.port;
 	ac.db_url = c.db_url;
 	ac.store_dir = c.store_dir;
-	ac.store_shared = c.store_shared;
 	ac.self_exe = c.self_exe;
 	ac.threads = c.http_threads;
 	ac.max_connections = c.max_connections;

@@ -7,6 +7,7 @@
 #include "service/supervisor.h"
 #include "api/log.h"
 #include "db/queue.h"
+#include "engine/core/progress.h"
 #include "service/config.h"
 
 #include <errno.h>
@@ -19,14 +20,6 @@
 #include <sys/wait.h>
 #include <time.h>
 #include <unistd.h>
-
-static double mono_s(void)
-{
-	struct timespec ts;
-
-	clock_gettime(CLOCK_MONOTONIC, &ts);
-	return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
-}
 
 void supervisor_init(struct supervisor *s, const struct service_config *cfg, int n, int argc,
 		     char **argv)
@@ -74,17 +67,17 @@ static void spawn_one(struct supervisor *s, int i)
 		log_msg(LOG_ERROR, "supervisor", "cannot start worker %s: %s", s->w[i].name,
 			strerror(rc));
 		s->w[i].pid = 0;
-		s->w[i].restart_at_s = mono_s() + 5;
+		s->w[i].restart_at_s = progress_now_s() + 5;
 		return;
 	}
-	s->w[i].started_s = mono_s();
+	s->w[i].started_s = progress_now_s();
 	log_msg(LOG_DEBUG, "supervisor", "worker %s started (pid %d)", s->w[i].name,
 		(int)s->w[i].pid);
 }
 
 void supervisor_start_due(struct supervisor *s)
 {
-	double now = mono_s();
+	double now = progress_now_s();
 
 	for (int i = 0; i < s->n; i++)
 		if (!s->w[i].pid && now >= s->w[i].restart_at_s)
@@ -98,7 +91,7 @@ int supervisor_reap(struct supervisor *s, void (*dead)(void *ctx, const char *na
 	/* Only our workers: waitpid(-1) would also reap the analysis
 	 * children that api/analyze.c threads wait for. */
 	for (int i = 0; i < s->n; i++) {
-		double now = mono_s(), backoff;
+		double now = progress_now_s(), backoff;
 		pid_t pid = s->w[i].pid;
 		if (!pid || waitpid(pid, &status, WNOHANG) != pid)
 			continue;
@@ -135,13 +128,13 @@ int supervisor_alive(const struct supervisor *s)
 
 void supervisor_stop(struct supervisor *s, double wait_s)
 {
-	double deadline = mono_s() + wait_s;
+	double deadline = progress_now_s() + wait_s;
 	struct timespec ts = {0, 50 * 1000 * 1000};
 
 	for (int i = 0; i < s->n; i++)
 		if (s->w[i].pid)
 			kill(s->w[i].pid, SIGTERM);
-	while (supervisor_alive(s) && mono_s() < deadline) {
+	while (supervisor_alive(s) && progress_now_s() < deadline) {
 		for (int i = 0; i < s->n; i++)
 			if (s->w[i].pid && waitpid(s->w[i].pid, NULL, WNOHANG) == s->w[i].pid)
 				s->w[i].pid = 0;

@@ -13,6 +13,7 @@
 #include "db/store.h"
 #include "db/tenants.h"
 #include "engine/engine.h"
+#include "engine/core/progress.h"
 #include "service/commands.h"
 #include "service/config.h"
 #include "service/jobproc.h"
@@ -36,14 +37,6 @@ static void on_term(int sig)
 {
 	(void)sig;
 	worker_stopping = 1;
-}
-
-static double mono_s(void)
-{
-	struct timespec ts;
-
-	clock_gettime(CLOCK_MONOTONIC, &ts);
-	return (double)ts.tv_sec + (double)ts.tv_nsec * 1e-9;
 }
 
 struct attempt {
@@ -251,7 +244,7 @@ fail:
 static void supervise(struct attempt *a)
 {
 	const struct service_config *c = a->cfg;
-	double start = mono_s(), last_write = start - 1.0, now; /* first report at once */
+	double start = progress_now_s(), last_write = start - 1.0, now; /* first report at once */
 	double beat_s = c->lease_s / 3.0 > 0.5 ? c->lease_s / 3.0 : 0.5;
 	int64_t lease_ms = (int64_t)c->lease_s * 1000;
 	struct err e;
@@ -268,7 +261,7 @@ static void supervise(struct attempt *a)
 			read_pipe(a);
 			break;
 		}
-		now = mono_s();
+		now = progress_now_s();
 		if (!a->lost && !a->timed_out && !a->shutdown &&
 		    ((a->progress_dirty && now - last_write >= 0.25) || now - last_write >= beat_s)) {
 			int rc;
@@ -390,7 +383,7 @@ static int store_usable(const struct service_config *c, int recheck)
 {
 	static double last_s = -1e9;
 	static int ok = 1;
-	double now = mono_s();
+	double now = progress_now_s();
 
 	if (recheck || now - last_s >= 2.0) {
 		struct err e;
