@@ -72,6 +72,7 @@ struct api_server {
 	atomic_int open_streams;
 	struct api_gate *gate;           /* accept loop and head gate (gate.c) */
 	atomic_llong gate_answers[3];    /* the gate's own 408, 503, other (400/431/501) */
+	atomic_llong gate_keepalive_closed; /* kept-alive connections past the head deadline */
 
 	/* Parked SSE streams and the notifier that resumes them (notify.c). */
 	pthread_mutex_t wait_mu;
@@ -157,6 +158,12 @@ void api_gate_notify(void *cls, struct MHD_Connection *conn, void **socket_conte
 		     enum MHD_ConnectionNotificationCode toe);
 /* Connections MHD holds now. */
 int api_gate_live(struct api_gate *g);
+/* A request on conn has its whole head (the access handler's first
+ * call) / has ended (MHD_OPTION_NOTIFY_COMPLETED): between the two
+ * calls the connection is not idle; after the second it has
+ * --head-timeout-s to send its next whole head. */
+void api_gate_request_begins(struct api_server *s, struct MHD_Connection *conn);
+void api_gate_request_ends(struct api_server *s, struct MHD_Connection *conn);
 
 /* ---- responses (http.c) ---- */
 enum MHD_Result api_queue(struct api_req *r, unsigned status, struct MHD_Response *resp);

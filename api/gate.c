@@ -8,7 +8,10 @@
  * message framing (RFC 9112 section 6.3) 400 or 501, a full server 503
  * with Retry-After; each then closes.  So MHD's slots are only taken by
  * clients that sent a whole head: slow headers (slowloris) wait here,
- * where a connection costs a descriptor and ~100 bytes.  Design:
+ * where a connection costs a descriptor and ~100 bytes.  Once MHD holds
+ * a connection, its next request on the same connection (keep-alive) has
+ * the same deadline: from the end of one request to the whole head of
+ * the next, else the gate shuts the socket down (held_expire()).  Design:
  * docs/service.md "HTTP hardening".
  */
 #define _GNU_SOURCE /* accept4, strcasestr */
@@ -56,6 +59,24 @@ struct gate_list {
 	int n;
 };
 
+/* A connection MHD holds (its socket_context).  Between two requests it
+ * waits in the gate's kept list, oldest first: a kept-alive client must
+ * send its next whole head within head_timeout_ms of the last response,
+ * as a new one must of its accept, however steadily the head trickles
+ * (MHD's --conn-timeout-s only measures silence).  fd stays open until
+ * MHD's close notification, which unlinks the entry under the gate's
+ * mutex first, so held_expire() never shuts down a reused descriptor. */
+struct gate_held {
+	int fd;
+	int kept;              /* 1 while in the kept list */
+	int64_t idle_since_ms; /* db_now_ms() when its last request ended */
+	struct gate_held *prev, *next;
+};
+
+struct gate_held_list {
+	struct gate_held *head, *tail;
+};
+
 /* Live MHD connections of one client address. */
 struct gate_ip {
 	unsigned char key[17]; /* family byte + address */
@@ -74,6 +95,7 @@ struct api_gate {
 	/* MHD's connections, counted at hand-over, released on close. */
 	pthread_mutex_t mu;
 	int live;
+	struct gate_held_list kept; /* idle between requests, oldest first */
 	struct gate_ip *ips[GATE_BUCKETS];
 	char peek[GATE_HEAD_MAX + 1];
 };
@@ -219,22 +241,116 @@ int api_gate_live(struct api_gate *g)
 	return n;
 }
 
-/* MHD_OPTION_NOTIFY_CONNECTION: a connection the gate handed over ends.
- * socket_context marks those MHD started, so one that failed before
- * starting is not released twice. */
+/* ---- connections MHD holds: the keep-alive head deadline ---- */
+
+/* Stands in for a connection whose gate_held could not be allocated: its
+ * slot is still released, it just has no keep-alive deadline. */
+static struct gate_held untracked;
+
+static void kept_unlink(struct api_gate *g, struct gate_held *h)
+{
+	if (!h->kept)
+		return;
+	if (h->prev)
+		h->prev->next = h->next;
+	else
+		g->kept.head = h->next;
+	if (h->next)
+		h->next->prev = h->prev;
+	else
+		g->kept.tail = h->prev;
+	h->prev = h->next = NULL;
+	h->kept = 0;
+}
+
+static struct gate_held *held_of(struct MHD_Connection *conn)
+{
+	const union MHD_ConnectionInfo *ci =
+		MHD_get_connection_info(conn, MHD_CONNECTION_INFO_SOCKET_CONTEXT);
+
+	return ci ? ci->socket_context : NULL;
+}
+
+void api_gate_request_begins(struct api_server *s, struct MHD_Connection *conn)
+{
+	struct gate_held *h = s->gate ? held_of(conn) : NULL;
+
+	if (!h || h == &untracked)
+		return;
+	pthread_mutex_lock(&s->gate->mu);
+	kept_unlink(s->gate, h);
+	pthread_mutex_unlock(&s->gate->mu);
+}
+
+void api_gate_request_ends(struct api_server *s, struct MHD_Connection *conn)
+{
+	struct api_gate *g = s->gate;
+	struct gate_held *h = g ? held_of(conn) : NULL;
+
+	if (!h || h == &untracked)
+		return;
+	pthread_mutex_lock(&g->mu);
+	if (!h->kept) {
+		h->idle_since_ms = db_now_ms();
+		h->kept = 1;
+		h->next = NULL;
+		h->prev = g->kept.tail;
+		if (g->kept.tail)
+			g->kept.tail->next = h;
+		else
+			g->kept.head = h;
+		g->kept.tail = h;
+	}
+	pthread_mutex_unlock(&g->mu);
+}
+
+/* Shut down the kept connections whose next head is overdue (MHD then
+ * reads the end of the stream and closes them); returns the earliest
+ * deadline still pending, or -1. */
+static int64_t held_expire(struct api_gate *g, int64_t now)
+{
+	int64_t next = -1;
+
+	pthread_mutex_lock(&g->mu);
+	while (g->kept.head && g->kept.head->idle_since_ms + g->head_timeout_ms <= now) {
+		struct gate_held *h = g->kept.head;
+		kept_unlink(g, h);
+		shutdown(h->fd, SHUT_RDWR);
+		atomic_fetch_add(&g->srv->gate_keepalive_closed, 1);
+	}
+	if (g->kept.head)
+		next = g->kept.head->idle_since_ms + g->head_timeout_ms;
+	pthread_mutex_unlock(&g->mu);
+	return next;
+}
+
+/* MHD_OPTION_NOTIFY_CONNECTION: a connection the gate handed over starts
+ * or ends.  socket_context marks those MHD started, so one that failed
+ * before starting is not released twice. */
 void api_gate_notify(void *cls, struct MHD_Connection *conn, void **socket_context,
 		     enum MHD_ConnectionNotificationCode toe)
 {
 	struct api_server *s = cls;
 	const union MHD_ConnectionInfo *ci;
+	struct gate_held *h;
 
 	if (toe == MHD_CONNECTION_NOTIFY_STARTED) {
-		*socket_context = s;
+		ci = MHD_get_connection_info(conn, MHD_CONNECTION_INFO_CONNECTION_FD);
+		h = ci ? calloc(1, sizeof *h) : NULL;
+		if (h)
+			h->fd = ci->connect_fd;
+		*socket_context = h ? h : &untracked;
 		return;
 	}
-	if (!*socket_context)
+	if (!(h = *socket_context))
 		return;
 	*socket_context = NULL;
+	if (h != &untracked) {
+		pthread_mutex_lock(&s->gate->mu);
+		kept_unlink(s->gate, h);
+		pthread_mutex_unlock(&s->gate->mu);
+		free(h);
+	}
 	ci = MHD_get_connection_info(conn, MHD_CONNECTION_INFO_CLIENT_ADDRESS);
 	slot_release(s->gate, ci ? ci->client_addr : NULL);
 }
@@ -561,11 +677,12 @@ static void *gate_main(void *arg)
 	struct epoll_event evs[128];
 
 	while (!atomic_load(&g->srv->stopping)) {
-		int64_t now = db_now_ms(), next = -1;
+		int64_t now = db_now_ms(), next;
 		int n, timeout;
 
 		expire(g, now);
-		if (g->pending.head)
+		next = held_expire(g, now);
+		if (g->pending.head && (next < 0 || g->pending.head->deadline_ms < next))
 			next = g->pending.head->deadline_ms;
 		if (g->linger.head && (next < 0 || g->linger.head->deadline_ms < next))
 			next = g->linger.head->deadline_ms;

@@ -148,10 +148,15 @@ enum MHD_Result api_metrics(struct api_req *r)
 		"infilld_http_gate_answers_total{code=\"408\"} %lld\n"
 		"infilld_http_gate_answers_total{code=\"503\"} %lld\n"
 		"infilld_http_gate_answers_total{code=\"other\"} %lld\n"
+		"# HELP infilld_http_keepalive_closed_total Kept-alive connections closed for not "
+		"sending their next request head within the head deadline.\n"
+		"# TYPE infilld_http_keepalive_closed_total counter\n"
+		"infilld_http_keepalive_closed_total %lld\n"
 		"# HELP infilld_http_connections Connections libmicrohttpd holds.\n"
 		"# TYPE infilld_http_connections gauge\ninfilld_http_connections %d\n",
 	    (long long)atomic_load(&s->gate_answers[0]), (long long)atomic_load(&s->gate_answers[1]),
-	    (long long)atomic_load(&s->gate_answers[2]), s->gate ? api_gate_live(s->gate) : 0);
+	    (long long)atomic_load(&s->gate_answers[2]),
+	    (long long)atomic_load(&s->gate_keepalive_closed), s->gate ? api_gate_live(s->gate) : 0);
 	put(&t, "# HELP infilld_workers Worker processes.\n# TYPE infilld_workers gauge\n"
 		"infilld_workers{kind=\"configured\"} %d\ninfilld_workers{kind=\"alive\"} %d\n",
 	    s->cfg.workers, atomic_load(&s->workers_alive));

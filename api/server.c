@@ -224,6 +224,7 @@ static enum MHD_Result on_request(void *cls, struct MHD_Connection *conn, const 
 
 	(void)version;
 	if (!r) {
+		api_gate_request_begins(s, conn);
 		r = calloc(1, sizeof *r);
 		if (!r)
 			return MHD_NO;
@@ -309,8 +310,8 @@ static void on_completed(void *cls, struct MHD_Connection *conn, void **req_cls,
 	struct api_server *s = cls;
 	struct api_req *r = *req_cls;
 
-	(void)conn;
 	(void)toe;
+	api_gate_request_ends(s, conn);
 	if (!r)
 		return;
 	if (r->status)

@@ -1,6 +1,7 @@
 """HTTP hardening, with raw sockets against the real server: slow request
 heads wait in the head gate and get 408 at the deadline while others are
-served; slow bodies are cut off; a full server answers 503 with
+served; a kept-alive connection whose next head trickles is closed at the
+same deadline; slow bodies are cut off; a full server answers 503 with
 Retry-After; conflicting message framing gets 400/501; problems carry
 exactly one Content-Type."""
 import os
@@ -93,6 +94,90 @@ def test_slow_heads():
     took = time.time() - t0
     check(got408 == len(socks), "408 for %d of %d slow heads" % (got408, len(socks)))
     check(took < 6, "slow heads closed after %.1f s (deadline 2 s)" % took)
+
+
+def read_response(s, limit=5.0):
+    """One whole response (head and Content-Length body) off a kept-alive
+    socket."""
+    s.settimeout(limit)
+    data = b""
+    while b"\r\n\r\n" not in data:
+        b = s.recv(65536)
+        if not b:
+            raise AssertionError("closed before a response: %r" % data)
+        data += b
+    head, body = data.split(b"\r\n\r\n", 1)
+    n = 0
+    for line in head.split(b"\r\n")[1:]:
+        k, _, v = line.partition(b":")
+        if k.strip().lower() == b"content-length":
+            n = int(v)
+    while len(body) < n:
+        body += s.recv(65536)
+    return head.decode(errors="replace")
+
+
+def metric(name):
+    for line in srv.request("GET", "/metrics").body.decode().splitlines():
+        if line.startswith(name + " "):
+            return float(line.split()[1])
+    raise AssertionError("no metric " + name)
+
+
+def test_slow_keepalive_heads():
+    """10 kept-alive connections from 5 addresses (under 3/4 of the limit,
+    so responses do not say Connection: close) each trickle their second
+    request's head, a line every 0.4 s: each is closed at the 2 s head
+    deadline (MHD's 30 s --conn-timeout-s alone never fires, the line
+    keeps it busy), while /livez stays fast and a kept-alive client that
+    sends its next request in time is served on the same connection."""
+    before = metric("infilld_http_keepalive_closed_total")
+    socks = []
+    for i in range(10):
+        s = connect("127.0.0.%d" % (20 + i % 5))
+        s.sendall(b"GET /livez HTTP/1.1\r\nHost: x\r\n\r\n")
+        head = read_response(s)
+        check(head.startswith("HTTP/1.1 200") and "Connection: close" not in head,
+              "first request kept alive: %r" % head[:80])
+        s.sendall(b"GET /livez HTTP/1.1\r\n")
+        socks.append(s)
+    t0 = time.time()
+    good = connect("127.0.0.30")
+    good.sendall(b"GET /livez HTTP/1.1\r\nHost: x\r\n\r\n")
+    read_response(good)
+    time.sleep(1.0)  # idle, but inside the deadline
+    good.sendall(b"GET /livez HTTP/1.1\r\nHost: x\r\n\r\n")
+    check(read_response(good).startswith("HTTP/1.1 200"), "prompt second request served")
+    good.close()
+    open_ = list(socks)
+    closed_at = {}
+    worst = 0.0
+    while open_ and time.time() - t0 < 12:
+        for s in list(open_):
+            try:
+                s.sendall(b"X-Slow: 1\r\n")
+                s.settimeout(0.01)
+                if s.recv(4096) == b"":
+                    raise ConnectionResetError
+            except socket.timeout:
+                continue
+            except (BrokenPipeError, ConnectionResetError, OSError):
+                closed_at[s] = time.time() - t0
+                open_.remove(s)
+        st, dt = timed_livez()
+        check(st == 200, "livez during the attack: %d" % st)
+        worst = max(worst, dt)
+        time.sleep(0.4)
+    for s in socks:
+        s.close()
+    check(not open_, "%d of 10 trickling keep-alive heads still open after 12 s" % len(open_))
+    late = max(closed_at.values())
+    check(late < 4.5, "trickling keep-alive heads closed after %.1f s (deadline 2 s)" % late)
+    check(worst < 2.0, "livez took %.2f s under the attack" % worst)
+    after = metric("infilld_http_keepalive_closed_total")
+    check(after - before >= 10, "keepalive_closed counted %d" % (after - before))
+    print("     10 trickling keep-alive heads closed after %.1f-%.1f s; /livez worst %.3f s"
+          % (min(closed_at.values()), late, worst))
 
 
 def test_slow_body():
@@ -218,7 +303,7 @@ def teardown():
 if __name__ == "__main__":
     try:
         setup()
-        run([test_slow_heads, test_slow_body, test_framing, test_one_content_type,
+        run([test_slow_heads, test_slow_keepalive_heads, test_slow_body, test_framing, test_one_content_type,
              test_limits_answer_503, teardown])
     finally:
         srv.cleanup()
