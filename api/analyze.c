@@ -6,6 +6,8 @@
  * rlimits and then runs the CLI's analyze) spawned by one of two pool
  * threads; the upload's connection stays parked meanwhile.  A crash, a
  * hang (wall timeout) or a limit in the child fails only that upload.
+ * The same threads run other file work that must not block an HTTP
+ * thread (api_offload(): output.c's whole-file digest before a Range).
  */
 #define _GNU_SOURCE /* pipe2, strcasestr */
 #include "api/api_internal.h"
@@ -29,6 +31,7 @@
 
 struct analyze_task {
 	struct api_req *req;
+	void (*fn)(struct api_req *);
 	struct analyze_task *next;
 };
 
@@ -150,7 +153,7 @@ static void *analyze_main(void *arg)
 			return NULL; /* stopping and nothing left */
 		/* Prepares r->pending; then the connection is resumed and MHD
 		 * calls on_request again, which queues it. */
-		api_upload_complete(t->req);
+		t->fn(t->req);
 		MHD_resume_connection(t->req->conn);
 		free(t);
 	}
@@ -158,12 +161,18 @@ static void *analyze_main(void *arg)
 
 int api_analyze_submit(struct api_req *r)
 {
+	return api_offload(r, api_upload_complete);
+}
+
+int api_offload(struct api_req *r, void (*fn)(struct api_req *))
+{
 	struct api_server *s = r->srv;
 	struct analyze_task *t = calloc(1, sizeof *t);
 
 	if (!t)
 		return -1;
 	t->req = r;
+	t->fn = fn;
 	api_park(r);
 	pthread_mutex_lock(&s->an_mu);
 	if (s->an_tail)

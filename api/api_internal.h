@@ -61,6 +61,16 @@ struct api_gate;
 struct job_new;
 struct job_row;
 
+/* An artifact file whose whole SHA-256 this process has checked against
+ * the database (output.c), by identity: a write, truncation or rename
+ * onto it changes ctime, so a changed file is checked again. */
+#define API_SEEN_SLOTS 1024
+struct api_seen {
+	uint64_t dev, ino;
+	int64_t size, mtime_ns, ctime_ns;
+	int used;
+};
+
 struct api_server {
 	struct api_config cfg;
 	struct MHD_Daemon *mhd;
@@ -84,7 +94,11 @@ struct api_server {
 	atomic_int stopping;
 	atomic_int quiesced; /* draining: new connections are closed at accept */
 
-	/* Mesh analysis: a small pool running sandboxed children. */
+	/* Artifacts checked whole (output.c), direct-mapped by inode. */
+	pthread_mutex_t seen_mu;
+	struct api_seen seen[API_SEEN_SLOTS];
+
+	/* Mesh analysis and other file work: a small pool (analyze.c). */
 	pthread_mutex_t an_mu;
 	pthread_cond_t an_cv;
 	struct analyze_task *an_head, *an_tail;
@@ -126,6 +140,8 @@ struct api_req {
 	size_t discarded;
 	int64_t started_ms;         /* head complete (first call), for the body rate */
 	int64_t body_bytes;         /* received so far */
+	void *work;                 /* a handler's state across a park; */
+	void (*work_free)(void *);  /* freed with the request when set */
 };
 
 #define API_DISCARD_MAX (16u << 20)
@@ -276,7 +292,10 @@ void api_committer_stop(struct api_server *s);
 /* 202 response for a queued (or replayed) job (jobs.c). */
 struct MHD_Response *api_submit_response(const struct job_row *j, int replayed);
 
-/* Mesh analysis pool (analyze.c). */
+/* Mesh analysis pool (analyze.c).  api_offload() parks r and runs fn(r)
+ * on a pool thread; fn must set r->pending (and pending_status), then the
+ * connection is resumed and the response queued. 0, or -1 (no memory). */
+int api_offload(struct api_req *r, void (*fn)(struct api_req *));
 int api_analyze_start(struct api_server *s, struct err *e);
 void api_analyze_stop(struct api_server *s);
 

@@ -7,7 +7,12 @@
  * The file's size is checked against the database before anything is
  * sent, and a whole download is hashed as it streams: a file altered on
  * disk ends the stream without its last chunk, so the client sees an
- * error instead of a complete, wrong file.
+ * error instead of a complete, wrong file.  A part cannot be checked on
+ * its own, so a Range is served only from a file this process has seen
+ * whole and right (srv->seen, by device, inode, size, mtime and ctime,
+ * filled by whole downloads and by these checks); any other is hashed
+ * whole first, on a pool thread with the connection parked, and a
+ * mismatch answers 500 instead of 206.
  */
 #include "api/api_internal.h"
 #include "api/log.h"
@@ -20,6 +25,7 @@
 #include <inttypes.h>
 #include <nettle/base64.h>
 #include <nettle/sha2.h>
+#include <pthread.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -28,9 +34,53 @@
 
 #define OUTPUT_BLOCK (256u * 1024u)
 
+/* ---- files known whole: srv->seen ---- */
+
+static int64_t ns_of(const struct timespec *t)
+{
+	return (int64_t)t->tv_sec * 1000000000 + t->tv_nsec;
+}
+
+static struct api_seen seen_key(const struct stat *st)
+{
+	struct api_seen k = {(uint64_t)st->st_dev, (uint64_t)st->st_ino, (int64_t)st->st_size,
+			     ns_of(&st->st_mtim), ns_of(&st->st_ctim), 1};
+	return k;
+}
+
+static struct api_seen *seen_slot(struct api_server *s, const struct api_seen *k)
+{
+	return &s->seen[(k->ino * 0x9e3779b97f4a7c15ull ^ k->dev) % API_SEEN_SLOTS];
+}
+
+static int seen_has(struct api_server *s, const struct stat *st)
+{
+	struct api_seen k = seen_key(st), *v;
+	int hit;
+
+	pthread_mutex_lock(&s->seen_mu);
+	v = seen_slot(s, &k);
+	hit = v->used && v->dev == k.dev && v->ino == k.ino && v->size == k.size &&
+	      v->mtime_ns == k.mtime_ns && v->ctime_ns == k.ctime_ns;
+	pthread_mutex_unlock(&s->seen_mu);
+	return hit;
+}
+
+static void seen_add(struct api_server *s, const struct stat *st)
+{
+	struct api_seen k = seen_key(st);
+
+	pthread_mutex_lock(&s->seen_mu);
+	*seen_slot(s, &k) = k;
+	pthread_mutex_unlock(&s->seen_mu);
+}
+
+/* ---- whole downloads ---- */
+
 struct dl {
 	struct api_server *srv;
 	int fd;
+	struct stat st;              /* as opened (for srv->seen) */
 	uint64_t size;
 	uint64_t hashed;             /* bytes fed to sha so far (reads are in order) */
 	struct sha256_ctx sha;
@@ -67,6 +117,7 @@ static ssize_t dl_read(void *cls, uint64_t pos, char *buf, size_t max)
 					d->job_id, hex, d->expect_sha);
 				return MHD_CONTENT_READER_END_WITH_ERROR;
 			}
+			seen_add(d->srv, &d->st);
 		}
 	}
 	atomic_fetch_add(&d->srv->bytes_out, n);
@@ -149,9 +200,91 @@ static int etag_match(const char *inm, const char *etag)
 	return inm && (strstr(inm, etag) != NULL || !strcmp(inm, "*"));
 }
 
+/* What every 200 or 206 of one artifact carries. */
+struct out_headers {
+	const char *mime;
+	char etag[72], digest[64], disp[768], length[32];
+};
+
+static void out_headers_add(struct MHD_Response *resp, const struct out_headers *h)
+{
+	MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE, h->mime);
+	MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_DISPOSITION, h->disp);
+	MHD_add_response_header(resp, MHD_HTTP_HEADER_ETAG, h->etag);
+	MHD_add_response_header(resp, "Repr-Digest", h->digest);
+	MHD_add_response_header(resp, MHD_HTTP_HEADER_ACCEPT_RANGES, "bytes");
+	MHD_add_response_header(resp, "X-Artifact-Length", h->length);
+}
+
+/* 206 for bytes from..to of fd (owned: the response closes it, or this
+ * does when no response can be made); NULL when out of memory. */
+static struct MHD_Response *range_response(struct api_server *s, int fd, const struct stat *st,
+					   uint64_t from, uint64_t to,
+					   const struct out_headers *h)
+{
+	struct MHD_Response *resp = MHD_create_response_from_fd_at_offset64(to - from + 1, fd, from);
+	char cr[80];
+
+	if (!resp) {
+		close(fd);
+		return NULL;
+	}
+	snprintf(cr, sizeof cr, "bytes %" PRIu64 "-%" PRIu64 "/%lld", from, to,
+		 (long long)st->st_size);
+	MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_RANGE, cr);
+	out_headers_add(resp, h);
+	atomic_fetch_add(&s->bytes_out, (long long)(to - from + 1));
+	return resp;
+}
+
+/* A Range of a file not yet known whole: checked on a pool thread. */
+struct range_check {
+	int fd; /* -1 once handed to a response */
+	struct stat st;
+	uint64_t from, to;
+	char expect_sha[65], job_id[DB_ID_MAX];
+	struct out_headers h;
+};
+
+static void range_check_free(void *p)
+{
+	struct range_check *c = p;
+
+	if (c->fd >= 0)
+		close(c->fd);
+	free(c);
+}
+
+static void range_check_run(struct api_req *r)
+{
+	struct range_check *c = r->work;
+	int64_t bytes = -1;
+	char hex[65];
+
+	if (store_fd_sha256(c->fd, &bytes, hex) == 0 && bytes == (int64_t)c->st.st_size &&
+	    !strcmp(hex, c->expect_sha)) {
+		seen_add(r->srv, &c->st);
+		r->pending = range_response(r->srv, c->fd, &c->st, c->from, c->to, &c->h);
+		c->fd = -1;
+		r->pending_status = MHD_HTTP_PARTIAL_CONTENT;
+		if (r->pending)
+			return;
+	} else {
+		log_msg(LOG_ERROR, "output",
+			"job %s: artifact holds %lld bytes with SHA-256 %s, the database %s; "
+			"range refused (run infilld fsck)",
+			c->job_id, (long long)bytes, bytes < 0 ? "(unreadable)" : hex,
+			c->expect_sha);
+	}
+	r->pending = api_problem_response(PROB_INTERNAL, r->url, NULL,
+					  "the stored output of this job is damaged; it cannot "
+					  "be served", &r->pending_status);
+}
+
 enum MHD_Result api_job_output(struct api_req *r)
 {
-	char path[STORE_PATH_MAX], etag[72], digest[64], disp[768], b64[48], expect_sha[65];
+	char path[STORE_PATH_MAX], b64[48], expect_sha[65];
+	struct out_headers h;
 	struct job_row j;
 	struct MHD_Response *resp;
 	enum MHD_Result ret;
@@ -192,30 +325,32 @@ enum MHD_Result api_job_output(struct api_req *r)
 				   "the stored output of job %s is damaged; it cannot be served",
 				   r->arg[0]);
 	}
-	snprintf(etag, sizeof etag, "\"%s\"", j.artifact_sha256);
+	snprintf(h.etag, sizeof h.etag, "\"%s\"", j.artifact_sha256);
 	{
 		uint8_t raw[32];
 		for (int i = 0; i < 32; i++)
 			sscanf(j.artifact_sha256 + 2 * i, "%2hhx", &raw[i]);
 		base64_encode_raw((char *)b64, 32, raw);
 		b64[BASE64_ENCODE_RAW_LENGTH(32)] = '\0';
-		snprintf(digest, sizeof digest, "sha-256=:%s:", b64);
+		snprintf(h.digest, sizeof h.digest, "sha-256=:%s:", b64);
 	}
 	snprintf(expect_sha, sizeof expect_sha, "%s", j.artifact_sha256);
 	if (out_format_parse(j.format, &f, &e) != 0)
 		f = OUT_ZIP;
-	content_disposition(&j, out_format_extension(f), disp, sizeof disp);
+	content_disposition(&j, out_format_extension(f), h.disp, sizeof h.disp);
+	h.mime = out_format_mime(f);
+	snprintf(h.length, sizeof h.length, "%lld", (long long)st.st_size);
 	queue_job_row_fini(&j);
-	if (etag_match(api_header(r, MHD_HTTP_HEADER_IF_NONE_MATCH), etag)) {
+	if (etag_match(api_header(r, MHD_HTTP_HEADER_IF_NONE_MATCH), h.etag)) {
 		close(fd);
 		resp = MHD_create_response_from_buffer(0, NULL, MHD_RESPMEM_PERSISTENT);
 		if (resp)
-			MHD_add_response_header(resp, MHD_HTTP_HEADER_ETAG, etag);
+			MHD_add_response_header(resp, MHD_HTTP_HEADER_ETAG, h.etag);
 		return api_queue(r, MHD_HTTP_NOT_MODIFIED, resp);
 	}
 	rg = parse_range(api_header(r, MHD_HTTP_HEADER_RANGE), (uint64_t)st.st_size, &from, &to);
 	if (rg && api_header(r, MHD_HTTP_HEADER_IF_RANGE) &&
-	    strcmp(api_header(r, MHD_HTTP_HEADER_IF_RANGE), etag) != 0)
+	    strcmp(api_header(r, MHD_HTTP_HEADER_IF_RANGE), h.etag) != 0)
 		rg = 0; /* changed representation: send it all */
 	if (rg < 0) {
 		char cr[48];
@@ -228,17 +363,29 @@ enum MHD_Result api_job_output(struct api_req *r)
 			MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_RANGE, cr);
 		return api_queue(r, status, resp);
 	}
+	if (rg > 0 && seen_has(r->srv, &st))
+		return api_queue(r, MHD_HTTP_PARTIAL_CONTENT,
+				 range_response(r->srv, fd, &st, from, to, &h));
 	if (rg > 0) {
-		char cr[80];
-		resp = MHD_create_response_from_fd_at_offset64(to - from + 1, fd, from);
-		snprintf(cr, sizeof cr, "bytes %" PRIu64 "-%" PRIu64 "/%lld", from, to,
-			 (long long)st.st_size);
-		if (resp)
-			MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_RANGE, cr);
-		else
+		struct range_check *c = calloc(1, sizeof *c);
+		if (!c) {
 			close(fd);
-		atomic_fetch_add(&r->srv->bytes_out, (long long)(to - from + 1));
-	} else {
+			return MHD_NO;
+		}
+		c->fd = fd;
+		c->st = st;
+		c->from = from;
+		c->to = to;
+		c->h = h;
+		snprintf(c->expect_sha, sizeof c->expect_sha, "%s", expect_sha);
+		snprintf(c->job_id, sizeof c->job_id, "%s", r->arg[0]);
+		r->work = c;
+		r->work_free = range_check_free;
+		if (api_offload(r, range_check_run) != 0)
+			return MHD_NO; /* c is freed with the request */
+		return MHD_YES;
+	}
+	{
 		struct dl *d = calloc(1, sizeof *d);
 		if (!d) {
 			close(fd);
@@ -246,6 +393,7 @@ enum MHD_Result api_job_output(struct api_req *r)
 		}
 		d->srv = r->srv;
 		d->fd = fd;
+		d->st = st;
 		d->size = (uint64_t)st.st_size;
 		sha256_init(&d->sha);
 		snprintf(d->expect_sha, sizeof d->expect_sha, "%s", expect_sha);
@@ -258,17 +406,6 @@ enum MHD_Result api_job_output(struct api_req *r)
 			return MHD_NO;
 		}
 	}
-	if (!resp)
-		return MHD_NO;
-	MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_TYPE, out_format_mime(f));
-	MHD_add_response_header(resp, MHD_HTTP_HEADER_CONTENT_DISPOSITION, disp);
-	MHD_add_response_header(resp, MHD_HTTP_HEADER_ETAG, etag);
-	MHD_add_response_header(resp, "Repr-Digest", digest);
-	MHD_add_response_header(resp, MHD_HTTP_HEADER_ACCEPT_RANGES, "bytes");
-	{
-		char len[32];
-		snprintf(len, sizeof len, "%lld", (long long)st.st_size);
-		MHD_add_response_header(resp, "X-Artifact-Length", len);
-	}
-	return api_queue(r, rg > 0 ? MHD_HTTP_PARTIAL_CONTENT : MHD_HTTP_OK, resp);
+	out_headers_add(resp, &h);
+	return api_queue(r, MHD_HTTP_OK, resp);
 }

@@ -318,6 +318,8 @@ static void on_completed(void *cls, struct MHD_Connection *conn, void **req_cls,
 		atomic_fetch_add(&s->requests[r->route_index][status_index(r->status)], 1);
 	if (r->pending)
 		MHD_destroy_response(r->pending);
+	if (r->work_free)
+		r->work_free(r->work);
 	api_upload_free(r->upload);
 	buf_fini(&r->body);
 	free(r);
@@ -366,6 +368,7 @@ int api_server_start(const struct api_config *c, struct api_server **out, struct
 	s->cfg = *c;
 	pthread_mutex_init(&s->wait_mu, NULL);
 	pthread_mutex_init(&s->an_mu, NULL);
+	pthread_mutex_init(&s->seen_mu, NULL);
 	pthread_cond_init(&s->an_cv, NULL);
 	pthread_mutex_init(&s->cm_mu, NULL);
 	pthread_cond_init(&s->cm_cv, NULL);
@@ -471,6 +474,7 @@ void api_server_stop(struct api_server *s)
 	db_pool_free(s->pool);
 	pthread_mutex_destroy(&s->wait_mu);
 	pthread_mutex_destroy(&s->an_mu);
+	pthread_mutex_destroy(&s->seen_mu);
 	pthread_cond_destroy(&s->an_cv);
 	pthread_mutex_destroy(&s->cm_mu);
 	pthread_cond_destroy(&s->cm_cv);

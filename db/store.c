@@ -1,11 +1,13 @@
 /* store.c - data-directory layout and atomic publication (see store.h). */
 #define _XOPEN_SOURCE 700
 #include "db/store.h"
+#include "db/tenants.h"
 #include "engine/core/err.h"
 
 #include <errno.h>
 #include <fcntl.h>
 #include <ftw.h>
+#include <nettle/sha2.h>
 #include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
@@ -256,4 +258,36 @@ void store_output_name(const char *mesh_name, const char *fallback, char *buf, s
 		sanitise_stem(fallback, buf, len);
 	if (!buf[0])
 		snprintf(buf, len, "part");
+}
+
+int store_fd_sha256(int fd, int64_t *bytes, char hex[65])
+{
+	enum { BLOCK = 1 << 16 };
+	unsigned char *block = malloc(BLOCK);
+	struct sha256_ctx sha;
+	uint8_t digest[SHA256_DIGEST_SIZE];
+	int64_t total = 0;
+	ssize_t n;
+
+	if (!block) {
+		errno = ENOMEM;
+		return -1;
+	}
+	sha256_init(&sha);
+	for (;;) {
+		n = pread(fd, block, BLOCK, (off_t)total);
+		if (n < 0 && errno == EINTR)
+			continue;
+		if (n <= 0)
+			break;
+		sha256_update(&sha, (size_t)n, block);
+		total += n;
+	}
+	free(block);
+	if (n < 0)
+		return -1;
+	sha256_digest(&sha, sizeof digest, digest);
+	db_sha256_hex(digest, hex);
+	*bytes = total;
+	return 0;
 }

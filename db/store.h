@@ -58,5 +58,9 @@ void store_output_name(const char *mesh_name, const char *fallback, char *buf, s
  * the store and the reason (a shared store that went away). */
 int store_check(const char *store_dir, struct err *e);
 int64_t store_free_bytes(const char *store_dir);
+/* Size (bytes) and SHA-256 (64 hex digits) of what fd holds, read with
+ * pread() from offset 0 (fd's position is untouched; thread-safe).  0, or
+ * -1 with errno. */
+int store_fd_sha256(int fd, int64_t *bytes, char hex[65]);
 
 #endif

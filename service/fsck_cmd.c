@@ -29,27 +29,15 @@ static const char fsck_usage[] =
 /* Size and SHA-256 (hex) of path: 0, or -1 with errno when unreadable. */
 static int digest_file(const char *path, int64_t *bytes, char hex[65])
 {
-	static unsigned char block[1 << 16];
-	struct sha256_ctx sha;
-	uint8_t digest[SHA256_DIGEST_SIZE];
-	int64_t total = 0;
-	ssize_t n;
-	int fd = open(path, O_RDONLY | O_CLOEXEC);
+	int rc, fd = open(path, O_RDONLY | O_CLOEXEC), saved;
 
 	if (fd < 0)
 		return -1;
-	sha256_init(&sha);
-	while ((n = read(fd, block, sizeof block)) > 0) {
-		sha256_update(&sha, (size_t)n, block);
-		total += n;
-	}
+	rc = store_fd_sha256(fd, bytes, hex);
+	saved = errno;
 	close(fd);
-	if (n < 0)
-		return -1;
-	sha256_digest(&sha, sizeof digest, digest);
-	db_sha256_hex(digest, hex);
-	*bytes = total;
-	return 0;
+	errno = saved;
+	return rc;
 }
 
 /* Move a damaged file aside and mark its job; 0 or -1 (printed). */

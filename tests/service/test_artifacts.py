@@ -1,6 +1,7 @@
 """Damaged artifacts are never served as 200: a file whose size differs
 from the database's answers 500, an altered one of the right size ends its
-chunked stream with an error; `infilld fsck` reports both (and a missing
+chunked stream with an error, and a Range of it answers 500 rather than 206
+(even after an earlier Range of the intact file was served); `infilld fsck` reports both (and a missing
 one), exits 1, and with --quarantine moves the damaged ones aside so their
 downloads answer 410."""
 import glob
@@ -48,6 +49,17 @@ def download(jid):
     return r.status, body
 
 
+def ranged(jid, spec):
+    """(status, body, headers) of a Range request."""
+    c = http.client.HTTPConnection("127.0.0.1", srv.port, timeout=20)
+    c.request("GET", "/v1/jobs/%s/output" % jid,
+              headers={"Authorization": "Bearer " + S["key"], "Range": spec})
+    r = c.getresponse()
+    body = r.read()
+    c.close()
+    return r.status, body, dict(r.getheaders())
+
+
 def fsck(*extra):
     out = subprocess.run([BIN, "fsck", "--data", srv.data, *extra], capture_output=True,
                          text=True, timeout=60)
@@ -58,6 +70,16 @@ def test_damage_detected():
     truncated, altered, intact, gone = S["jobs"]
     st, body = download(intact)
     check(st == 200 and body is not None, "intact download")
+    whole = {}
+    for jid in (intact, altered):
+        with open(artifact(jid), "rb") as f:
+            whole[jid] = f.read()
+    # Ranges of intact files: the first checks the whole file's digest on
+    # the server, the next is served from what it saw; both are the bytes
+    for jid in (altered, altered, intact):
+        st, part, h = ranged(jid, "bytes=50-149")
+        check(st == 206 and part == whole[jid][50:150], "range of an intact file: %d" % st)
+        check(h.get("Content-Range") == "bytes 50-149/%d" % len(whole[jid]), h)
     with open(artifact(truncated), "r+b") as f:
         f.truncate(os.path.getsize(artifact(truncated)) // 2)
     with open(artifact(altered), "r+b") as f:
@@ -70,6 +92,15 @@ def test_damage_detected():
     check(st == 500, "truncated artifact: %d" % st)
     st, body = download(altered)
     check(body is None or st != 200, "altered artifact served whole as %d" % st)
+    # the altered file was served in part before: its new ctime makes the
+    # server check it again, so neither a range over the change nor one
+    # away from it is served
+    for spec in ("bytes=50-149", "bytes=0-9", "bytes=-10"):
+        st, part, _ = ranged(altered, spec)
+        check(st == 500 and b"damaged" in part, "range %s of the altered file: %d %r" %
+              (spec, st, part[:80]))
+    st, part, _ = ranged(truncated, "bytes=0-9")
+    check(st == 500, "range of the truncated file: %d" % st)
     st, body = download(gone)
     check(st == 410, "missing artifact: %d" % st)
     st, body = download(intact)
