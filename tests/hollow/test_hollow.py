@@ -3,8 +3,9 @@
 Drives the real binary (env INFILLD_BIN) and reads its metrics; the
 interior-overhang figure comes from engine/verify, which checks the very
 layer images written (independent of the optimiser).  Kept small for
-`make test`: a 12 mm cube, the letter P (50 and 100 mm) and a too-thin tetrahedron; the
-50 mm models run in `make bench` (tests/bench/hollow.sh).
+`make test`: 8 and 12 mm cubes, the letter P at 50 mm and a too-thin
+tetrahedron; the 50 mm models and the letter at 100 mm (which reaches the
+offset hull: asserted there) run in `make bench` (tests/bench/hollow.sh).
 Standalone: python3 tests/hollow/test_hollow.py
 """
 import json
@@ -84,28 +85,30 @@ class HollowTest(unittest.TestCase):
         self.tmp.cleanup()
 
     def test_cube_support_free_at_45_and_30(self):
+        # an 8 mm cube: the optimiser's cost is not monotone in size (12 mm
+        # at alpha 30 took 72 s, 8 mm 4 s) and these checks need no more
         res = {}
-        for a in (45, 30):
+        for a, max_px in ((45, 4), (30, 16)):  # 2 and 13 px measured
             # optimise_s=0: no time budget, so what is checked does not depend
             # on the machine's speed (under ASan on shared cores the round
             # once outran the default 60 s)
             # fill=false: the optimiser's voids alone (with the fill, the
             # fill alone hollows this cube more and is kept: test below)
-            m = hollow(self.tmp.name, "misc/cube.ascii.stl", height_mm=12, alpha_deg=a,
+            m = hollow(self.tmp.name, "misc/cube.ascii.stl", height_mm=8, alpha_deg=a,
                        rounds=1, optimise_s=0, fill="false")
             h = m["hollow"]
             res[a] = h
             self.assertGreaterEqual(h["voids_optimised"], 1)
             self.assertEqual(h["voids_fill"], 0)
             self.assertFalse(h["budget_spent"])
-            optimised_slopes_ok(self, h["verify"], 8)  # 1 px at 45, 6 at 30 measured
+            optimised_slopes_ok(self, h["verify"], max_px)
             self.assertEqual(h["verify"]["islands"], 0)
             # walls never thinner than allowed (1 pixel of rasterisation)
             self.assertGreaterEqual(h["min_wall_3d_mm"], 0.8 - 0.06)
             self.assertGreaterEqual(h["verify"]["min_wall_vertical_mm"], 1.0 - 0.06)
             between_walls_ok(self, h["verify"])
-            # groin vaults: 0.37 at alpha 45, 0.21 at 30 measured
-            self.assertGreater(h["volume_reduction"], 0.15)
+            # groin vaults: 0.25 at alpha 45, 0.16 at 30 measured
+            self.assertGreater(h["volume_reduction"], 0.12)
             self.assertLess(h["volume_reduction"], 1.0)
         # a smaller alpha never hollows more
         self.assertLessEqual(res[30]["volume_reduction"], res[45]["volume_reduction"] + 1e-9)
@@ -273,28 +276,6 @@ class HollowTest(unittest.TestCase):
         self.assertGreaterEqual(h["voids_optimised"], 2, h)  # 3 measured, 18.4 %
         self.assertGreater(h["volume_reduction"], 0.1)
         optimised_slopes_ok(self, h["verify"], 3)
-        self.assertEqual(h["verify"]["islands"], 0)
-        self.assertGreaterEqual(h["min_wall_mm"], 1.0 - 0.06)
-        between_walls_ok(self, h["verify"])
-
-    # The same letter at 100 mm: with 1 mm walls now half as thick relative
-    # to the letter, stability moves the projected centre of mass past the
-    # offset hull H_r (r = half the contact hull's inradius, the paper's
-    # margin), which the 50 mm letter cannot reach (docs/hollow.md).
-    # The fill alone (rounds=0) keeps the run short; it is the part of the
-    # pipeline that moves the centre of mass on this letter.
-    def test_P_reaches_offset_hull_at_100mm(self):
-        m = hollow(self.tmp.name, "P.off", height_mm=100, up="y", objective="stability",
-                   rounds=0)
-        h = m["hollow"]
-        self.assertFalse(h["stands_before"])
-        self.assertLess(h["com_before_mm"], 0)
-        # the exact slope rule (no pixel of slack) leaves the fill 4.97 mm
-        # in against the 5.0 mm offset hull (it reached it with the slack)
-        self.assertGreater(h["com_after_mm"], 0.99 * h["hull_offset_mm"], h)
-        self.assertEqual(h["com_inside_hull"], h["com_after_mm"] > h["hull_offset_mm"], h)
-        self.assertGreater(h["hull_offset_mm"], 4.0)
-        self.assertEqual(h["interior_overhang_mm2"], 0.0, h["verify"])
         self.assertEqual(h["verify"]["islands"], 0)
         self.assertGreaterEqual(h["min_wall_mm"], 1.0 - 0.06)
         between_walls_ok(self, h["verify"])
