@@ -16,6 +16,7 @@
  */
 #define _GNU_SOURCE /* accept4, strcasestr */
 #include "api/api_internal.h"
+#include "api/gate.h"
 #include "api/log.h"
 #include "db/db.h"
 #include "engine/core/err.h"

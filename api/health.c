@@ -3,6 +3,7 @@
  * or ids, so the series count stays constant.
  */
 #include "api/api_internal.h"
+#include "api/gate.h"
 #include "db/queue.h"
 #include "db/store.h"
 #include "engine/core/err.h"

@@ -3,6 +3,7 @@
  * ever waits.
  */
 #include "api/api_internal.h"
+#include "api/gate.h"
 
 #include <stdarg.h>
 #include <stdio.h>

@@ -8,6 +8,7 @@
  * bodies are read raw (MHD's POST processor is not used).
  */
 #include "api/api_internal.h"
+#include "api/gate.h"
 #include "api/log.h"
 #include "db/store.h"
 #include "engine/core/err.h"
