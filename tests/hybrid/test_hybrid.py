@@ -148,11 +148,12 @@ class HybridCli(unittest.TestCase):
 
     def test_single_structures(self):
         box = self.path("box.stl")
-        write_box_stl(box, 24, 20, 16)
+        write_box_stl(box, 16, 14, 12)
         for s in ("tcs", "mfs"):
             with self.subTest(structure=s):
                 out = self.path(f"box.{s}.sl1")
-                m = self.job(box, out, "--set", f"structure={s}", "--set", "layer_mm=0.1")
+                m = self.job(box, out, "--set", f"structure={s}", "--set", "layer_mm=0.1",
+                             "--set", "compliance=false")
                 h = m["hybrid"]
                 self.assertEqual(h["structure"], s)
                 self.assertNotIn("components", h)
@@ -168,9 +169,10 @@ class HybridCli(unittest.TestCase):
 
     def test_mesh_output(self):
         box = self.path("box_m.stl")
-        write_box_stl(box, 20, 16, 12)
+        write_box_stl(box, 14, 12, 10)
         out = self.path("box.stl")
-        m = self.job(box, out, "--set", "structure=mfs", "--set", "layer_mm=0.1")
+        m = self.job(box, out, "--set", "structure=mfs", "--set", "layer_mm=0.1",
+                     "--set", "compliance=false")
         count, directed, vol, nt = stl_edges(out)
         bad = [e for e, c in count.items() if c != 2]
         self.assertEqual(bad, [], "every edge in exactly two triangles")
