@@ -7,7 +7,7 @@
 
 #include <stddef.h>
 
-#include "engine/hollow/topdown.h"
+#include "engine/hollow/fill/fill.h"
 
 struct mesh;
 struct err;

@@ -13,9 +13,9 @@
 
 #include "engine/core/mem.h"
 #include "engine/geom/clip.h"
-#include "engine/hollow/fragments.h"
+#include "engine/hollow/fill/fill.h"
 #include "engine/hollow/hmesh.h"
-#include "engine/hollow/rounds.h"
+#include "engine/hollow/run.h"
 #include "engine/mesh/mesh.h"
 #include "engine/output/printer/printer.h"
 #include "engine/slice/slice.h"
@@ -308,7 +308,7 @@ static int hollow_prepare(const struct engine_ctx *ctx, const void *params, void
 	if (!rc)
 		rc = start_verify(s, s->out.mesh, e);
 	/* layer outputs print the pixels: beads split off the optimised voids
-	 * there are dropped like voids under min_void_mm3 (fragments.h) */
+	 * there are dropped like voids under min_void_mm3 (fill/fill.h) */
 	if (!rc && s->out.voids_optimised > 0)
 		rc = hl_fragments_find(s->out.mesh, ctx->mesh->nv, ctx->mesh->nt,
 				       s->map ? s->map : &s->own_map, s->map ? s->antialias : 1,
@@ -521,29 +521,29 @@ static int hollow_metrics(void *state, struct metrics *m, struct err *e)
 	rc |= metrics_num(m, "hollow.wall_mm", s->cfg.wall_mm);
 	rc |= metrics_num(m, "hollow.wall_next_mm", s->cfg.wall_next_mm);
 	rc |= metrics_num(m, "hollow.alpha_deg", s->alpha_deg);
-	rc |= metrics_num(m, "hollow.opt_layer_mm", o->opt_layer_mm);
-	rc |= metrics_num(m, "hollow.sample_mm", o->sample_mm);
+	rc |= metrics_num(m, "hollow.opt_layer_mm", o->opt.opt_layer_mm);
+	rc |= metrics_num(m, "hollow.sample_mm", o->opt.sample_mm);
 	rc |= metrics_str(m, "hollow.objective", objective_names[s->objective]);
-	rc |= metrics_int(m, "hollow.solver_iterations", o->iterations);
+	rc |= metrics_int(m, "hollow.solver_iterations", o->opt.iterations);
 	rc |= metrics_int(m, "hollow.voids_optimised", (long long)o->voids_optimised);
 	rc |= metrics_int(m, "hollow.voids_fill", (long long)o->fill.voids);
 	rc |= metrics_num(m, "hollow.fill_volume_mm3", o->fill.volume_mm3);
 	rc |= metrics_int(m, "hollow.voids_fallback", (long long)o->voids_fallback);
-	rc |= metrics_int(m, "hollow.groups_failed", (long long)o->groups_failed);
-	rc |= metrics_int(m, "hollow.groups_small", (long long)o->groups_small);
-	rc |= metrics_int(m, "hollow.voids_too_close", (long long)o->voids_too_close);
-	rc |= metrics_num(m, "hollow.optimised_volume_mm3", o->opt_volume_mm3);
+	rc |= metrics_int(m, "hollow.groups_failed", (long long)o->opt.groups_failed);
+	rc |= metrics_int(m, "hollow.groups_small", (long long)o->opt.groups_small);
+	rc |= metrics_int(m, "hollow.voids_too_close", (long long)o->opt.voids_too_close);
+	rc |= metrics_num(m, "hollow.optimised_volume_mm3", o->opt.volume_mm3);
 	rc |= metrics_num(m, "hollow.fill_alone_volume_mm3", o->fill_alone_mm3);
 	rc |= metrics_num(m, "hollow.optimised_and_fill_volume_mm3", o->opt_fill_mm3);
 	rc |= metrics_int(m, "hollow.voids_dropped_for_fill", (long long)o->voids_dropped_for_fill);
 	rc |= metrics_num(m, "hollow.optimise_s", s->cfg.optimise_s);
 	if (o->has_com)
-		rc |= metrics_int(m, "hollow.voids_against_com", (long long)o->voids_against_com);
-	rc |= metrics_bool(m, "hollow.budget_spent", o->budget_spent);
-	rc |= metrics_num(m, "hollow.seconds.offset", o->s_offset);
-	rc |= metrics_num(m, "hollow.seconds.groups", o->s_groups);
-	rc |= metrics_num(m, "hollow.seconds.optimise", o->s_solve);
-	rc |= metrics_num(m, "hollow.seconds.mesh", o->s_mesh);
+		rc |= metrics_int(m, "hollow.voids_against_com", (long long)o->opt.voids_against_com);
+	rc |= metrics_bool(m, "hollow.budget_spent", o->opt.budget_spent);
+	rc |= metrics_num(m, "hollow.seconds.offset", o->opt.s_offset);
+	rc |= metrics_num(m, "hollow.seconds.groups", o->opt.s_groups);
+	rc |= metrics_num(m, "hollow.seconds.optimise", o->opt.s_solve);
+	rc |= metrics_num(m, "hollow.seconds.mesh", o->opt.s_mesh);
 	rc |= metrics_num(m, "hollow.seconds.fill", o->s_fill);
 	rc |= metrics_num(m, "hollow.seconds.prepare", s->t_prepare);
 	rc |= metrics_num(m, "hollow.seconds.verify", s->t_verify);

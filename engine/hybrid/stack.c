@@ -74,18 +74,6 @@ static void pixel_xy(const struct hy_stack *st, int i, int j, double *x, double 
 
 /* ---- pass 1: part and interior ---- */
 
-struct src_ctx {
-	struct slicer *slicer;
-	double layer_mm;
-};
-
-static int src_layer(void *ctx, int k, struct paths *region, struct err *e)
-{
-	struct src_ctx *c = ctx;
-
-	return slice_at(c->slicer, (k + 0.5) * c->layer_mm, region, NULL, e);
-}
-
 int hy_stack_init(struct hy_stack *st, const struct mesh *m, struct box3 box, double pitch_mm,
 		  double layer_mm, int layers, double shell_mm, struct progress *pg,
 		  struct err *e)
@@ -94,7 +82,7 @@ int hy_stack_init(struct hy_stack *st, const struct mesh *m, struct box3 box, do
 	struct slice_erode_source src;
 	struct slice_erode_info info;
 	struct slice_eroder *er = NULL;
-	struct src_ctx sc = {NULL, layer_mm};
+	struct slice_mid_source sc = {NULL, layer_mm};
 	struct slicer *own = NULL;
 	struct raster *img = NULL;
 	struct paths region;
@@ -114,7 +102,7 @@ int hy_stack_init(struct hy_stack *st, const struct mesh *m, struct box3 box, do
 	ep.y0_mm = box.lo.y;
 	ep.x1_mm = box.hi.x;
 	ep.y1_mm = box.hi.y;
-	src.layer = src_layer;
+	src.layer = slice_mid_layer;
 	src.ctx = &sc;
 	if ((rc = slice_erode_new(&ep, &src, &er, e)) != 0) {
 		if (rc == ERR_LIMIT)

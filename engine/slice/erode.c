@@ -20,6 +20,13 @@
 #include <stdint.h>
 #include <string.h>
 
+int slice_mid_layer(void *ctx, int k, struct paths *region, struct err *e)
+{
+	const struct slice_mid_source *m = ctx;
+
+	return slice_at(m->slicer, (k + 0.5) * m->layer_mm, region, NULL, e);
+}
+
 #define HI_NONE INT32_MAX
 #define ERODE_MAX_SIDE 65535
 #define ERODE_MAX_PIXELS (1u << 28)

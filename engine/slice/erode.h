@@ -55,6 +55,17 @@ struct slice_erode_source {
 	void *ctx;
 };
 
+/* The usual source: the slices of a mesh at the mid-planes of the stack's
+ * layers (layer k: z = (k + 1/2) layer_mm).  Use slice_mid_layer as
+ * layer() with a struct slice_mid_source as ctx (borrowed; it must
+ * outlive the eroder). */
+struct slicer;
+struct slice_mid_source {
+	struct slicer *slicer;
+	double layer_mm;
+};
+int slice_mid_layer(void *ctx, int k, struct paths *region, struct err *e);
+
 struct slice_eroder;
 
 /* Validate p (ERR_PARAM naming the field), size the grid (ERR_LIMIT when

@@ -37,25 +37,18 @@ struct solid_state {
 	/* shell_mm > 0: the cavity is the part eroded by a ball of radius
 	 * shell_mm; the eroder pulls layers from its own slicer because it
 	 * runs ahead of the layer being printed. */
-	struct slicer *src_slicer;
+	struct slice_mid_source src; /* its own slicer, owned */
 	struct slice_eroder *eroder;
 	struct paths cavity;
 	double cavity_area_sum_mm2;
 	double shell_mm, shell_pixel_mm;
 };
 
-static int source_layer(void *ctx, int k, struct paths *region, struct err *e)
-{
-	struct solid_state *s = ctx;
-
-	return slice_at(s->src_slicer, (k + 0.5) * s->layer_mm, region, NULL, e);
-}
-
 static int setup_shell(struct solid_state *s, const struct engine_ctx *ctx,
 		       const struct solid_params *p, struct err *e)
 {
 	struct slice_erode_params ep;
-	struct slice_erode_source src = {source_layer, s};
+	struct slice_erode_source src = {slice_mid_layer, &s->src};
 	const struct box3 *bb = &ctx->report->bbox;
 	int rc;
 
@@ -64,7 +57,8 @@ static int setup_shell(struct solid_state *s, const struct engine_ctx *ctx,
 	if (s->shell_pixel_mm <= 0)
 		s->shell_pixel_mm = ctx->map ? sqrt(raster_map_pixel_area_mm2(ctx->map))
 					     : SOLID_FDM_SHELL_PIXEL_MM;
-	rc = slice_new(ctx->mesh, &s->src_slicer, e);
+	s->src.layer_mm = s->layer_mm;
+	rc = slice_new(ctx->mesh, &s->src.slicer, e);
 	if (rc)
 		return rc;
 	memset(&ep, 0, sizeof ep);
@@ -171,7 +165,7 @@ static void solid_release(void *state)
 	if (!s)
 		return;
 	slice_free(s->slicer);
-	slice_free(s->src_slicer);
+	slice_free(s->src.slicer);
 	slice_erode_free(s->eroder);
 	paths_fini(&s->cavity);
 	mem_free(s);

@@ -12,7 +12,7 @@
 
 #include "engine/core/err.h"
 #include "engine/core/mem.h"
-#include "engine/hollow/fillstep.h"
+#include "engine/hollow/fill/fill_int.h"
 
 #define W 40
 #define H 40

@@ -14,7 +14,7 @@
 #include "engine/core/err.h"
 #include "engine/core/mem.h"
 #include "engine/geom/raster.h"
-#include "engine/hollow/fragments.h"
+#include "engine/hollow/fill/fill.h"
 #include "engine/mesh/mesh.h"
 
 #define PX 0.05
@@ -86,7 +86,7 @@ static void test_bead_found(void)
 			if (f.layer[k].n)
 				layers++;
 			for (size_t i = 0; i < f.layer[k].n; i++) {
-				const struct hl_run *r = &f.layer[k].run[i];
+				const struct hl_span *r = &f.layer[k].run[i];
 				double y = (f.v0 + r->y + 0.5 - 10) * PX;
 				double x0 = (f.u0 + r->x0 + 0.5 - 10) * PX, x1 = (f.u0 + r->x1 + 0.5 - 10) * PX;
 				CHECK(y > 15 && y < 15.3 && x0 > 15 && x1 < 15.3);

@@ -15,9 +15,7 @@
 
 #include "engine/core/err.h"
 #include "engine/core/mem.h"
-#include "engine/hollow/hollow_int.h"
-#include "engine/hollow/nlp.h"
-#include "engine/hollow/void.h"
+#include "engine/hollow/opt/opt_int.h"
 
 /* Loop around the rectangle [x0,x1] x [y0,y1] with spacing ~s, CCW. */
 static void rect_loop(struct hl_loop *L, double x0, double y0, double x1, double y1, double s,

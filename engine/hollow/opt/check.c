@@ -1,13 +1,12 @@
 /* check.c - the independent re-evaluation of an optimised void (see
- * nlp.h): loop moments, enclosed volume and the support-free check at the
+ * opt_int.h): loop moments, enclosed volume and the support-free check at the
  * user's alpha.  Kept apart from nlp.c on purpose: it shares no code with
  * the optimiser's constraint evaluation (docs/hollow.md "Solving").
  */
 #include <math.h>
 #include <string.h>
 
-#include "engine/hollow/hollow_int.h"
-#include "engine/hollow/nlp.h"
+#include "engine/hollow/opt/opt_int.h"
 
 void hl_loop_moments(const struct hl_void *v, size_t k, const double *l, double *area,
 		     double *mx, double *my)

@@ -1,8 +1,8 @@
 /* grid.c - pixel-grid helpers of the top-down fill: row runs of masks and
  * the nearest-seed label transform (exact Euclidean distances between
- * pixel centres).  See grid.h; labelling is engine/geom/label.c.
+ * pixel centres).  See fill_int.h; labelling is engine/geom/label.c.
  */
-#include "engine/hollow/grid.h"
+#include "engine/hollow/fill/fill_int.h"
 
 #include <math.h>
 #include <string.h>
@@ -12,7 +12,7 @@
 #include "engine/geom/edt.h"
 
 int hl_grid_runs(const uint8_t *mask, int w, int x0, int y0, int x1, int y1,
-		 struct hl_run **runs, size_t *n, size_t *cap, struct err *e)
+		 struct hl_span **runs, size_t *n, size_t *cap, struct err *e)
 {
 	for (int y = y0; y < y1; y++) {
 		const uint8_t *m = mask + (size_t)y * (size_t)w;
@@ -40,7 +40,7 @@ int hl_grid_runs(const uint8_t *mask, int w, int x0, int y0, int x1, int y1,
 	return 0;
 }
 
-void hl_grid_paint(uint8_t *mask, int w, const struct hl_run *runs, size_t n, uint8_t val)
+void hl_grid_paint(uint8_t *mask, int w, const struct hl_span *runs, size_t n, uint8_t val)
 {
 	for (size_t i = 0; i < n; i++)
 		memset(mask + (size_t)runs[i].y * (size_t)w + runs[i].x0, val,

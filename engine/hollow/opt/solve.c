@@ -24,9 +24,7 @@
 #include "engine/core/err.h"
 #include "engine/core/mem.h"
 #include "engine/core/progress.h"
-#include "engine/hollow/nlp.h"
-#include "engine/hollow/solve.h"
-#include "engine/hollow/start.h"
+#include "engine/hollow/opt/opt_int.h"
 
 /* What a worker sends back before its nv offsets. */
 struct wire_head {

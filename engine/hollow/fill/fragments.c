@@ -21,7 +21,6 @@
  * under it now) or void, and then it is in the same component (linked
  * vertically) and painted too.  Walls only grow.
  */
-#include "engine/hollow/fragments.h"
 
 #include <math.h>
 #include <string.h>
@@ -30,7 +29,7 @@
 #include "engine/core/mem.h"
 #include "engine/geom/path.h"
 #include "engine/geom/raster.h"
-#include "engine/hollow/grid.h"
+#include "engine/hollow/fill/fill_int.h"
 #include "engine/mesh/mesh.h"
 #include "engine/slice/layer.h"
 #include "engine/slice/slice.h"

@@ -20,7 +20,7 @@
 
 #include "engine/core/err.h"
 #include "engine/core/mem.h"
-#include "engine/hollow/hollow_int.h"
+#include "engine/hollow/opt/opt_int.h"
 
 struct strip_in {
 	const double *pa, *pb;

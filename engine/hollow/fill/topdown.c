@@ -5,7 +5,7 @@
  * optimiser (nlp.c) leaves space unhollowed.  Derivation and why it is a
  * deviation from paper 004: docs/hollow.md "Top-down fill".
  */
-#include "engine/hollow/topdown.h"
+#include "engine/hollow/fill/fill_int.h"
 
 #include <math.h>
 #include <stddef.h>
@@ -15,8 +15,6 @@
 #include "engine/core/mem.h"
 #include "engine/core/progress.h"
 #include "engine/geom/edt.h"
-#include "engine/hollow/fillstep.h"
-#include "engine/hollow/rounds.h"
 #include "engine/mesh/mesh.h"
 #include "engine/slice/erode.h"
 #include "engine/slice/slice.h"
@@ -65,7 +63,7 @@ void hl_fill_mass(const struct hl_fill *f, double *vol_mm3, double cxy[2])
 		return;
 	for (int j = 0; j < f->n; j++)
 		for (size_t i = 0; i < f->layer[j].n; i++) {
-			const struct hl_run *q = &f->layer[j].run[i];
+			const struct hl_span *q = &f->layer[j].run[i];
 			double k = (double)(q->x1 - q->x0 + 1), x, y;
 			/* the centre of the run is the mean of its pixel centres */
 			map_inverse(&f->map, f->u0 + 0.5 * (q->x0 + q->x1) + 0.5, f->v0 + q->y + 0.5,
@@ -132,16 +130,10 @@ int hl_fill_region(const struct hl_fill *f, const struct hl_fill_layer *l, struc
 
 /* ---- the offset stack C(k) ---- */
 
-int hl_src_layer(void *ctx, int k, struct paths *region, struct err *e)
-{
-	struct hl_src_ctx *c = ctx;
-
-	return slice_at(c->s, (k + 0.5) * c->layer_mm, region, NULL, e);
-}
-
+/* A mesh's eroded print layers: the eroder and the slicer it pulls from
+ * (both owned). */
 struct eroded {
-	struct slicer *s;
-	struct hl_src_ctx sc;
+	struct slice_mid_source sc;
 	struct slice_eroder *er;
 };
 
@@ -153,12 +145,11 @@ static int eroded_open(struct eroded *x, const struct mesh *m, double r_mm, doub
 	int rc;
 
 	memset(x, 0, sizeof *x);
-	rc = slice_new(m, &x->s, e);
+	rc = slice_new(m, &x->sc.slicer, e);
 	if (rc)
 		return rc;
-	x->sc.s = x->s;
 	x->sc.layer_mm = layer_mm;
-	src.layer = hl_src_layer;
+	src.layer = slice_mid_layer;
 	src.ctx = &x->sc; /* x outlives the eroder */
 	memset(&ep, 0, sizeof ep);
 	ep.r_mm = r_mm;
@@ -175,7 +166,7 @@ static int eroded_open(struct eroded *x, const struct mesh *m, double r_mm, doub
 static void eroded_close(struct eroded *x)
 {
 	slice_erode_free(x->er);
-	slice_free(x->s);
+	slice_free(x->sc.slicer);
 	memset(x, 0, sizeof *x);
 }
 
@@ -183,7 +174,7 @@ static void eroded_close(struct eroded *x)
  * bottom-up (the eroders stream upward): centre-sampled erosions of the
  * part by wall_mm and of solid by wall_next_mm, intersected. */
 static int offset_stack(const struct mesh *part, const struct mesh *solid,
-			const struct hl_config *c, const struct raster_map *gm, int w, int h, int n,
+			const struct hl_fill_params *c, const struct raster_map *gm, int w, int h, int n,
 			struct hl_fill_layer *C, struct err *e)
 {
 	struct eroded ep, es;
@@ -200,9 +191,9 @@ static int offset_stack(const struct mesh *part, const struct mesh *solid,
 	}
 	for (size_t i = 0; i < part->nv; i++)
 		box3_add(&bb, part->v[i]);
-	rc = eroded_open(&ep, part, c->wall_mm, c->pixel_mm, c->print_layer_mm, n, &bb, e);
+	rc = eroded_open(&ep, part, c->wall_mm, c->pixel_mm, c->layer_mm, n, &bb, e);
 	if (!rc && solid)
-		rc = eroded_open(&es, solid, c->wall_next_mm, c->pixel_mm, c->print_layer_mm, n, &bb,
+		rc = eroded_open(&es, solid, c->wall_next_mm, c->pixel_mm, c->layer_mm, n, &bb,
 				 e);
 	for (int k = 0; !rc && k < n; k++) {
 		size_t cap = 0;
@@ -221,10 +212,10 @@ static int offset_stack(const struct mesh *part, const struct mesh *solid,
 			for (int x = 0; x < w; x++) {
 				double px, py;
 				m[x] = a[x] >= 128 && b[x] >= 128;
-				if (!m[x] || !c->fill_keep_set)
+				if (!m[x] || !c->keep_set)
 					continue;
 				map_inverse(gm, x + 0.5, y + 0.5, &px, &py);
-				m[x] = c->fill_keep[0] * px + c->fill_keep[1] * py < c->fill_keep[2];
+				m[x] = c->keep[0] * px + c->keep[1] * py < c->keep[2];
 			}
 		}
 		rc = hl_grid_runs(mask, w, 0, 0, w, h, &C[k].run, &C[k].n, &cap, e);
@@ -241,7 +232,7 @@ out:
 /* ---- components (4-connected in a layer, linked to the void directly
  * above and below: the verifier's void connectivity) ---- */
 
-static uint32_t run_root(struct hl_run **at, uint32_t i)
+static uint32_t run_root(struct hl_span **at, uint32_t i)
 {
 	/* comp holds the union-find parent as a global run index */
 	while (at[i]->comp != i) {
@@ -251,7 +242,7 @@ static uint32_t run_root(struct hl_run **at, uint32_t i)
 	return i;
 }
 
-static void run_union(struct hl_run **at, uint32_t a, uint32_t b)
+static void run_union(struct hl_span **at, uint32_t a, uint32_t b)
 {
 	a = run_root(at, a);
 	b = run_root(at, b);
@@ -261,8 +252,8 @@ static void run_union(struct hl_run **at, uint32_t a, uint32_t b)
 
 /* Link the runs of row list A (sorted by x) with those of B that overlap
  * in x; ia, ib: their global indices. */
-static void link_rows(struct hl_run **at, const struct hl_run *A, size_t na, uint32_t ia,
-		      const struct hl_run *B, size_t nb, uint32_t ib)
+static void link_rows(struct hl_span **at, const struct hl_span *A, size_t na, uint32_t ia,
+		      const struct hl_span *B, size_t nb, uint32_t ib)
 {
 	size_t i = 0, j = 0;
 
@@ -277,7 +268,7 @@ static void link_rows(struct hl_run **at, const struct hl_run *A, size_t na, uin
 }
 
 /* First run of each row y (rs[y], rs[h] = n) of a row-major run list. */
-static void row_starts(const struct hl_run *r, size_t n, int h, size_t *rs)
+static void row_starts(const struct hl_span *r, size_t n, int h, size_t *rs)
 {
 	size_t i = 0;
 
@@ -292,7 +283,7 @@ int hl_fill_components(struct hl_fill *f, double min_mm3, double px_area_mm2, in
 		       struct err *e)
 {
 	size_t total = 0, *rs0 = NULL, *rs1 = NULL;
-	struct hl_run **at = NULL;
+	struct hl_span **at = NULL;
 	double *vol = NULL;
 	uint32_t *off = NULL;
 	int rc = 0;
@@ -400,10 +391,10 @@ int hl_fill_grid(const struct vec3 *pts, size_t nv, const struct raster_map *m, 
 	return 0;
 }
 
-int hl_fill_build(const struct mesh *part, const struct mesh *solid, const struct hl_config *c,
+int hl_fill_build(const struct mesh *part, const struct mesh *solid, const struct hl_fill_params *c,
 		  struct progress *prog, double f0, double f1, struct hl_fill *f, struct err *e)
 {
-	const struct raster_map *m = &c->fill_map;
+	const struct raster_map *m = &c->map;
 	struct hl_fill r;
 	struct hl_fill_layer *C = NULL;
 	struct raster_map gm;
@@ -414,14 +405,14 @@ int hl_fill_build(const struct mesh *part, const struct mesh *solid, const struc
 	float *sig = NULL;
 	int32_t *lastv = NULL; /* per grid pixel: the lowest layer so far where it is void */
 	int px0 = 0, py0 = 0, px1 = 0, py1 = 0, pad, rc = 0, n;
-	double L = c->print_layer_mm;
+	double L = c->layer_mm;
 
 	memset(&r, 0, sizeof r);
 	memset(&s, 0, sizeof s);
 	edt_scratch_init(&s.es);
 	/* only an axis-aligned grid (rotations by quarter turns, mirrors) has
 	 * rows and columns that are lines of the printer frame */
-	if (!c->fill_map_set || !(L > 0) ||
+	if (!(L > 0) ||
 	    !((m->a[0][1] == 0 && m->a[1][0] == 0) || (m->a[0][0] == 0 && m->a[1][1] == 0)))
 		return 0;
 	for (size_t i = 0; i < part->nv; i++)
@@ -445,7 +436,7 @@ int hl_fill_build(const struct mesh *part, const struct mesh *solid, const struc
 	g.mv = (int)ceil(g.wall / L - 1e-9);
 	g.birth = 0.5 * g.wall;
 	g.lone = HL_FILL_LONE_MM;
-	g.lean = c->fill_lean;
+	g.lean = c->lean;
 	g.half = 0.5 * g.wall / cos(c->alpha_rad - c->margin_rad);
 	pad = (int)ceil((g.wall + 2 * g.dg + 2 * g.pmax) / fmin(g.px, g.py)) + 2;
 	gm = *m;

@@ -1,4 +1,6 @@
-/* hollow_int.h - data model shared by the files of the hollow engine.
+/* opt_int.h - internals of the paper's optimiser (engine/hollow/opt/):
+ * the data model and the steps rounds.c chains.  Not for use outside
+ * engine/hollow/opt/ (opt.h is the optimiser's face).
  *
  * Paper 004 (Wang et al., "Support-Free Hollowing", TVCG 2018); the method
  * and every derivation are in docs/hollow.md.  Frame: printer frame, mm,
@@ -8,17 +10,20 @@
  * P -> P'): vertex j moves to v_j + l_j r_j with r_j its inward shifting
  * direction and 0 <= l_j <= ub_j (eq. 1, 7-10).
  */
-#ifndef INFILLD_HOLLOW_INT_H
-#define INFILLD_HOLLOW_INT_H
+#ifndef INFILLD_HOLLOW_OPT_INT_H
+#define INFILLD_HOLLOW_OPT_INT_H
 
 #include <stddef.h>
 #include <stdint.h>
 
+#include "engine/geom/hull.h"
 #include "engine/geom/path.h"
 #include "engine/geom/vec.h"
+#include "engine/hollow/opt/opt.h"
 
 struct err;
 struct mesh_bvh;
+struct progress;
 
 /* One contour at one optimisation slice. */
 struct hl_loop {
@@ -146,5 +151,109 @@ void hl_bounds_smooth(double *ub, size_t n, double *tmp);
 int hl_strip(const double *pa, double za, size_t na, uint32_t ida, const double *pb, double zb,
 	     size_t nb, uint32_t idb, const struct hl_block *block, uint32_t **tri, size_t *nt,
 	     size_t *tcap, struct hl_xedge **xe, size_t *nxe, size_t *xcap, struct err *e);
+
+/* ---- optimisation problem (nlp.c, check.c; sections 4-6, 8.2-8.3) ---- */
+
+struct hl_nlp_opts {
+	double alpha_rad;    /* overhang limit of the constraints (from the vertical) */
+	double h_mm;         /* optimisation layer thickness */
+	double ceil_eps_mm2; /* eq. 6 */
+	int ceiling_literal; /* 1: eq. 6 as a constraint A(top) <= eps; 0 (default):
+				its limit form, the top loop fixed on its poles
+				(docs/hollow.md: the literal form violates
+				constraint qualification at the collapse) */
+	double gate_tau;     /* an edge faces down when n_e . d < -gate_tau */
+	int max_iter;        /* Ipopt iterations per outer round */
+	int max_outer;       /* sign-gating rounds */
+	enum hl_objective objective;
+	/* stability: the solid before these voids and the target region */
+	double vol_mm3;             /* V(M) */
+	double com_xy[2];           /* c(M) projected on the plate (mm) */
+	const struct hull_pt *target; /* convex CCW region the COM must reach */
+	size_t ntarget;
+	double light_weight;        /* weight of the lightweight term (>= 0) */
+	/* time budget: progress_now_s() instant (s) after which no solve goes
+	 * on; Ipopt's max_cpu_time is cut to what is left.  0 = none */
+	double deadline_s;
+	/* cooperative cancellation (inline solves only); may be NULL */
+	int (*cancelled)(void *ctx);
+	void *cancel_ctx;
+};
+
+/* Optimise the voids v[0..n) as one problem.  On success every void has
+ * l (nv offsets, allocated with mem_alloc), iterations, outer and seconds
+ * set; status = 0 when the result passes hl_void_check() at the
+ * constraint angle, else a negative value (the void must not be used).
+ * Returns 0, ERR_NOMEM, ERR_CANCELLED or ERR_INTERNAL (solver setup). */
+int hl_nlp_solve(struct hl_void *v, size_t n, const struct hl_nlp_opts *o, struct err *e);
+
+struct hl_check {
+	double worst_face;    /* max over faces of (sin alpha - n.z ... ) > 0 = violation, radians */
+	double worst_edge_mm; /* max over facing-down cross edges of |d| - h tan alpha */
+	double top_area_mm2;  /* area of the topmost loop after shifting */
+	double max_shift_mm;  /* max over vertices of l - ub (> 0 = bound broken) */
+	double min_shift_mm;  /* min over vertices of l (< 0 = bound broken) */
+};
+
+/* Measure how well offsets l satisfy the paper's constraints at alpha_rad
+ * (independent re-evaluation, used after every solve and by tests). */
+void hl_void_check(const struct hl_void *v, const double *l, double alpha_rad, double h_mm,
+		   double gate_tau, struct hl_check *c);
+
+/* Volume (mm^3) enclosed by void v with offsets l (divergence theorem over
+ * the strip faces and both caps' polygons). */
+double hl_void_volume(const struct hl_void *v, const double *l);
+
+/* Signed area (mm^2) and first moments (mm^3) of loop k with offsets l. */
+void hl_loop_moments(const struct hl_void *v, size_t k, const double *l, double *area,
+		     double *mx, double *my);
+
+/* ---- one round's solves (solve.c) ---- */
+
+
+/* status of a void whose optimum failed its check but whose support-free
+ * starting point passed and was used instead */
+#define HL_STATUS_FALLBACK 1
+/* status of a void not optimised: the time budget (o->deadline_s) was
+ * spent before its turn; it gets the support-free start like a failed one */
+#define HL_STATUS_UNSOLVED (-2000)
+
+/* Optimise v[0..n): lightweight voids each on their own, in up to
+ * `threads` worker processes; stability as one problem.  Every void ends
+ * with status 0 (optimum), HL_STATUS_FALLBACK, or < 0 (drop it); past
+ * o->deadline_s no solve starts and the rest take their start.  prog
+ * (may be NULL) moves from stage fraction f0 to f1 as voids finish and
+ * may cancel.
+ * Returns 0, ERR_NOMEM, ERR_IO (pipe/poll) or ERR_CANCELLED. */
+int hl_solve_round(struct hl_void *v, size_t n, const struct hl_nlp_opts *o, int threads,
+		   struct progress *prog, double f0, double f1, struct err *e);
+
+/* ---- support-free start (start.c, restrip.c) ---- */
+
+/* Fill l (v->nv offsets): v->start when restrip.c made one, else a sweep
+ * top-down: top loop on its poles, every other vertex the smallest offset
+ * within reach_mm of its upper cross-edge neighbours (see start.c).  0 or
+ * ERR_NOMEM. */
+int hl_void_support_start(const struct hl_void *v, double reach_mm, double *l, struct err *e);
+
+/* Rebuild v's strips top-down where its start puts the vertices, and set
+ * v->start (restrip.c; reach_mm as above, block: clearance at offset 0).
+ * A pair of loops with no strip whose cross edges stay within reach ends
+ * the void: it keeps the loops above and *first is the index (in v's
+ * loops before the call) of the lowest kept, else 0.  Returns 0, 1 when
+ * fewer than two loops are left (v unusable), or a negative err_code. */
+int hl_void_restrip(struct hl_void *v, double reach_mm, const struct hl_block *block,
+		    size_t *first, struct err *e);
+
+/* ---- building a void (void.c) ---- */
+
+/* Build a void from loops[0..n) (bottom to top, consecutive slices;
+ * borrowed, copied): shifting directions and bounds per loop (hl_poles),
+ * strips between neighbours (hl_strip).  Strips are built upward until a
+ * pair has no admissible strip; *used = loops taken (>= 1).  Returns 0
+ * with *out replaced, 1 when fewer than two loops could be joined (the
+ * caller continues from loops[*used]), or a negative err_code. */
+int hl_void_build(const struct hl_loop *const *loops, size_t n, const struct hl_block *block,
+		  struct hl_void *out, size_t *used, struct err *e);
 
 #endif

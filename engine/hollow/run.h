@@ -1,21 +1,24 @@
-/* rounds.h - the hollowing pipeline of paper 004 over repeated rounds
- * (rounds.c): uniform offset -> slices -> loops -> groups -> strips ->
- * optimisation -> voids, the solid of one round being the input of the
- * next (section 7.2).  Design: docs/hollow.md.
+/* run.h - the hollow engine's pipeline (run.c): the paper's optimiser
+ * (opt/opt.h) over repeated rounds, then the top-down pixel fill
+ * (fill/fill.h) of what it left, and for the stability objective the
+ * centre-of-mass bookkeeping around both.  Design: docs/hollow.md.
  */
-#ifndef INFILLD_HOLLOW_ROUNDS_H
-#define INFILLD_HOLLOW_ROUNDS_H
+#ifndef INFILLD_HOLLOW_RUN_H
+#define INFILLD_HOLLOW_RUN_H
 
 #include <stddef.h>
 
-#include "engine/geom/hull.h"
-#include "engine/hollow/nlp.h"
-#include "engine/hollow/topdown.h"
+#include "engine/geom/raster.h"
+#include "engine/hollow/fill/fill.h"
+#include "engine/hollow/opt/opt.h"
 
 struct mesh;
 struct progress;
 struct err;
 
+/* What the job asks for (engine/hollow/hollow.c fills it from the job's
+ * parameters); run.c derives the optimiser's and the fill's own
+ * parameters from it. */
 struct hl_config {
 	double wall_mm;        /* first offset t (shell to the outside) */
 	double wall_next_mm;   /* offset of later rounds (walls between voids) */
@@ -27,7 +30,7 @@ struct hl_config {
 	double margin_rad;     /* safety subtracted from alpha in the constraints */
 	double min_void_mm3;
 	int rounds;            /* at most this many rounds */
-	double optimise_s;     /* time budget of the rounds (s, from hl_run's start);
+	double optimise_s;     /* time budget of the rounds (s, from the optimiser's start);
 				* voids not solved in it keep their support-free
 				* start, later rounds do not start; 0 = none */
 	int threads;
@@ -38,27 +41,18 @@ struct hl_config {
 	int fill_lean;         /* fill: walls between voids lean (else they stand) */
 	struct raster_map fill_map; /* printer mm -> pixels of the images the verifier reads */
 	int fill_map_set;      /* fill_map is set (else no fill) */
-	int fill_keep_set;     /* the fill keeps to the half-plane below (hl_run sets it
-				* for stability; callers leave it 0) */
-	double fill_keep[3];   /* pixel centre (x, y) in printer mm may be void only
-				* where keep[0] x + keep[1] y < keep[2] */
 };
 
 struct hl_outcome {
-	struct mesh *mesh;        /* outer surface + void surfaces (owned) */
+	struct mesh *mesh;        /* outer surface + the kept optimised voids' surfaces (owned) */
 	int rounds;               /* rounds whose voids are in the output (0: fill alone kept) */
-	int budget_spent;         /* the optimise_s budget cut the rounds short */
-	size_t voids;             /* optimised (mesh) voids + fill components */
+	size_t voids;             /* voids in the output: optimised + fill components */
 	size_t voids_optimised;   /* of them: made by the optimiser (or its start) */
-	size_t voids_fallback;    /* voids kept at their support-free start */
-	size_t groups_failed;     /* optimised groups dropped (check failed) */
-	size_t groups_small;      /* dropped: below min_void_mm3 */
-	size_t voids_too_close;   /* dropped: within wall_next_mm of a larger void */
-	size_t voids_against_com; /* stability: optimised voids dropped because they
-				   * moved the centre of mass away from the target */
+	size_t voids_fallback;    /* of those: kept at their support-free start */
+	struct hl_opt_stats opt;  /* the optimiser's own record (its voids may have
+				   * been dropped below for the fill alone) */
 	double part_volume_mm3;
-	double void_volume_mm3;
-	double opt_volume_mm3;    /* of the optimised voids (before the choice below) */
+	double void_volume_mm3;   /* of the voids in the output */
 	/* lightweight with the fill: the fill alone's volume (0 when not
 	 * built: no optimised void), the optimised voids and the fill around
 	 * them together, and the optimised voids dropped because the fill
@@ -66,11 +60,8 @@ struct hl_outcome {
 	double fill_alone_mm3;
 	double opt_fill_mm3;
 	size_t voids_dropped_for_fill;
-	struct hl_fill fill;      /* top-down fill (topdown.h); empty when off */
-	double opt_layer_mm;      /* h actually used */
-	double sample_mm;
-	int iterations;           /* Ipopt iterations, all voids and rounds */
-	double s_offset, s_contours, s_groups, s_solve, s_mesh, s_fill; /* seconds */
+	struct hl_fill fill;      /* top-down fill; empty when off */
+	double s_fill;            /* seconds in the fill */
 	char note[256];           /* "" or why nothing was hollowed */
 	/* stability */
 	int has_com;
@@ -90,10 +81,5 @@ void hl_outcome_fini(struct hl_outcome *o);
  * error of the slicer. */
 int hl_run(const struct mesh *part, const struct hl_config *c, struct progress *prog,
 	   struct hl_outcome *o, struct err *e);
-
-/* Volume (mm^3) and centre of mass (mm) of a closed, outward mesh
- * (mesh_mass, divided out; 0 for a mesh of no volume). */
-void hl_mesh_mass(const struct mesh *m, double *vol, double com[3]);
-
 
 #endif

@@ -6,8 +6,7 @@
 
 #include "engine/core/err.h"
 #include "engine/core/mem.h"
-#include "engine/hollow/hollow_int.h"
-#include "engine/hollow/void.h"
+#include "engine/hollow/opt/opt_int.h"
 
 void hl_loop_fini(struct hl_loop *l)
 {

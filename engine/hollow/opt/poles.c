@@ -21,7 +21,7 @@
 #include "engine/core/err.h"
 #include "engine/core/mem.h"
 #include "engine/geom/delaunay.h"
-#include "engine/hollow/hollow_int.h"
+#include "engine/hollow/opt/opt_int.h"
 
 /* Crossing-number point-in-polygon for the loop xy (n vertices). */
 static int inside_loop(const double *xy, size_t n, double x, double y)

@@ -22,7 +22,7 @@
 #include "engine/core/err.h"
 #include "engine/core/mem.h"
 #include "engine/geom/clip.h"
-#include "engine/hollow/hollow_int.h"
+#include "engine/hollow/opt/opt_int.h"
 
 /* Reflex corners sharper than this (turn angle, radians) are kept. */
 #define HL_KEEP_TURN_RAD 0.35

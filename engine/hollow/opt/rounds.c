@@ -17,12 +17,9 @@
  *  5. the kept voids appended to the result mesh, which is S_{r+1}.
  * Stop when a round keeps no void or after `rounds` rounds.
  */
-#include "engine/hollow/rounds.h"
+#include "engine/hollow/opt/opt.h"
 
 #include <math.h>
-#include <pthread.h>
-#include <stdatomic.h>
-#include <stdio.h>
 #include <stdlib.h>
 #include <string.h>
 
@@ -31,21 +28,11 @@
 #include "engine/core/progress.h"
 #include "engine/geom/clip.h"
 #include "engine/geom/polytri.h"
-#include "engine/hollow/hollow_int.h"
-#include "engine/hollow/solve.h"
-#include "engine/hollow/start.h"
-#include "engine/hollow/void.h"
+#include "engine/hollow/opt/opt_int.h"
 #include "engine/mesh/mesh.h"
 #include "engine/slice/erode.h"
 #include "engine/slice/layer.h"
 #include "engine/slice/slice.h"
-
-void hl_outcome_fini(struct hl_outcome *o)
-{
-	mesh_free(o->mesh);
-	hl_fill_fini(&o->fill);
-	memset(o, 0, sizeof *o);
-}
 
 void hl_mesh_mass(const struct mesh *m, double *vol, double com[3])
 {
@@ -168,7 +155,7 @@ out:
 /* ---- one round ---- */
 
 struct round_in {
-	const struct hl_config *c;
+	const struct hl_opt_params *c;
 	const struct mesh *solid; /* S_r */
 	double wall;              /* t_r */
 	int m;                    /* stack layers per optimisation slice */
@@ -251,10 +238,10 @@ static int chain_voids(struct chain_ctx *x, const struct hl_loop **chain, size_t
 	return 0;
 }
 
-static int round_voids(const struct round_in *in, struct hl_outcome *o, struct hl_void **vout,
+static int round_voids(const struct round_in *in, struct hl_opt_stats *o, struct hl_void **vout,
 		       size_t *nvout, struct err *e)
 {
-	const struct hl_config *c = in->c;
+	const struct hl_opt_params *c = in->c;
 	struct slicer *ss = NULL;
 	struct slice_eroder *er = NULL;
 	struct mesh_bvh *bvh = NULL;
@@ -276,8 +263,8 @@ static int round_voids(const struct round_in *in, struct hl_outcome *o, struct h
 		goto out;
 	{
 		struct slice_erode_params ep;
-		struct hl_src_ctx sc = {ss, c->stack_layer_mm};
-		struct slice_erode_source src = {hl_src_layer, &sc};
+		struct slice_mid_source sc = {ss, c->stack_layer_mm};
+		struct slice_erode_source src = {slice_mid_layer, &sc};
 		memset(&ep, 0, sizeof ep);
 		ep.r_mm = in->wall;
 		ep.pixel_mm = c->pixel_mm;
@@ -508,132 +495,90 @@ static int void_centroid(const struct hl_void *v, double cxy[2])
 	return 0;
 }
 
-/* Standing fill: at most this many passes of the half-plane's fixed
- * point, stopping when the centre of mass moved less than the step (mm). */
-#define HL_STAND_PASSES 4
-#define HL_STAND_STEP_MM 0.05
-
-/* (x, y) of the centre of mass of o's part: its mesh (part less the
- * optimised voids) less the fill's void. */
-static struct hull_pt com_after(const struct hl_outcome *o)
+/* Step 5 of one round: its solved voids vv[0..nvv) sorted larger first
+ * (a void too close to a kept one is dropped), failed, small, too-close
+ * and (stability) centre-of-mass-worsening ones dropped, the rest
+ * appended to mesh; *kept counts them.  nlp's stability state (vol_mm3,
+ * com_xy) follows the kept voids.  0, ERR_NOMEM or ERR_LIMIT. */
+static int keep_voids(const struct hl_opt_params *c, struct hl_void *vv, size_t nvv,
+		      struct hl_nlp_opts *nlp, struct mesh *mesh, struct hl_opt_stats *st,
+		      size_t *kept, struct err *e)
 {
-	double vm, cm[3], vf, cf[2];
-	struct hull_pt q;
+	unsigned char *kept_mask;
 
-	hl_mesh_mass(o->mesh, &vm, cm);
-	hl_fill_mass(&o->fill, &vf, cf);
-	q.x = cm[0];
-	q.y = cm[1];
-	if (vf > 0 && vm - vf > 0) {
-		q.x = (vm * cm[0] - vf * cf[0]) / (vm - vf);
-		q.y = (vm * cm[1] - vf * cf[1]) / (vm - vf);
-	}
-	return q;
-}
-
-/* The fill alone (step 9's other candidate) on a helper thread, while the
- * job thread fills around the optimised voids: the two are independent
- * (both read the part and the config only).  The helper has a private
- * progress record whose cancel hook is the flag the job thread raises
- * when its own fill stops (progress.h: helpers never touch the job's). */
-struct alone_job {
-	const struct mesh *part;
-	const struct hl_config *c;
-	struct hl_fill fill;
-	struct progress prog;
-	struct err e;
-	atomic_int stop;
-	int rc;
-};
-
-static int alone_cancelled(void *ctx)
-{
-	return atomic_load(&((struct alone_job *)ctx)->stop);
-}
-
-static void *alone_main(void *arg)
-{
-	struct alone_job *j = arg;
-
-	j->rc = hl_fill_build(j->part, NULL, j->c, &j->prog, 0, 1, &j->fill, &j->e);
-	return NULL;
-}
-
-/* The top-down fill of what the optimiser left (o->mesh holds its voids).
- * Lightweight: everywhere.  Stability (target: the goal region, hull: the
- * contact hull, r: its offset): removing mass at p moves the centre of
- * mass c along c - p, so while c is outside the target the fill keeps to
- * the half-plane behind c, away from the target's closest point q (the
- * raster counterpart of eq. 13-14's gradient); when c already stands, the
- * fill goes everywhere and is redone behind c only if it would tip the
- * part out of the offset hull H_r. */
-static int fill_run(const struct mesh *part, const struct hl_config *c,
-		    const struct hull_pt *target, size_t ntarget, const struct hull_pt *hull,
-		    size_t nhull, double r_mm, struct progress *prog, struct hl_outcome *o,
-		    struct err *e)
-{
-	const struct mesh *solid = o->voids ? o->mesh : NULL;
-	struct hl_config fc = *c;
-	struct hull_pt q = com_after(o), t;
-	int edge, vertex, rc;
-	double d;
-
-	fc.fill_keep_set = 0;
-	if (ntarget < 3)
-		return hl_fill_build(part, solid, &fc, prog, 0.9, 1.0, &o->fill, e);
-	d = hull_closest_mm(target, ntarget, q, &t, &edge, &vertex);
-	if (!(d > 0)) {
-		struct hull_pt *hr = NULL;
-		size_t nhr = 0;
-		rc = hl_fill_build(part, solid, &fc, prog, 0.9, 0.95, &o->fill, e);
-		if (!rc)
-			rc = hull_offset_in(hull, nhull, r_mm, &hr, &nhr, e);
-		if (rc || (nhr >= 3 && hull_signed_distance_mm(hr, nhr, com_after(o)) > 0)) {
-			mem_free(hr);
+	*kept = 0;
+	/* no void: vv may be NULL, which qsort must not see */
+	if (nvv > 1)
+		qsort(vv, nvv, sizeof *vv, cmp_void_volume_desc);
+	kept_mask = mem_calloc(nvv + 1, 1);
+	if (!kept_mask)
+		return ERR_SET(e, ERR_NOMEM, "hollow: out of memory");
+	for (size_t i = 0; i < nvv; i++) {
+		int close = 0, rc;
+		st->iterations += vv[i].iterations;
+		if (vv[i].status < 0) {
+			st->groups_failed++;
+			continue;
+		}
+		if (vv[i].volume_mm3 < c->min_void_mm3) {
+			st->groups_small++;
+			continue;
+		}
+		for (size_t j = 0; j < i && !close; j++)
+			close = kept_mask[j] && voids_too_close(&vv[i], &vv[j], c->wall_next_mm);
+		if (close) {
+			st->voids_too_close++;
+			continue;
+		}
+		/* stability: a void (solved jointly, or a fallback start) is kept
+		 * only if it does not move the centre of mass away from the
+		 * target (distance to it, 0 inside) */
+		if (nlp->objective == HL_OBJ_STABILITY) {
+			double p[2], vn = nlp->vol_mm3 - vv[i].volume_mm3, d0, d1;
+			struct hull_pt q0 = {nlp->com_xy[0], nlp->com_xy[1]}, q1, t;
+			int edge, vertex;
+			if (void_centroid(&vv[i], p) || !(vn > 0)) {
+				st->voids_against_com++;
+				continue;
+			}
+			q1.x = (nlp->vol_mm3 * q0.x - vv[i].volume_mm3 * p[0]) / vn;
+			q1.y = (nlp->vol_mm3 * q0.y - vv[i].volume_mm3 * p[1]) / vn;
+			d0 = hull_closest_mm(c->target, c->ntarget, q0, &t, &edge, &vertex);
+			d1 = hull_closest_mm(c->target, c->ntarget, q1, &t, &edge, &vertex);
+			if (d1 > d0 + 1e-9) {
+				st->voids_against_com++;
+				continue;
+			}
+			nlp->vol_mm3 = vn;
+			nlp->com_xy[0] = q1.x;
+			nlp->com_xy[1] = q1.y;
+		}
+		rc = append_void(mesh, &vv[i], e);
+		if (rc) {
+			mem_free(kept_mask);
 			return rc;
 		}
-		mem_free(hr);
-		hl_fill_fini(&o->fill);
-		/* behind c, away from the target's inscribed centre */
-		hull_inradius_mm(target, ntarget, &t);
-		d = hypot(t.x - q.x, t.y - q.y);
-		if (!(d > 0))
-			return 0;
+		st->voids_fallback += vv[i].status == HL_STATUS_FALLBACK;
+		st->volume_mm3 += vv[i].volume_mm3;
+		kept_mask[i] = 1;
+		(*kept)++;
 	}
-	/* c moves along n as the fill removes mass behind it, and then more
-	 * mass lies behind it: the half-plane follows c (a fixed point) */
-	fc.fill_keep_set = 1;
-	fc.fill_keep[0] = (t.x - q.x) / d;
-	fc.fill_keep[1] = (t.y - q.y) / d;
-	for (int it = 0; it < HL_STAND_PASSES; it++) {
-		double shift;
-		fc.fill_keep[2] = fc.fill_keep[0] * q.x + fc.fill_keep[1] * q.y;
-		rc = hl_fill_build(part, solid, &fc, prog, 0.95, 1.0, &o->fill, e);
-		if (rc)
-			return rc;
-		t = com_after(o);
-		shift = fc.fill_keep[0] * (t.x - q.x) + fc.fill_keep[1] * (t.y - q.y);
-		q = t;
-		if (!(shift > HL_STAND_STEP_MM) || !(hull_closest_mm(target, ntarget, q, &t, &edge,
-								      &vertex) > 0))
-			break;
-	}
+	mem_free(kept_mask);
 	return 0;
 }
 
-int hl_run(const struct mesh *part, const struct hl_config *c, struct progress *prog,
-	   struct hl_outcome *o, struct err *e)
+int hl_opt_run(const struct mesh *part, const struct hl_opt_params *c, struct progress *prog,
+	       struct mesh **out, struct hl_opt_stats *st, struct err *e)
 {
-	struct hl_outcome res;
 	struct hl_nlp_opts nlp;
 	struct paths *base = NULL;
-	struct hull_pt *hull = NULL, *target = NULL;
-	size_t nhull = 0, ntarget = 0;
+	struct mesh *res = NULL;
 	struct box3 bb = box3_empty();
-	double com[3];
+	int stab = c->objective == HL_OBJ_STABILITY && c->target && c->ntarget >= 3;
 	int rc = 0, m, stack_count, nslices;
 
-	memset(&res, 0, sizeof res);
+	*out = NULL;
+	memset(st, 0, sizeof *st);
 	for (size_t i = 0; i < part->nv; i++)
 		box3_add(&bb, part->v[i]);
 	m = (int)lround(c->opt_layer_mm / c->stack_layer_mm);
@@ -644,45 +589,25 @@ int hl_run(const struct mesh *part, const struct hl_config *c, struct progress *
 		return ERR_SET(e, ERR_LIMIT, "hollow: %.2f mm at %g mm stack layers is too many layers",
 			       bb.hi.z, c->stack_layer_mm);
 	nslices = (stack_count - 1 - m / 2) / m + 1;
-	res.opt_layer_mm = m * c->stack_layer_mm;
-	res.sample_mm = c->sample_mm;
-	res.mesh = mesh_clone(part);
-	if (!res.mesh)
+	st->opt_layer_mm = m * c->stack_layer_mm;
+	st->sample_mm = c->sample_mm;
+	res = mesh_clone(part);
+	if (!res)
 		return ERR_SET(e, ERR_NOMEM, "hollow: out of memory copying the part");
-	hl_mesh_mass(part, &res.part_volume_mm3, com);
 
 	memset(&nlp, 0, sizeof nlp);
 	nlp.alpha_rad = c->alpha_rad - c->margin_rad;
-	nlp.h_mm = res.opt_layer_mm;
+	nlp.h_mm = st->opt_layer_mm;
 	nlp.ceil_eps_mm2 = 1e-5;
 	nlp.gate_tau = 1e-3;
 	nlp.max_iter = 400;
 	nlp.max_outer = 4;
 	nlp.deadline_s = c->optimise_s > 0 ? progress_now_s() + c->optimise_s : 0;
-	nlp.objective = c->objective;
+	nlp.objective = stab ? HL_OBJ_STABILITY : HL_OBJ_LIGHTWEIGHT;
 	nlp.light_weight = c->light_weight;
-	if (c->objective == HL_OBJ_STABILITY) {
-		double rho;
-		struct hull_pt q = {com[0], com[1]};
-		rc = slice_contact_hull(part, c->print_layer_mm, &hull, &nhull, e);
-		if (rc)
-			goto out;
-		if (nhull < 3) {
-			snprintf(res.note, sizeof res.note, "no contact area found on the first layer");
-		} else {
-			rho = hull_inradius_mm(hull, nhull, NULL);
-			res.has_com = 1;
-			res.hull_offset_mm = 0.5 * rho;
-			res.com_before_mm = hull_signed_distance_mm(hull, nhull, q);
-			res.stands_before = res.com_before_mm > 0;
-			/* target: H_r shrunk by another 10 % of r, so the optimum (on
-			 * the target's boundary) lies strictly inside H_r */
-			rc = hull_offset_in(hull, nhull, 0.55 * rho, &target, &ntarget, e);
-			if (rc)
-				goto out;
-			nlp.target = target;
-			nlp.ntarget = ntarget;
-		}
+	if (stab) {
+		nlp.target = c->target;
+		nlp.ntarget = c->ntarget;
 	}
 	base = mem_calloc((size_t)nslices + 1, sizeof *base);
 	if (!base) {
@@ -692,15 +617,14 @@ int hl_run(const struct mesh *part, const struct hl_config *c, struct progress *
 	for (int k = 0; k < nslices; k++)
 		paths_init(&base[k]);
 	for (int r = 1; r <= c->rounds; r++) {
-		struct round_in in = {c, res.mesh, r == 1 ? c->wall_mm : c->wall_next_mm, m, nslices,
+		struct round_in in = {c, res, r == 1 ? c->wall_mm : c->wall_next_mm, m, nslices,
 				      stack_count, r == 1 ? NULL : base, r == 1 ? base : NULL, &nlp};
 		struct hl_void *vv = NULL;
 		size_t nvv = 0, kept = 0;
-		unsigned char *kept_mask = NULL;
 		double f0 = (double)(r - 1) / c->rounds, f1 = (double)r / c->rounds, t0;
 
 		if (nlp.deadline_s > 0 && progress_now_s() >= nlp.deadline_s) {
-			res.budget_spent = 1;
+			st->budget_spent = 1;
 			break;
 		}
 		if (prog) {
@@ -708,219 +632,39 @@ int hl_run(const struct mesh *part, const struct hl_config *c, struct progress *
 			if (rc)
 				goto out;
 		}
-		rc = round_voids(&in, &res, &vv, &nvv, e);
+		rc = round_voids(&in, st, &vv, &nvv, e);
 		if (rc)
 			goto out;
-		if (c->objective == HL_OBJ_STABILITY && ntarget >= 3) {
+		if (stab) {
 			double vs, cs[3];
-			hl_mesh_mass(res.mesh, &vs, cs);
+			hl_mesh_mass(res, &vs, cs);
 			nlp.vol_mm3 = vs;
 			nlp.com_xy[0] = cs[0];
 			nlp.com_xy[1] = cs[1];
-		} else {
-			nlp.objective = HL_OBJ_LIGHTWEIGHT;
 		}
 		t0 = progress_now_s();
 		rc = hl_solve_round(vv, nvv, &nlp, c->threads, prog, f0 + 0.2 * (f1 - f0), f1, e);
-		res.s_solve += progress_now_s() - t0;
-		res.budget_spent |= nlp.deadline_s > 0 && progress_now_s() >= nlp.deadline_s;
-		if (rc) {
-			voids_fini(vv, nvv);
-			goto out;
+		st->s_solve += progress_now_s() - t0;
+		st->budget_spent |= nlp.deadline_s > 0 && progress_now_s() >= nlp.deadline_s;
+		if (!rc) {
+			t0 = progress_now_s();
+			rc = keep_voids(c, vv, nvv, &nlp, res, st, &kept, e);
+			st->s_mesh += progress_now_s() - t0;
 		}
-		t0 = progress_now_s();
-		/* larger voids first: a void too close to a kept one is dropped
-		 * (no void: vv may be NULL, which qsort must not see) */
-		if (nvv > 1)
-			qsort(vv, nvv, sizeof *vv, cmp_void_volume_desc);
-		kept_mask = mem_calloc(nvv + 1, 1);
-		if (!kept_mask) {
-			voids_fini(vv, nvv);
-			rc = ERR_SET(e, ERR_NOMEM, "hollow: out of memory");
-			goto out;
-		}
-		for (size_t i = 0; i < nvv; i++) {
-			res.iterations += vv[i].iterations;
-			if (vv[i].status < 0) {
-				res.groups_failed++;
-				continue;
-			}
-			if (vv[i].volume_mm3 < c->min_void_mm3) {
-				res.groups_small++;
-				continue;
-			}
-			{
-				int close = 0;
-				for (size_t j = 0; j < i && !close; j++)
-					close = kept_mask[j] &&
-						voids_too_close(&vv[i], &vv[j], c->wall_next_mm);
-				if (close) {
-					res.voids_too_close++;
-					continue;
-				}
-			}
-			/* stability: a void (solved jointly, or a fallback start) is
-			 * kept only if it does not move the centre of mass away from
-			 * the target (distance to it, 0 inside) */
-			if (nlp.objective == HL_OBJ_STABILITY) {
-				double p[2], vn = nlp.vol_mm3 - vv[i].volume_mm3, d0, d1;
-				struct hull_pt q0 = {nlp.com_xy[0], nlp.com_xy[1]}, q1, t;
-				int edge, vertex;
-				if (void_centroid(&vv[i], p) || !(vn > 0)) {
-					res.voids_against_com++;
-					continue;
-				}
-				q1.x = (nlp.vol_mm3 * q0.x - vv[i].volume_mm3 * p[0]) / vn;
-				q1.y = (nlp.vol_mm3 * q0.y - vv[i].volume_mm3 * p[1]) / vn;
-				d0 = hull_closest_mm(target, ntarget, q0, &t, &edge, &vertex);
-				d1 = hull_closest_mm(target, ntarget, q1, &t, &edge, &vertex);
-				if (d1 > d0 + 1e-9) {
-					res.voids_against_com++;
-					continue;
-				}
-				nlp.vol_mm3 = vn;
-				nlp.com_xy[0] = q1.x;
-				nlp.com_xy[1] = q1.y;
-			}
-			rc = append_void(res.mesh, &vv[i], e);
-			if (rc) {
-				voids_fini(vv, nvv);
-				mem_free(kept_mask);
-				goto out;
-			}
-			res.voids_fallback += vv[i].status == HL_STATUS_FALLBACK;
-			res.void_volume_mm3 += vv[i].volume_mm3;
-			kept_mask[i] = 1;
-			kept++;
-		}
-		mem_free(kept_mask);
-		kept_mask = NULL;
-		res.s_mesh += progress_now_s() - t0;
 		voids_fini(vv, nvv);
+		if (rc)
+			goto out;
 		if (!kept)
 			break;
-		res.voids += kept;
-		res.rounds = r;
+		st->voids += kept;
+		st->rounds = r;
 	}
-	res.voids_optimised = res.voids;
-	res.opt_volume_mm3 = res.void_volume_mm3;
-	if (c->fill && (c->objective == HL_OBJ_LIGHTWEIGHT || ntarget >= 3)) {
-		double t0 = progress_now_s();
-		int both = res.voids_optimised > 0 && c->objective == HL_OBJ_LIGHTWEIGHT;
-		struct alone_job *aj = NULL;
-		pthread_t th;
-		if (both && c->threads >= 2 && (aj = mem_calloc(1, sizeof *aj)) != NULL) {
-			struct progress_hooks hk = {NULL, alone_cancelled, aj};
-			aj->part = part;
-			aj->c = c;
-			err_clear(&aj->e);
-			atomic_init(&aj->stop, 0);
-			progress_init(&aj->prog, &hk);
-			if (pthread_create(&th, NULL, alone_main, aj) != 0) {
-				mem_free(aj); /* no thread: the fill alone runs after, here */
-				aj = NULL;
-			}
-		}
-		rc = fill_run(part, c, target, ntarget, hull, nhull, res.hull_offset_mm, prog, &res, e);
-		if (aj) {
-			if (rc)
-				atomic_store(&aj->stop, 1);
-			pthread_join(th, NULL);
-			if (!rc && aj->rc) {
-				*e = aj->e;
-				rc = aj->rc;
-			}
-			if (rc)
-				hl_fill_fini(&aj->fill);
-		}
-		if (rc) {
-			mem_free(aj);
-			goto out;
-		}
-		res.voids += res.fill.voids;
-		res.void_volume_mm3 += res.fill.volume_mm3;
-		/* lightweight: the fill keeps wall_next_mm from the optimised
-		 * voids, and where they are smaller than what the fill alone
-		 * would carve there the pair hollows less; keep the larger */
-		if (!rc && res.voids_optimised > 0 && c->objective == HL_OBJ_LIGHTWEIGHT) {
-			struct hl_fill alone;
-			if (aj) {
-				alone = aj->fill;
-				mem_free(aj);
-				aj = NULL;
-			} else {
-				memset(&alone, 0, sizeof alone);
-				rc = hl_fill_build(part, NULL, c, prog, 0.95, 1.0, &alone, e);
-				if (rc)
-					goto out;
-			}
-			res.fill_alone_mm3 = alone.volume_mm3;
-			res.opt_fill_mm3 = res.void_volume_mm3;
-			if (alone.volume_mm3 > res.void_volume_mm3) {
-				struct mesh *pm = mesh_clone(part);
-				if (!pm) {
-					hl_fill_fini(&alone);
-					rc = ERR_SET(e, ERR_NOMEM, "hollow: out of memory");
-					goto out;
-				}
-				mesh_free(res.mesh);
-				res.mesh = pm;
-				hl_fill_fini(&res.fill);
-				res.fill = alone;
-				res.voids_dropped_for_fill = res.voids_optimised;
-				res.rounds = 0; /* no optimised round is in the output */
-				res.voids = alone.voids;
-				res.voids_optimised = res.voids_fallback = 0;
-				res.void_volume_mm3 = alone.volume_mm3;
-			} else {
-				hl_fill_fini(&alone);
-			}
-		}
-		if (aj) { /* not taken above (cannot happen: same condition) */
-			hl_fill_fini(&aj->fill);
-			mem_free(aj);
-		}
-		res.s_fill = progress_now_s() - t0;
-	}
-	if (!res.voids && !res.note[0] && c->fill_map_set && c->rounds == 0) {
-		/* the pixel fill alone: its pixels are whole squares, so with
-		 * a reach under one pixel no solid pixel may hang over a void */
-		const struct raster_map *fm = &c->fill_map;
-		double pitch = 1 / sqrt(fabs(fm->a[0][0] * fm->a[1][1] - fm->a[0][1] * fm->a[1][0]));
-		double reach = c->print_layer_mm * tan(c->alpha_rad);
-		if (reach < pitch)
-			snprintf(res.note, sizeof res.note,
-				 "no support-free void: at this alpha a layer may overhang %.3f mm, less "
-				 "than the %.3f mm pixel, and the pixel fill cannot hang a pixel over a "
-				 "void; the optimiser's voids (rounds > 0) or a larger alpha can hollow it",
-				 reach, pitch);
-	}
-	if (!res.voids && !res.note[0])
-		snprintf(res.note, sizeof res.note,
-			 "too thin to hollow: no support-free void of at least %g mm3 fits inside a "
-			 "%g mm wall; the part is returned unchanged",
-			 c->min_void_mm3, c->wall_mm);
-	if (res.has_com) {
-		struct hull_pt q = com_after(&res);
-		res.com_after_mm = hull_signed_distance_mm(hull, nhull, q);
-		{
-			struct hull_pt *hr = NULL;
-			size_t nhr = 0;
-			rc = hull_offset_in(hull, nhull, res.hull_offset_mm, &hr, &nhr, e);
-			if (rc)
-				goto out;
-			res.com_inside = nhr >= 3 && hull_signed_distance_mm(hr, nhr, q) > 0;
-			mem_free(hr);
-		}
-	}
-	*o = res;
-	memset(&res, 0, sizeof res);
+	*out = res;
+	res = NULL;
 out:
-	hl_outcome_fini(&res);
+	mesh_free(res);
 	for (int k = 0; base && k < nslices; k++)
 		paths_fini(&base[k]);
 	mem_free(base);
-	mem_free(hull);
-	mem_free(target);
 	return rc;
 }

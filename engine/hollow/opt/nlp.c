@@ -1,4 +1,4 @@
-/* nlp.c - Ipopt problem of the support-free hollowing (see nlp.h).
+/* nlp.c - Ipopt problem of the support-free hollowing (see opt_int.h).
  *
  * Derivatives are exact and sparse (docs/hollow.md, "Derivatives"):
  *  - a face with corners p_a, p_b, p_c, p_i = (v_i + l_i r_i, z_i), has the
@@ -16,7 +16,7 @@
  * Hessian sparse: the objective's Hessian is 3 x 3 and each definition
  * constraint has the per-loop sparsity of the areas.
  */
-#include "engine/hollow/nlp.h"
+#include "engine/hollow/opt/opt_int.h"
 
 #include <math.h>
 #include <pthread.h>
@@ -28,7 +28,6 @@
 #include "engine/core/err.h"
 #include "engine/core/mem.h"
 #include "engine/core/progress.h"
-#include "engine/hollow/start.h"
 
 /* MUMPS (Ipopt's only linear solver here) is not thread-safe: solves in
  * this process are serialised; parallelism comes from worker processes

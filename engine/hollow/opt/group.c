@@ -17,7 +17,7 @@
 
 #include "engine/core/err.h"
 #include "engine/core/mem.h"
-#include "engine/hollow/hollow_int.h"
+#include "engine/hollow/opt/opt_int.h"
 
 static void loop_box(const struct hl_loop *l, double b[4])
 {

@@ -16,8 +16,7 @@
 
 #include "engine/core/err.h"
 #include "engine/core/mem.h"
-#include "engine/hollow/hollow_int.h"
-#include "engine/hollow/start.h"
+#include "engine/hollow/opt/opt_int.h"
 
 /* Interval of t with |w + t r| <= D (r unit); 0 if empty. */
 static int ray_disc(double wx, double wy, double rx, double ry, double D, double *t0, double *t1)

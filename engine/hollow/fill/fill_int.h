@@ -1,18 +1,43 @@
-/* fillstep.h - the per-layer steps of the top-down fill (fillstep.c):
- * from the void of print layer k + 1, the void of layer k on a window of
- * the fill's pixel grid.  topdown.c drives them layer by layer, top-down.
- * Rules and measurements: docs/hollow.md "Top-down fill".  Internal to
- * engine/hollow.
+/* fill_int.h - internals of the top-down fill (engine/hollow/fill/): the
+ * pixel-grid helpers (grid.c: row runs of masks, the nearest-seed label
+ * transform on the exact Euclidean feature transform of geom/edt.h) and
+ * the per-layer steps (fillstep.c, fillwall.c) that make the void of
+ * print layer k from that of layer k + 1 on a window of the fill's grid;
+ * topdown.c drives them top-down.  Rules and measurements: docs/hollow.md
+ * "Top-down fill".  Not for use outside engine/hollow/fill/.
  */
-#ifndef INFILLD_HOLLOW_FILLSTEP_H
-#define INFILLD_HOLLOW_FILLSTEP_H
+#ifndef INFILLD_HOLLOW_FILL_INT_H
+#define INFILLD_HOLLOW_FILL_INT_H
 
 #include <stddef.h>
 #include <stdint.h>
 
 #include "engine/geom/edt.h"
+#include "engine/hollow/fill/fill.h"
 
 struct err;
+
+/* ---- pixel grids (grid.c) ---- */
+
+/* The set pixels of mask (w x h, row stride w, nonzero = set) restricted
+ * to columns [x0, x1) and rows [y0, y1), as runs in row-major order,
+ * appended to *runs (*n, *cap: mem_grow array).  0 or ERR_NOMEM. */
+int hl_grid_runs(const uint8_t *mask, int w, int x0, int y0, int x1, int y1,
+		 struct hl_span **runs, size_t *n, size_t *cap, struct err *e);
+
+/* Set mask[y * w + x] = val for every pixel of runs[0..n). */
+void hl_grid_paint(uint8_t *mask, int w, const struct hl_span *runs, size_t n, uint8_t val);
+
+/* Nearest-seed transform on a w x h window (row stride w): for every
+ * pixel, d2 = squared distance (mm^2, pitches px_mm along x, py_mm along
+ * y) between pixel centres to the nearest pixel with lab != 0, and
+ * near = that pixel's lab (0 and INFINITY without seeds).  O(w h).
+ * Scratch is allocated per call (edt_nearest_sq does the work).  0 or
+ * ERR_NOMEM. */
+int hl_grid_nearest(const int32_t *lab, int w, int h, double px_mm, double py_mm, float *d2,
+		    int32_t *near, struct err *e);
+
+/* ---- the per-layer steps (fillstep.c, fillwall.c) ---- */
 
 /* Beside a void of its region of C, a new void needs wall + dg + this
  * much (mm) of room: each void costs walls of wall_next down to its

@@ -1,9 +1,9 @@
-/* fillstep.c - the per-layer steps of the top-down fill (fillstep.h):
+/* fillstep.c - the per-layer steps of the top-down fill (fill_int.h):
  * growth with receding fins, keep-apart, vertical walls, births on
  * ridges, islands.  Pixel sets on one window; the rule and why each step
  * keeps it: docs/hollow.md "Top-down fill".
  */
-#include "engine/hollow/fillstep.h"
+#include "engine/hollow/fill/fill_int.h"
 
 #include <math.h>
 #include <stddef.h>
@@ -12,7 +12,6 @@
 #include "engine/core/err.h"
 #include "engine/core/mem.h"
 #include "engine/geom/label.h"
-#include "engine/hollow/grid.h"
 
 void hl_win_fini(struct hl_win *s)
 {

@@ -1,10 +1,10 @@
 /* fillwall.c - leaning walls between the top-down fill's voids
- * (`lean_walls`, on by default; fillstep.h, docs/hollow.md "Top-down
+ * (`lean_walls`, on by default; fill_int.h, docs/hollow.md "Top-down
  * fill"): keep-apart that moves the wall between two voids towards the
  * smaller one by dd per layer, and the pruning of the pixels such a
  * moving wall would leave behind.
  */
-#include "engine/hollow/fillstep.h"
+#include "engine/hollow/fill/fill_int.h"
 
 #include <math.h>
 #include <stddef.h>
@@ -13,7 +13,6 @@
 #include "engine/core/err.h"
 #include "engine/core/mem.h"
 #include "engine/geom/label.h"
-#include "engine/hollow/grid.h"
 
 /*
  * Keep the voids apart, leaning (on s->v, given V(k + 1) = s->vw).  Each

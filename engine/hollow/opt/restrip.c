@@ -41,8 +41,7 @@
 
 #include "engine/core/err.h"
 #include "engine/core/mem.h"
-#include "engine/hollow/hollow_int.h"
-#include "engine/hollow/start.h"
+#include "engine/hollow/opt/opt_int.h"
 
 /* Offsets t with |w + t r| <= D (r unit): [t0, t1]; 0 if none. */
 static int ray_disc(double wx, double wy, double rx, double ry, double D, double *t0, double *t1)

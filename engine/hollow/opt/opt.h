@@ -1,0 +1,75 @@
+/* opt.h - the optimiser of paper 004 (engine/hollow/opt/): repeated rounds
+ * of uniform offset -> optimisation slices -> loops -> groups -> strips ->
+ * support-free offset optimisation -> voids, the solid of one round the
+ * input of the next (sections 3-8 and 7.2).  The hollow engine's
+ * orchestration (engine/hollow/run.c) runs it before the pixel fill
+ * (engine/hollow/fill/fill.h).  Design: docs/hollow.md "Pipeline".
+ * Frame: printer frame, mm, z up.
+ */
+#ifndef INFILLD_HOLLOW_OPT_H
+#define INFILLD_HOLLOW_OPT_H
+
+#include <stddef.h>
+
+struct mesh;
+struct progress;
+struct err;
+struct hull_pt;
+
+enum hl_objective { HL_OBJ_LIGHTWEIGHT = 0, HL_OBJ_STABILITY = 1 };
+
+struct hl_opt_params {
+	double wall_mm;        /* offset t of round 1 (shell to the outside) */
+	double wall_next_mm;   /* offset of later rounds (walls between voids) */
+	double opt_layer_mm;   /* h of the optimisation (snapped to the stack) */
+	double stack_layer_mm; /* layer height of the eroded stack */
+	double pixel_mm;       /* erosion grid pitch */
+	double sample_mm;      /* loop sampling step s */
+	double alpha_rad;      /* overhang limit, from the vertical */
+	double margin_rad;     /* safety subtracted from alpha in the constraints */
+	double min_void_mm3;   /* smaller voids are dropped */
+	int rounds;            /* at most this many rounds (0: none, the part copied) */
+	double optimise_s;     /* time budget (s, from hl_opt_run's start): voids not
+				* solved in it keep their support-free start, later
+				* rounds do not start; 0 = none */
+	int threads;           /* solver processes */
+	enum hl_objective objective;
+	double light_weight;   /* stability: weight of the lightweight term */
+	/* stability: the convex counter-clockwise region (printer mm) the
+	 * centre of mass must reach (borrowed); fewer than 3 points: the
+	 * voids are optimised for weight alone */
+	const struct hull_pt *target;
+	size_t ntarget;
+};
+
+struct hl_opt_stats {
+	int rounds;               /* rounds whose voids were kept */
+	int budget_spent;         /* optimise_s cut the rounds short */
+	size_t voids;             /* kept (optimised, or at their support-free start) */
+	size_t voids_fallback;    /* of them: kept at their support-free start */
+	size_t groups_failed;     /* optimised groups dropped (check failed) */
+	size_t groups_small;      /* dropped: below min_void_mm3 */
+	size_t voids_too_close;   /* dropped: within wall_next_mm of a larger void */
+	size_t voids_against_com; /* stability: dropped because they moved the centre
+				   * of mass away from the target */
+	double volume_mm3;        /* of the kept voids */
+	double opt_layer_mm;      /* h actually used (a whole number of stack layers) */
+	double sample_mm;
+	int iterations;           /* Ipopt iterations, all voids and rounds */
+	double s_offset, s_groups, s_solve, s_mesh; /* seconds */
+};
+
+/* Hollow the placed, closed mesh part with the optimiser.  *out (a new
+ * mesh, caller frees) is the part's surface followed by the kept voids'
+ * surfaces (turned inward); the part copied when nothing was kept.  *st
+ * is overwritten.  prog (may be NULL) moves from 0 to 1 over the rounds
+ * and can cancel.  Returns 0, ERR_NOMEM, ERR_CANCELLED, ERR_LIMIT (too
+ * many layers, grid too large) or an error of the slicer (*out NULL). */
+int hl_opt_run(const struct mesh *part, const struct hl_opt_params *p, struct progress *prog,
+	       struct mesh **out, struct hl_opt_stats *st, struct err *e);
+
+/* Volume (mm^3) and centre of mass (mm) of a closed, outward mesh
+ * (mesh_mass, divided out; 0 for a mesh of no volume). */
+void hl_mesh_mass(const struct mesh *m, double *vol, double com[3]);
+
+#endif
