@@ -260,26 +260,28 @@ static int hollow_prepare(const struct engine_ctx *ctx, const void *params, void
 	s->antialias = ctx->printer && ctx->printer->kind == PRINTER_RESIN ? ctx->printer->resin.antialias : 1;
 	s->objective = p->objective;
 	c = &s->cfg;
-	c->wall_mm = ctx->common->shell_mm > 0 ? ctx->common->shell_mm : p->wall_mm;
-	c->wall_next_mm = p->wall_next_mm;
-	c->stack_layer_mm = p->stack_layer_mm > 0 ? p->stack_layer_mm : fmin(ctx->layer_mm, 0.1);
-	c->opt_layer_mm = fmax(p->opt_layer_mm, c->stack_layer_mm);
-	c->pixel_mm = p->pixel_mm > 0 ? p->pixel_mm
-		      : ctx->map     ? sqrt(raster_map_pixel_area_mm2(ctx->map))
-				     : HOLLOW_VERIFY_PIXEL_MM;
-	c->alpha_rad = s->alpha_deg * M_PI / 180;
-	c->margin_rad = p->margin_deg * M_PI / 180;
-	if (c->margin_rad >= 0.5 * c->alpha_rad)
-		c->margin_rad = 0.5 * c->alpha_rad;
-	h = lround(c->opt_layer_mm / c->stack_layer_mm) * c->stack_layer_mm;
-	c->sample_mm = p->sample_mm > 0 ? p->sample_mm
-					: fmin(0.5, fmax(0.1, 0.5 * h * tan(c->alpha_rad - c->margin_rad)));
-	c->min_void_mm3 = p->min_void_mm3;
-	c->rounds = p->rounds;
-	c->optimise_s = p->optimise_s;
-	c->threads = ctx->threads > 0 ? ctx->threads : 1;
-	c->objective = p->objective == 1 ? HL_OBJ_STABILITY : HL_OBJ_LIGHTWEIGHT;
-	c->light_weight = HOLLOW_LIGHT_WEIGHT;
+	c->opt.wall_mm = ctx->common->shell_mm > 0 ? ctx->common->shell_mm : p->wall_mm;
+	c->opt.wall_next_mm = p->wall_next_mm;
+	c->opt.stack_layer_mm = p->stack_layer_mm > 0 ? p->stack_layer_mm : fmin(ctx->layer_mm, 0.1);
+	c->opt.opt_layer_mm = fmax(p->opt_layer_mm, c->opt.stack_layer_mm);
+	c->opt.pixel_mm = p->pixel_mm > 0 ? p->pixel_mm
+			  : ctx->map     ? sqrt(raster_map_pixel_area_mm2(ctx->map))
+					 : HOLLOW_VERIFY_PIXEL_MM;
+	c->opt.alpha_rad = s->alpha_deg * M_PI / 180;
+	c->opt.margin_rad = p->margin_deg * M_PI / 180;
+	if (c->opt.margin_rad >= 0.5 * c->opt.alpha_rad)
+		c->opt.margin_rad = 0.5 * c->opt.alpha_rad;
+	h = lround(c->opt.opt_layer_mm / c->opt.stack_layer_mm) * c->opt.stack_layer_mm;
+	c->opt.sample_mm =
+		p->sample_mm > 0
+			? p->sample_mm
+			: fmin(0.5, fmax(0.1, 0.5 * h * tan(c->opt.alpha_rad - c->opt.margin_rad)));
+	c->opt.min_void_mm3 = p->min_void_mm3;
+	c->opt.rounds = p->rounds;
+	c->opt.optimise_s = p->optimise_s;
+	c->opt.threads = ctx->threads > 0 ? ctx->threads : 1;
+	c->opt.objective = p->objective == 1 ? HL_OBJ_STABILITY : HL_OBJ_LIGHTWEIGHT;
+	c->opt.light_weight = HOLLOW_LIGHT_WEIGHT;
 	c->print_layer_mm = ctx->layer_mm;
 	/* the fill lives in the layers; a mesh output carries its pixels as
 	 * stepped void surfaces (hmesh.h) */
@@ -312,7 +314,7 @@ static int hollow_prepare(const struct engine_ctx *ctx, const void *params, void
 	if (!rc && s->out.voids_optimised > 0)
 		rc = hl_fragments_find(s->out.mesh, ctx->mesh->nv, ctx->mesh->nt,
 				       s->map ? s->map : &s->own_map, s->map ? s->antialias : 1,
-				       VERIFY_THRESHOLD, s->layer_mm, c->min_void_mm3, &s->frag, e);
+				       VERIFY_THRESHOLD, s->layer_mm, c->opt.min_void_mm3, &s->frag, e);
 	if (rc) {
 		hollow_release(s);
 		return rc;
@@ -518,8 +520,8 @@ static int hollow_metrics(void *state, struct metrics *m, struct err *e)
 	rc |= metrics_num(m, "hollow.interior_overhang_added_mm2", s->added_overhang_mm2);
 	rc |= metrics_num(m, "hollow.min_wall_mm", fmin(s->rep.min_wall_mm, s->min_wall_3d_mm));
 	rc |= metrics_num(m, "hollow.min_wall_3d_mm", s->min_wall_3d_mm);
-	rc |= metrics_num(m, "hollow.wall_mm", s->cfg.wall_mm);
-	rc |= metrics_num(m, "hollow.wall_next_mm", s->cfg.wall_next_mm);
+	rc |= metrics_num(m, "hollow.wall_mm", s->cfg.opt.wall_mm);
+	rc |= metrics_num(m, "hollow.wall_next_mm", s->cfg.opt.wall_next_mm);
 	rc |= metrics_num(m, "hollow.alpha_deg", s->alpha_deg);
 	rc |= metrics_num(m, "hollow.opt_layer_mm", o->opt.opt_layer_mm);
 	rc |= metrics_num(m, "hollow.sample_mm", o->opt.sample_mm);
@@ -536,7 +538,7 @@ static int hollow_metrics(void *state, struct metrics *m, struct err *e)
 	rc |= metrics_num(m, "hollow.fill_alone_volume_mm3", o->fill_alone_mm3);
 	rc |= metrics_num(m, "hollow.optimised_and_fill_volume_mm3", o->opt_fill_mm3);
 	rc |= metrics_int(m, "hollow.voids_dropped_for_fill", (long long)o->voids_dropped_for_fill);
-	rc |= metrics_num(m, "hollow.optimise_s", s->cfg.optimise_s);
+	rc |= metrics_num(m, "hollow.optimise_s", s->cfg.opt.optimise_s);
 	if (o->has_com)
 		rc |= metrics_int(m, "hollow.voids_against_com", (long long)o->opt.voids_against_com);
 	rc |= metrics_bool(m, "hollow.budget_spent", o->opt.budget_spent);

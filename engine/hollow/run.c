@@ -26,38 +26,16 @@ void hl_outcome_fini(struct hl_outcome *o)
 	memset(o, 0, sizeof *o);
 }
 
-static void opt_params(const struct hl_config *c, const struct hull_pt *target, size_t ntarget,
-		       struct hl_opt_params *p)
-{
-	memset(p, 0, sizeof *p);
-	p->wall_mm = c->wall_mm;
-	p->wall_next_mm = c->wall_next_mm;
-	p->opt_layer_mm = c->opt_layer_mm;
-	p->stack_layer_mm = c->stack_layer_mm;
-	p->pixel_mm = c->pixel_mm;
-	p->sample_mm = c->sample_mm;
-	p->alpha_rad = c->alpha_rad;
-	p->margin_rad = c->margin_rad;
-	p->min_void_mm3 = c->min_void_mm3;
-	p->rounds = c->rounds;
-	p->optimise_s = c->optimise_s;
-	p->threads = c->threads;
-	p->objective = c->objective;
-	p->light_weight = c->light_weight;
-	p->target = target;
-	p->ntarget = ntarget;
-}
-
 static void fill_params(const struct hl_config *c, struct hl_fill_params *p)
 {
 	memset(p, 0, sizeof *p);
-	p->wall_mm = c->wall_mm;
-	p->wall_next_mm = c->wall_next_mm;
-	p->pixel_mm = c->pixel_mm;
+	p->wall_mm = c->opt.wall_mm;
+	p->wall_next_mm = c->opt.wall_next_mm;
+	p->pixel_mm = c->opt.pixel_mm;
 	p->layer_mm = c->print_layer_mm;
-	p->alpha_rad = c->alpha_rad;
-	p->margin_rad = c->margin_rad;
-	p->min_void_mm3 = c->min_void_mm3;
+	p->alpha_rad = c->opt.alpha_rad;
+	p->margin_rad = c->opt.margin_rad;
+	p->min_void_mm3 = c->opt.min_void_mm3;
 	p->lean = c->fill_lean;
 	p->map = c->fill_map;
 }
@@ -215,14 +193,14 @@ static int fill_stage(const struct mesh *part, const struct hl_config *c,
 {
 	struct hl_fill_params fp;
 	double t0 = progress_now_s();
-	int both = res->voids_optimised > 0 && c->objective == HL_OBJ_LIGHTWEIGHT;
+	int both = res->voids_optimised > 0 && c->opt.objective == HL_OBJ_LIGHTWEIGHT;
 	struct alone_job *aj = NULL;
 	struct hl_fill alone;
 	pthread_t th;
 	int rc, have_alone = 0;
 
 	fill_params(c, &fp);
-	if (both && c->threads >= 2 && (aj = mem_calloc(1, sizeof *aj)) != NULL) {
+	if (both && c->opt.threads >= 2 && (aj = mem_calloc(1, sizeof *aj)) != NULL) {
 		struct progress_hooks hk = {NULL, alone_cancelled, aj};
 		aj->part = part;
 		aj->c = &fp;
@@ -293,12 +271,12 @@ static void empty_note(const struct hl_config *c, struct hl_outcome *o)
 {
 	if (o->voids || o->note[0])
 		return;
-	if (c->fill_map_set && c->rounds == 0) {
+	if (c->fill_map_set && c->opt.rounds == 0) {
 		/* the pixel fill alone: its pixels are whole squares, so with
 		 * a reach under one pixel no solid pixel may hang over a void */
 		const struct raster_map *fm = &c->fill_map;
 		double pitch = 1 / sqrt(fabs(fm->a[0][0] * fm->a[1][1] - fm->a[0][1] * fm->a[1][0]));
-		double reach = c->print_layer_mm * tan(c->alpha_rad);
+		double reach = c->print_layer_mm * tan(c->opt.alpha_rad);
 		if (reach < pitch) {
 			snprintf(o->note, sizeof o->note,
 				 "no support-free void: at this alpha a layer may overhang %.3f mm, less "
@@ -311,7 +289,7 @@ static void empty_note(const struct hl_config *c, struct hl_outcome *o)
 	snprintf(o->note, sizeof o->note,
 		 "too thin to hollow: no support-free void of at least %g mm3 fits inside a "
 		 "%g mm wall; the part is returned unchanged",
-		 c->min_void_mm3, c->wall_mm);
+		 c->opt.min_void_mm3, c->opt.wall_mm);
 }
 
 int hl_run(const struct mesh *part, const struct hl_config *c, struct progress *prog,
@@ -326,12 +304,14 @@ int hl_run(const struct mesh *part, const struct hl_config *c, struct progress *
 
 	memset(&res, 0, sizeof res);
 	hl_mesh_mass(part, &res.part_volume_mm3, com);
-	if (c->objective == HL_OBJ_STABILITY) {
+	if (c->opt.objective == HL_OBJ_STABILITY) {
 		rc = stability_setup(part, c, &res, &hull, &nhull, &target, &ntarget, e);
 		if (rc)
 			goto out;
 	}
-	opt_params(c, target, ntarget, &op);
+	op = c->opt;
+	op.target = target;
+	op.ntarget = ntarget;
 	rc = hl_opt_run(part, &op, prog, &res.mesh, &res.opt, e);
 	if (rc)
 		goto out;
@@ -339,7 +319,7 @@ int hl_run(const struct mesh *part, const struct hl_config *c, struct progress *
 	res.voids = res.voids_optimised = res.opt.voids;
 	res.voids_fallback = res.opt.voids_fallback;
 	res.void_volume_mm3 = res.opt.volume_mm3;
-	if (c->fill && c->fill_map_set && (c->objective == HL_OBJ_LIGHTWEIGHT || ntarget >= 3)) {
+	if (c->fill && c->fill_map_set && (c->opt.objective == HL_OBJ_LIGHTWEIGHT || ntarget >= 3)) {
 		rc = fill_stage(part, c, target, ntarget, hull, nhull, prog, &res, e);
 		if (rc)
 			goto out;

@@ -17,30 +17,17 @@ struct progress;
 struct err;
 
 /* What the job asks for (engine/hollow/hollow.c fills it from the job's
- * parameters); run.c derives the optimiser's and the fill's own
- * parameters from it. */
+ * parameters); run.c derives the fill's own parameters from it. */
 struct hl_config {
-	double wall_mm;        /* first offset t (shell to the outside) */
-	double wall_next_mm;   /* offset of later rounds (walls between voids) */
-	double opt_layer_mm;   /* h of the optimisation (snapped to the stack) */
-	double stack_layer_mm; /* layer height of the eroded stack */
-	double pixel_mm;       /* erosion grid pitch */
-	double sample_mm;      /* loop sampling step s */
-	double alpha_rad;      /* overhang limit, from the vertical */
-	double margin_rad;     /* safety subtracted from alpha in the constraints */
-	double min_void_mm3;
-	int rounds;            /* at most this many rounds */
-	double optimise_s;     /* time budget of the rounds (s, from the optimiser's start);
-				* voids not solved in it keep their support-free
-				* start, later rounds do not start; 0 = none */
-	int threads;
-	enum hl_objective objective;
-	double light_weight;   /* stability: weight of the lightweight term */
-	double print_layer_mm; /* the job's layer (contact layer for stability) */
-	int fill;              /* lightweight: top-down fill of what the optimiser left */
-	int fill_lean;         /* fill: walls between voids lean (else they stand) */
+	struct hl_opt_params opt;  /* the optimiser's rounds (opt.target: left NULL, run.c
+				    * sets the stability target); the fill takes its
+				    * walls, pixel, alpha, margin and min_void_mm3 */
+	double print_layer_mm;     /* the job's layer (the fill's layers; contact
+				    * layer for stability) */
+	int fill;                  /* top-down fill of what the optimiser left */
+	int fill_lean;             /* fill: walls between voids lean (else they stand) */
 	struct raster_map fill_map; /* printer mm -> pixels of the images the verifier reads */
-	int fill_map_set;      /* fill_map is set (else no fill) */
+	int fill_map_set;          /* fill_map is set (else no fill) */
 };
 
 struct hl_outcome {
