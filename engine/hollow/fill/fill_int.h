@@ -47,23 +47,128 @@ int hl_grid_nearest(const int32_t *lab, int w, int h, double px_mm, double py_mm
  * (docs/hollow.md); 1.5 mm gave the cow 54 % instead of 59 %. */
 #define HL_FILL_LONE_MM 3.0
 
-/* What hl_step_grow() keeps solid of the solid of layer k + 1 (s->u). */
+/* What hl_step_grow() keeps solid of the solid of layer k + 1 (s->keep). */
 #define HL_KEEP_E 1      /* E: inside distance > dd */
 #define HL_KEEP_R 2      /* R: no solid of layer k within dg */
 #define HL_KEEP_BRIDGE 3 /* ties kept R to the walls */
 
-/* Scratch of one layer's window (ww x wh pixels, row stride ww). */
+/*
+ * Scratch of one layer's window: ww x wh pixels, row stride ww, each buffer
+ * np pixels long (hl_win_init()).  Per pixel: masks 0 / 1 (keep: a class
+ * above), distances in mm, squared distances in mm^2 (pixel centre to pixel
+ * centre at the pitches px, py; INFINITY without a seed pixel), labels and
+ * layer indices.  The steps, in the order topdown.c runs them: grow (with
+ * recede_fins), keep-apart (standing or lean), vertical walls, prune (lean
+ * only), born, islands; "w" = written by, "r" = read by.  C(k), V(k), E, R,
+ * F, sig, su, d1, B: docs/hollow.md "Top-down fill" and the steps' comments.
+ * Every field holds one thing, except step_mask and step_label: each step
+ * fills them afresh for its own use (listed below).
+ */
 struct hl_win {
-	uint8_t *cm, *seed, *vw, *u, *ex, *v;
-	float *dc2, *dv2, *su, *de2, *d1, *db2, *sn, *sw;
-	int32_t *lab, *near, *lv, *hd, *hq;
-	struct edt_scratch es;
+	/* ---- the layer's state (topdown.c copies it in and out) ---- */
+	/* C(k): 1 = pixel centre in the offset region of layer k.  In;
+	 * r: grow, prune, born. */
+	uint8_t *region;
+	/* V(k + 1): 1 = void in layer k + 1 (the layer done before).  In;
+	 * r: every step. */
+	uint8_t *void_above;
+	/* sig: the inside distance (mm) carried down from above to the solid
+	 * of layer k + 1 (INFINITY where none).  In; r: grow. */
+	float *sig_above_mm;
+	/* The lowest layer (> k, so the last one going down) in which the
+	 * pixel is void, INT32_MAX if none.  In; r: vertical walls, prune,
+	 * born. */
+	int32_t *last_void;
+	/* V(k): 1 = void in layer k.  w: grow; edited by every later step;
+	 * out (the runs of layer k, and V(k + 1) of layer k - 1). */
+	uint8_t *void_out;
+	/* sig of layer k - 1 (mm): w: grow (su - dd where kept solid,
+	 * INFINITY where void); each later step sets the pixels it flips (0,
+	 * or INFINITY: lean keep-apart, prune, born).  Out. */
+	float *sig_out_mm;
+
+	/* ---- grow (hl_step_grow, recede_fins) ---- */
+	/* Squared distance to V(k + 1), mm^2.  w, r: grow. */
+	float *void_above_d2_mm2;
+	/* su (mm): the distance to V(k + 1), or sig where that is smaller and
+	 * within 2 px of it.  w, r: grow (sig_out_mm = su - dd). */
+	float *inside_mm;
+	/* E: pixels of C(k), solid in layer k + 1, with su > dd.  w: grow;
+	 * r: recede_fins (the ground grows through E). */
+	uint8_t *core;
+	/* Squared distance to E u not C(k), mm^2 (R: farther than dg).  w, r:
+	 * grow. */
+	float *support_d2_mm2;
+	/* The HL_KEEP_* class of each pixel grow keeps solid (E, R or a
+	 * bridge), 0 elsewhere.  w: grow (recede_fins edits); r: prune. */
+	uint8_t *keep;
+	/* h: steps from the ground (0), -1 where no step reaches.  w, r:
+	 * recede_fins (not written when it has nothing to do: no R, or no
+	 * neighbour within dg). */
+	int32_t *fin_steps;
+	/* The pixels (indices i = y ww + x) the breadth-first search over h
+	 * has reached: first the ground, then those of h >= 1 in order of h.
+	 * w, r: recede_fins. */
+	int32_t *fin_queue;
+
+	/* ---- keep-apart (hl_step_keep_apart, hl_step_keep_apart_lean) ---- */
+	/* The label (step_label) of the component of V(k + 1) nearest to the
+	 * pixel, 0 without V(k + 1).  w, r: keep-apart. */
+	int32_t *near_void;
+	/* d1 squared: squared distance to V(k + 1), mm^2.  w: keep-apart; r:
+	 * prune. */
+	float *near_void_d2_mm2;
+	/* Squared distance to the nearest bisector pixel (B: where near_void
+	 * changes, d1 within reach), mm^2.  w: keep-apart (lean: only when
+	 * there is a B; not read otherwise); r: keep-apart, prune. */
+	float *bisector_d2_mm2;
+	/* The side of the nearest bisector pixel: 1 the larger component's,
+	 * 2 the smaller's, 0 none.  w: lean keep-apart; r: prune. */
+	int32_t *bisector_side;
+
+	/* ---- born (hl_step_born) ---- */
+	/* Squared distance to the void of layers k .. k + mv (void_out,
+	 * void_above, last_void), mm^2.  w, r: born. */
+	float *recent_void_d2_mm2;
+	/* 1 = not in F (the free region).  w, r: born. */
+	uint8_t *not_free;
+	/* D squared: F's squared inside distance (to not_free), mm^2.  w, r:
+	 * born. */
+	float *free_d2_mm2;
+	/* F's ridge where D >= birth: where a void may be born.  w, r: born. */
+	uint8_t *ridge;
+	/* Squared distance to the nearest pixel off the ridge, mm^2 (a ridge
+	 * pixel within dg of one turns void).  w, r: born. */
+	float *off_ridge_d2_mm2;
+
+	/* ---- per-step scratch: each step fills these before it reads them */
+	/* Mask.  grow: E u not C(k) (seeds of support_d2_mm2); standing
+	 * keep-apart: B (seeds of bisector_d2_mm2); vertical walls: the floor
+	 * pixels (void in layer k and in one of k + 2 .. k + mv, solid in
+	 * k + 1); born: the void of layers k .. k + mv (seeds of
+	 * recent_void_d2_mm2), then F (where ridge() looks), then the pixels
+	 * off the ridge (seeds of off_ridge_d2_mm2); islands: the solid of
+	 * layer k + 1. */
+	uint8_t *step_mask;
+	/* Labels.  keep-apart: the components of V(k + 1) (seeds of
+	 * near_void), then, lean only, the bisector pixels marked 1 or 2 by
+	 * side (seeds of bisector_side); vertical walls: the floor patches;
+	 * born: the components of C(k); islands: the solid components of
+	 * layer k + 1.  8-connected components, label_components8(). */
+	int32_t *step_label;
+	/* Scratch of the squared distance transforms (edt_sq()). */
+	struct edt_scratch edt;
 };
 
-/* Free the scratch (s zeroed or initialised). */
+/* Free every buffer of s and its EDT scratch.  s must have been zeroed
+ * (memset and edt_scratch_init(), as topdown.c does before hl_win_init())
+ * or passed to hl_win_init(), even one that failed.  s is not zeroed. */
 void hl_win_fini(struct hl_win *s);
-/* Scratch for windows of up to np pixels; 1 = ok, 0 = out of memory
- * (s then holds what was allocated: hl_win_fini frees it). */
+/* Zero s and allocate each of its buffers for windows of up to np pixels
+ * (topdown.c: the whole grid), contents undefined: every buffer is written
+ * before it is read, the inputs by topdown.c and the rest by the steps the
+ * fields' comments above name.  1 = ok, 0 = out of memory (s then holds
+ * what was allocated: hl_win_fini frees it). */
 int hl_win_init(struct hl_win *s, size_t np);
 
 /* The geometry of the rule, mm (pixel pitches px along x, py along y). */
@@ -80,12 +185,13 @@ struct hl_geo {
 };
 
 /* The steps, in the order topdown.c runs them on one window (ww x wh):
- * inputs s->cm = C(k), s->vw = V(k + 1), s->sw = carried inside
- * distance, s->lv = lowest void layer per pixel; output s->v = V(k) and
- * s->sn (the distance to carry).  Each returns 0, ERR_NOMEM or an EDT
- * error.  Keep-apart, vertical walls and islands only turn void solid;
- * births add void that keeps solid within dg; so the rule of
- * hl_step_grow() holds on the result. */
+ * inputs s->region = C(k), s->void_above = V(k + 1), s->sig_above_mm =
+ * the carried inside distance, s->last_void = the lowest void layer per
+ * pixel; output s->void_out = V(k) and s->sig_out_mm (the distance to
+ * carry); what each step writes and reads: struct hl_win.  Each returns 0,
+ * ERR_NOMEM or an EDT error.  Keep-apart, vertical walls and islands only
+ * turn void solid; births add void that keeps solid within dg; so the rule
+ * of hl_step_grow() holds on the result. */
 int hl_step_grow(struct hl_win *s, int ww, int wh, const struct hl_geo *g, struct err *e);
 int hl_step_keep_apart(struct hl_win *s, int ww, int wh, const struct hl_geo *g, struct err *e);
 int hl_step_vertical_walls(struct hl_win *s, int ww, int wh, const struct hl_geo *g, int k,

@@ -15,9 +15,10 @@
 #include "engine/geom/label.h"
 
 /*
- * Keep the voids apart, leaning (on s->v, given V(k + 1) = s->vw).  Each
- * void pixel belongs to its nearest component l of V(k + 1) (8-connected
- * in the layer), at distance d1 (s->d1 squared):
+ * Keep the voids apart, leaning (on s->void_out, given V(k + 1) =
+ * s->void_above).  Each void pixel belongs to its nearest component l of
+ * V(k + 1) (8-connected in the layer; s->near_void), at distance d1
+ * (s->near_void_d2_mm2 = d1^2):
  *   - d1 >= wall + dg: a new cell, >= wall + dg from every component; kept;
  *   - dg < d1 < wall + dg: neither growth nor a cell: solid;
  *   - d1 <= dg: growth of l, kept at >= half - dd from the bisector pixels
@@ -30,10 +31,11 @@
  * underside is the larger's ceiling) until the smaller is used up,
  * instead of standing down to a floor.  half = wall / 2 / cos(alpha -
  * margin) keeps wall_next across the leaning wall, normal to it.  Out:
- * s->hd = 1 or 2 for the side of the nearest bisector pixel (larger,
- * smaller; 0 without one), s->db2 its squared distance, s->d1: both read
- * by hl_step_prune.  Everything dropped turns solid (a subset: safe).
- * O(pixels + components^2).
+ * s->bisector_side = 1 or 2 for the side of the nearest bisector pixel
+ * (larger, smaller; 0 without one), s->bisector_d2_mm2 its squared
+ * distance (written only where there is a bisector pixel), and
+ * s->near_void_d2_mm2: all three read by hl_step_prune.  Everything
+ * dropped turns solid (a subset: safe).  O(pixels + components^2).
  */
 int hl_step_keep_apart_lean(struct hl_win *s, int ww, int wh, const struct hl_geo *g,
 			    struct err *e)
@@ -41,13 +43,15 @@ int hl_step_keep_apart_lean(struct hl_win *s, int ww, int wh, const struct hl_ge
 	static const int nb[4][2] = {{-1, 0}, {1, 0}, {0, -1}, {0, 1}};
 	size_t np = (size_t)ww * (size_t)wh;
 	double cut = g->wall + 2 * g->dg + 2 * g->pmax;
-	int32_t count = 0, *rank = NULL, *side = s->hd;
+	int32_t count = 0, *rank = NULL, *side = s->bisector_side;
 	size_t *area = NULL;
 	int anyb = 0, rc;
 
-	rc = label_components8(s->vw, ww, wh, s->lab, &count, e);
+	/* step_label: the components of V(k + 1), then the bisector marks */
+	rc = label_components8(s->void_above, ww, wh, s->step_label, &count, e);
 	if (!rc)
-		rc = hl_grid_nearest(s->lab, ww, wh, g->px, g->py, s->d1, s->near, e);
+		rc = hl_grid_nearest(s->step_label, ww, wh, g->px, g->py, s->near_void_d2_mm2,
+				     s->near_void, e);
 	if (rc)
 		return rc;
 	rank = mem_alloc(((size_t)count + 1) * sizeof *rank);
@@ -57,7 +61,7 @@ int hl_step_keep_apart_lean(struct hl_win *s, int ww, int wh, const struct hl_ge
 		goto out;
 	}
 	for (size_t i = 0; i < np; i++)
-		area[s->lab[i]]++;
+		area[s->step_label[i]]++;
 	/* rank 0 = the largest (ties: the lower label); the components of one
 	 * layer's window are few */
 	for (int32_t l = 1; l <= count; l++) {
@@ -65,47 +69,50 @@ int hl_step_keep_apart_lean(struct hl_win *s, int ww, int wh, const struct hl_ge
 		for (int32_t m = 1; m <= count; m++)
 			rank[l] += area[m] > area[l] || (area[m] == area[l] && m < l);
 	}
-	/* bisector pixels (in s->lab): 1 where every other side ranks below,
-	 * 2 where some other side ranks above */
+	/* bisector pixels, written over the labels in s->step_label (no longer
+	 * needed: area and rank are counted, s->near_void holds each pixel's
+	 * component): 1 where every other side ranks below, 2 where some
+	 * other side ranks above */
 	for (int y = 0; y < wh; y++)
 		for (int x = 0; x < ww; x++) {
 			size_t i = (size_t)y * (size_t)ww + (size_t)x;
-			int32_t l = s->near[i], f = 0;
-			if (l && s->d1[i] <= cut * cut)
+			int32_t l = s->near_void[i], f = 0;
+			if (l && s->near_void_d2_mm2[i] <= cut * cut)
 				for (int q = 0; q < 4; q++) {
 					int xn = x + nb[q][0], yn = y + nb[q][1];
 					int32_t m;
 					if (xn < 0 || yn < 0 || xn >= ww || yn >= wh)
 						continue;
-					m = s->near[(size_t)yn * (size_t)ww + (size_t)xn];
+					m = s->near_void[(size_t)yn * (size_t)ww + (size_t)xn];
 					if (m && m != l)
 						f = rank[m] < rank[l] ? 2 : (f ? f : 1);
 				}
-			s->lab[i] = f;
+			s->step_label[i] = f;
 			anyb |= f != 0;
 		}
 	if (anyb)
-		rc = hl_grid_nearest(s->lab, ww, wh, g->px, g->py, s->db2, side, e);
+		rc = hl_grid_nearest(s->step_label, ww, wh, g->px, g->py, s->bisector_d2_mm2, side,
+				     e);
 	else
 		memset(side, 0, np * sizeof *side);
 	if (rc)
 		goto out;
 	for (size_t i = 0; i < np; i++) {
 		double d1, h;
-		if (!s->v[i])
+		if (!s->void_out[i])
 			continue;
-		d1 = sqrt(s->d1[i]);
+		d1 = sqrt(s->near_void_d2_mm2[i]);
 		if (d1 >= g->wall + g->dg)
 			continue;
 		if (d1 <= g->dg) {
 			if (!anyb)
 				continue;
 			h = side[i] == 2 ? g->half + g->dd : g->half - g->dd;
-			if (s->db2[i] >= h * h)
+			if (s->bisector_d2_mm2[i] >= h * h)
 				continue;
 		}
-		s->v[i] = 0;
-		s->sn[i] = INFINITY; /* solid: reached from V(k) only, at dd per layer */
+		s->void_out[i] = 0;
+		s->sig_out_mm[i] = INFINITY; /* solid: reached from V(k) only, at dd per layer */
 	}
 out:
 	mem_free(rank);
@@ -141,10 +148,10 @@ static int ring_groups(const uint8_t *v, int ww, int wh, int x, int y)
 }
 
 /*
- * Prune (on s->v, after keep-apart and the vertical walls; lean walls
- * only).  A pixel hl_step_grow() kept solid (R, or a bridge) because the
- * pixel above had no solid of layer k within dg may have some now: the
- * wall band keep-apart added.  Kept anyway, it is left behind by the
+ * Prune (on s->void_out, after keep-apart and the vertical walls; lean
+ * walls only).  A pixel hl_step_grow() kept solid (R, or a bridge:
+ * s->keep) because the pixel above had no solid of layer k within dg may
+ * have some now: the wall band keep-apart added.  Kept anyway, it is left behind by the
  * moving wall: the next layer keeps it as R again and its bridge to the
  * wall grows, an icicle a pixel wide under the leaning wall (the cow, 50
  * mm: fin_mm3 2.09 without this).  It turns void, pixel by pixel on the
@@ -171,14 +178,15 @@ int hl_step_prune(struct hl_win *s, int ww, int wh, const struct hl_geo *g, int 
 				size_t i = (size_t)y * (size_t)ww + (size_t)x;
 				int ok = 1;
 				double h;
-				if (s->v[i] || !s->cm[i] || s->vw[i] ||
-				    (s->u[i] != HL_KEEP_R && s->u[i] != HL_KEEP_BRIDGE))
+				if (s->void_out[i] || !s->region[i] || s->void_above[i] ||
+				    (s->keep[i] != HL_KEEP_R && s->keep[i] != HL_KEEP_BRIDGE))
 					continue;
-				if (s->d1[i] > dg2 || (s->lv[i] >= k + 2 && s->lv[i] <= k + g->mv))
+				if (s->near_void_d2_mm2[i] > dg2 ||
+				    (s->last_void[i] >= k + 2 && s->last_void[i] <= k + g->mv))
 					continue;
-				h = s->hd[i] == 2 ? g->half + g->dd : g->half - g->dd;
-				if ((s->hd[i] && s->db2[i] < h * h) ||
-				    ring_groups(s->v, ww, wh, x, y) > 1)
+				h = s->bisector_side[i] == 2 ? g->half + g->dd : g->half - g->dd;
+				if ((s->bisector_side[i] && s->bisector_d2_mm2[i] < h * h) ||
+				    ring_groups(s->void_out, ww, wh, x, y) > 1)
 					continue;
 				/* every Q near it, solid at k + 1 and void at k once it is */
 				for (int qy = y - ry; ok && qy <= y + ry; qy++)
@@ -190,7 +198,8 @@ int hl_step_prune(struct hl_win *s, int ww, int wh, const struct hl_geo *g, int 
 						    dx * dx + dy * dy > dg2)
 							continue;
 						q = (size_t)qy * (size_t)ww + (size_t)qx;
-						if (!s->cm[q] || s->vw[q] || (q != i && !s->v[q]))
+						if (!s->region[q] || s->void_above[q] ||
+						    (q != i && !s->void_out[q]))
 							continue;
 						for (int sy = qy - ry; !sup && sy <= qy + ry; sy++)
 							for (int sx = qx - rx; !sup && sx <= qx + rx;
@@ -202,14 +211,14 @@ int hl_step_prune(struct hl_win *s, int ww, int wh, const struct hl_geo *g, int 
 								    sy >= wh || ex * ex + ey * ey > dg2)
 									continue;
 								t = (size_t)sy * (size_t)ww + (size_t)sx;
-								sup = t != i && !s->v[t];
+								sup = t != i && !s->void_out[t];
 							}
 						ok = sup;
 					}
 				if (!ok)
 					continue;
-				s->v[i] = 1;
-				s->sn[i] = INFINITY;
+				s->void_out[i] = 1;
+				s->sig_out_mm[i] = INFINITY;
 				changed = 1;
 			}
 	}

@@ -409,7 +409,7 @@ int hl_fill_build(const struct mesh *part, const struct mesh *solid, const struc
 
 	memset(&r, 0, sizeof r);
 	memset(&s, 0, sizeof s);
-	edt_scratch_init(&s.es);
+	edt_scratch_init(&s.edt);
 	/* only an axis-aligned grid (rotations by quarter turns, mirrors) has
 	 * rows and columns that are lines of the printer frame */
 	if (!(L > 0) ||
@@ -477,18 +477,20 @@ int hl_fill_build(const struct mesh *part, const struct mesh *solid, const struc
 			y1 = y1 + pad + 1 > r.h ? r.h : y1 + pad + 1;
 			ww = x1 - x0;
 			wh = y1 - y0;
-			memset(s.cm, 0, (size_t)ww * (size_t)wh);
+			/* the window's inputs (struct hl_win): C(k), V(k + 1), sig,
+			 * the lowest void layer */
+			memset(s.region, 0, (size_t)ww * (size_t)wh);
 			for (size_t i = 0; i < C[k].n; i++)
-				memset(s.cm + (size_t)(C[k].run[i].y - y0) * (size_t)ww +
+				memset(s.region + (size_t)(C[k].run[i].y - y0) * (size_t)ww +
 					       (C[k].run[i].x0 - x0),
 				       1, (size_t)(C[k].run[i].x1 - C[k].run[i].x0 + 1));
 			for (int y = 0; y < wh; y++) {
-				memcpy(s.vw + (size_t)y * (size_t)ww,
+				memcpy(s.void_above + (size_t)y * (size_t)ww,
 				       vup + (size_t)(y + y0) * (size_t)r.w + x0, (size_t)ww);
-				memcpy(s.sw + (size_t)y * (size_t)ww,
+				memcpy(s.sig_above_mm + (size_t)y * (size_t)ww,
 				       sig + (size_t)(y + y0) * (size_t)r.w + x0,
 				       (size_t)ww * sizeof *sig);
-				memcpy(s.lv + (size_t)y * (size_t)ww,
+				memcpy(s.last_void + (size_t)y * (size_t)ww,
 				       lastv + (size_t)(y + y0) * (size_t)r.w + x0,
 				       (size_t)ww * sizeof *lastv);
 			}
@@ -506,8 +508,8 @@ int hl_fill_build(const struct mesh *part, const struct mesh *solid, const struc
 			if (!rc)
 				rc = hl_step_islands(&s, ww, wh, e);
 			if (!rc)
-				rc = hl_grid_runs(s.v, ww, 0, 0, ww, wh, &r.layer[k].run, &r.layer[k].n,
-						  &cap, e);
+				rc = hl_grid_runs(s.void_out, ww, 0, 0, ww, wh, &r.layer[k].run,
+						  &r.layer[k].n, &cap, e);
 			for (size_t i = 0; !rc && i < r.layer[k].n; i++) {
 				r.layer[k].run[i].y += y0;
 				r.layer[k].run[i].x0 += x0;
@@ -524,12 +526,13 @@ int hl_fill_build(const struct mesh *part, const struct mesh *solid, const struc
 		if (rc || x1 < 0)
 			continue;
 		for (int y = y0; y < y1; y++) {
-			memcpy(vup + (size_t)y * (size_t)r.w + x0, s.v + (size_t)(y - y0) * (size_t)ww,
-			       (size_t)ww);
-			memcpy(sig + (size_t)y * (size_t)r.w + x0, s.sn + (size_t)(y - y0) * (size_t)ww,
+			memcpy(vup + (size_t)y * (size_t)r.w + x0,
+			       s.void_out + (size_t)(y - y0) * (size_t)ww, (size_t)ww);
+			memcpy(sig + (size_t)y * (size_t)r.w + x0,
+			       s.sig_out_mm + (size_t)(y - y0) * (size_t)ww,
 			       (size_t)ww * sizeof *sig);
 			for (int x = x0; x < x1; x++)
-				if (s.v[(size_t)(y - y0) * (size_t)ww + (size_t)(x - x0)])
+				if (s.void_out[(size_t)(y - y0) * (size_t)ww + (size_t)(x - x0)])
 					lastv[(size_t)y * (size_t)r.w + (size_t)x] = k;
 		}
 		px0 = x0;

@@ -1,4 +1,4 @@
-/* test_fillwall.c - the fill's prune step (engine/hollow/fillwall.c) on
+/* test_fillwall.c - the fill's prune step (engine/hollow/fill/fillwall.c) on
  * synthetic windows: icicles (one-pixel lines of kept R hanging from a
  * wall) peel from their tips only as far as the overhang rule allows,
  * nothing solid is cut off from the wall, and pixels that are not R stay.
@@ -35,22 +35,23 @@ static struct hl_geo geo(void)
 	return g;
 }
 
-/* Layer k + 1: solid (vw = 0) where up[] is set, void elsewhere; layer k:
- * the wall rows y < 3 solid, up[] pixels below y >= 3 solid as R, the
- * rest void.  No bisector (hd = 0), no void above within mv layers. */
+/* Layer k + 1: solid (void_above = 0) where up[] is set, void elsewhere;
+ * layer k: the wall rows y < 3 solid, up[] pixels below y >= 3 solid as R,
+ * the rest void.  No bisector (bisector_side = 0), no void above within mv
+ * layers. */
 static void setup(struct hl_win *s, const uint8_t *up)
 {
 	for (int i = 0; i < W * H; i++) {
 		int y = i / W;
-		s->cm[i] = 1;
-		s->vw[i] = !up[i];
-		s->v[i] = !(y < 3 || up[i]);
-		s->u[i] = y < 3 ? HL_KEEP_E : up[i] ? HL_KEEP_R : 0;
-		s->d1[i] = 0;
-		s->db2[i] = INFINITY;
-		s->hd[i] = 0;
-		s->lv[i] = INT32_MAX;
-		s->sn[i] = 0;
+		s->region[i] = 1;
+		s->void_above[i] = !up[i];
+		s->void_out[i] = !(y < 3 || up[i]);
+		s->keep[i] = y < 3 ? HL_KEEP_E : up[i] ? HL_KEEP_R : 0;
+		s->near_void_d2_mm2[i] = 0;
+		s->bisector_d2_mm2[i] = INFINITY;
+		s->bisector_side[i] = 0;
+		s->last_void[i] = INT32_MAX;
+		s->sig_out_mm[i] = 0;
 	}
 }
 
@@ -59,11 +60,11 @@ static int rule_holds(const struct hl_win *s, double dg)
 {
 	for (int i = 0; i < W * H; i++) {
 		int ok = 0;
-		if (s->vw[i] || !s->v[i])
+		if (s->void_above[i] || !s->void_out[i])
 			continue;
 		for (int j = 0; j < W * H && !ok; j++) {
 			double dx = (j % W - i % W) * PX, dy = (j / W - i / W) * PX;
-			ok = !s->v[j] && dx * dx + dy * dy <= dg * dg;
+			ok = !s->void_out[j] && dx * dx + dy * dy <= dg * dg;
 		}
 		if (!ok)
 			return 0;
@@ -88,14 +89,15 @@ static int all_attached(const struct hl_win *s)
 		for (int dy = -1; dy <= 1; dy++)
 			for (int dx = -1; dx <= 1; dx++) {
 				int xn = x + dx, yn = y + dy, j = yn * W + xn;
-				if (xn < 0 || yn < 0 || xn >= W || yn >= H || seen[j] || s->v[j])
+				if (xn < 0 || yn < 0 || xn >= W || yn >= H || seen[j] ||
+				    s->void_out[j])
 					continue;
 				seen[j] = 1;
 				st[n++] = j;
 			}
 	}
 	for (int i = 0; i < W * H; i++)
-		if (!s->v[i] && !seen[i])
+		if (!s->void_out[i] && !seen[i])
 			return 0;
 	return 1;
 }
@@ -126,17 +128,17 @@ static void test_icicle_peels_to_support(void)
 	CHECK(all_attached(&s));
 	/* the tip goes; pixels of layer k + 1 more than dg past the wall
 	 * need icicle pixels below them, every 2 dg at most */
-	CHECK(s.v[11 * W + 20]);
+	CHECK(s.void_out[11 * W + 20]);
 	{
 		int kept = 0;
 		for (int y = 3; y < 12; y++)
-			kept += !s.v[y * W + 20];
+			kept += !s.void_out[y * W + 20];
 		CHECK_INT(kept, >=, 2);
 		CHECK_INT(kept, <, 9);
 	}
 	/* the wall (E) and void never change */
 	for (int i = 0; i < 3 * W; i++)
-		CHECK(!s.v[i]);
+		CHECK(!s.void_out[i]);
 	hl_win_fini(&s);
 }
 
@@ -151,10 +153,10 @@ static void test_only_r_pruned(void)
 	wall_above(up, 1);
 	setup(&s, up);
 	for (int y = 3; y < 12; y++)
-		s.u[y * W + 20] = HL_KEEP_E;
+		s.keep[y * W + 20] = HL_KEEP_E;
 	CHECK_EQ_INT(hl_step_prune(&s, W, H, &g, 100), 0);
 	for (int y = 3; y < 12; y++)
-		CHECK(!s.v[y * W + 20]);
+		CHECK(!s.void_out[y * W + 20]);
 	hl_win_fini(&s);
 }
 
@@ -188,10 +190,10 @@ static void test_random_forests(void)
 		{
 			int before = 0, after = 0;
 			for (int i = 0; i < W * H; i++)
-				before += !s.v[i];
+				before += !s.void_out[i];
 			CHECK_EQ_INT(hl_step_prune(&s, W, H, &g, 100), 0);
 			for (int i = 0; i < W * H; i++)
-				after += !s.v[i];
+				after += !s.void_out[i];
 			removed += before - after;
 		}
 		CHECK(rule_holds(&s, g.dg));
