@@ -28,32 +28,14 @@
 #include "engine/hollow/fill/fill.h"
 #include "engine/mesh/mesh.h"
 
+#include "boxgen.h"
+
 #define PX 0.05
 #define LAYER 0.05
 #define B 10.0 /* map offset, pixels */
 #define WALL 1.0
 #define ALPHA_DEG 45.0
 #define MARGIN_DEG 0.5
-
-/* Box lo..hi (mm) appended to m as 8 vertices and 12 outward triangles
- * (arrays sized by the caller). */
-static void add_box(struct mesh *m, struct vec3 lo, struct vec3 hi)
-{
-	static const uint32_t f[12][3] = {{0, 2, 3}, {0, 3, 1}, {4, 5, 7}, {4, 7, 6},
-					  {0, 1, 5}, {0, 5, 4}, {2, 6, 7}, {2, 7, 3},
-					  {0, 4, 6}, {0, 6, 2}, {1, 3, 7}, {1, 7, 5}};
-	uint32_t v0 = (uint32_t)m->nv;
-
-	for (int i = 0; i < 8; i++)
-		m->v[m->nv++] = (struct vec3){i & 1 ? hi.x : lo.x, i & 2 ? hi.y : lo.y,
-					      i & 4 ? hi.z : lo.z};
-	for (int t = 0; t < 12; t++) {
-		uint32_t *q = m->tri + 3 * m->nt++;
-		q[0] = v0 + f[t][0];
-		q[1] = v0 + f[t][1];
-		q[2] = v0 + f[t][2];
-	}
-}
 
 /* A part of nb boxes (lo[i], hi[i]); 0 when out of memory. */
 static int boxes(struct mesh *m, const struct vec3 *lo, const struct vec3 *hi, int nb)
@@ -64,7 +46,7 @@ static int boxes(struct mesh *m, const struct vec3 *lo, const struct vec3 *hi, i
 	if (!m->v || !m->tri)
 		return 0;
 	for (int i = 0; i < nb; i++)
-		add_box(m, lo[i], hi[i]);
+		add_box(m, lo[i], hi[i], 0);
 	return 1;
 }
 
