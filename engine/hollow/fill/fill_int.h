@@ -193,6 +193,12 @@ struct hl_geo {
  * turn void solid; births add void that keeps solid within dg; so the rule
  * of hl_step_grow() holds on the result. */
 int hl_step_grow(struct hl_win *s, int ww, int wh, const struct hl_geo *g, struct err *e);
+/* Keep-apart's first half (both variants): s->step_label = the
+ * 8-connected components of V(k + 1) (*count of them), s->near_void =
+ * the label of the nearest one per pixel, s->near_void_d2_mm2 = the
+ * squared distance (mm^2) to it.  0, ERR_NOMEM or an EDT error. */
+int hl_step_near_voids(struct hl_win *s, int ww, int wh, const struct hl_geo *g, int32_t *count,
+		       struct err *e);
 int hl_step_keep_apart(struct hl_win *s, int ww, int wh, const struct hl_geo *g, struct err *e);
 int hl_step_vertical_walls(struct hl_win *s, int ww, int wh, const struct hl_geo *g, int k,
 			   struct err *e);

@@ -432,6 +432,17 @@ int hl_step_born(struct hl_win *s, int ww, int wh, const struct hl_geo *g, int k
 	return 0;
 }
 
+int hl_step_near_voids(struct hl_win *s, int ww, int wh, const struct hl_geo *g, int32_t *count,
+		       struct err *e)
+{
+	int rc = label_components8(s->void_above, ww, wh, s->step_label, count, e);
+
+	if (!rc)
+		rc = hl_grid_nearest(s->step_label, ww, wh, g->px, g->py, s->near_void_d2_mm2,
+				     s->near_void, e);
+	return rc;
+}
+
 /*
  * Keep the voids apart (on s->void_out, given V(k + 1) = s->void_above):
  * without this the greedy void grows into a foam of cells split by walls
@@ -456,15 +467,12 @@ int hl_step_keep_apart(struct hl_win *s, int ww, int wh, const struct hl_geo *g,
 	double cut = g->wall + 2 * g->dg + 2 * g->pmax, half = 0.5 * g->wall;
 	int32_t count;
 
-	if (g->lean)
-		return hl_step_keep_apart_lean(s, ww, wh, g, e);
 	int anyb = 0, rc;
 
-	/* step_label: the components of V(k + 1); step_mask: B */
-	rc = label_components8(s->void_above, ww, wh, s->step_label, &count, e);
-	if (!rc)
-		rc = hl_grid_nearest(s->step_label, ww, wh, g->px, g->py, s->near_void_d2_mm2,
-				     s->near_void, e);
+	if (g->lean)
+		return hl_step_keep_apart_lean(s, ww, wh, g, e);
+	/* step_mask: B */
+	rc = hl_step_near_voids(s, ww, wh, g, &count, e);
 	if (rc)
 		return rc;
 	for (int y = 0; y < wh; y++)

@@ -48,10 +48,7 @@ int hl_step_keep_apart_lean(struct hl_win *s, int ww, int wh, const struct hl_ge
 	int anyb = 0, rc;
 
 	/* step_label: the components of V(k + 1), then the bisector marks */
-	rc = label_components8(s->void_above, ww, wh, s->step_label, &count, e);
-	if (!rc)
-		rc = hl_grid_nearest(s->step_label, ww, wh, g->px, g->py, s->near_void_d2_mm2,
-				     s->near_void, e);
+	rc = hl_step_near_voids(s, ww, wh, g, &count, e);
 	if (rc)
 		return rc;
 	rank = mem_alloc(((size_t)count + 1) * sizeof *rank);
