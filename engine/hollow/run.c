@@ -158,12 +158,13 @@ static int fill_run(const struct mesh *part, const struct hl_fill_params *c,
  * region (*target): the hull offset inward by 0.55 of its inscribed
  * radius rho, i.e. H_r (r = rho / 2) shrunk by another 10 % of r, so the
  * optimum (on the target's boundary) lies strictly inside H_r.  With
- * fewer than 3 hull points o->note says so and there is no target. */
-static int stability_setup(const struct mesh *part, const struct hl_config *c,
-			   struct hl_outcome *o, struct hull_pt **hull, size_t *nhull,
-			   struct hull_pt **target, size_t *ntarget, struct err *e)
+ * fewer than 3 hull points o->note says so and there is no target.
+ * com: the part's centre of mass (mm). */
+static int stability_setup(const struct mesh *part, const double com[3],
+			   const struct hl_config *c, struct hl_outcome *o, struct hull_pt **hull,
+			   size_t *nhull, struct hull_pt **target, size_t *ntarget, struct err *e)
 {
-	double vol, com[3], rho;
+	double rho;
 	struct hull_pt q;
 	int rc = slice_contact_hull(part, c->print_layer_mm, hull, nhull, e);
 
@@ -173,7 +174,6 @@ static int stability_setup(const struct mesh *part, const struct hl_config *c,
 		snprintf(o->note, sizeof o->note, "no contact area found on the first layer");
 		return 0;
 	}
-	hl_mesh_mass(part, &vol, com);
 	q.x = com[0];
 	q.y = com[1];
 	rho = hull_inradius_mm(*hull, *nhull, NULL);
@@ -305,7 +305,7 @@ int hl_run(const struct mesh *part, const struct hl_config *c, struct progress *
 	memset(&res, 0, sizeof res);
 	hl_mesh_mass(part, &res.part_volume_mm3, com);
 	if (c->opt.objective == HL_OBJ_STABILITY) {
-		rc = stability_setup(part, c, &res, &hull, &nhull, &target, &ntarget, e);
+		rc = stability_setup(part, com, c, &res, &hull, &nhull, &target, &ntarget, e);
 		if (rc)
 			goto out;
 	}
