@@ -16,6 +16,7 @@
 #include "engine/hollow/fill/fill.h"
 #include "engine/hollow/hmesh.h"
 #include "engine/hollow/run.h"
+#include "engine/hollow/slopes.h"
 #include "engine/mesh/mesh.h"
 #include "engine/output/printer/printer.h"
 #include "engine/slice/slice.h"
@@ -122,6 +123,8 @@ struct hollow_state {
 	 * output has none) and what the output has beyond it, layer by layer */
 	double part_overhang_mm2, added_overhang_mm2;
 	struct hl_fill frag;         /* beads of the optimised voids, painted solid */
+	struct hl_slopes slopes;     /* the optimised voids' slopes on their polygons */
+	double t_slopes;
 	struct hl_config cfg;
 	int objective;
 	/* mesh outputs: the checker's and the fill's grid is a resin printer's
@@ -307,6 +310,14 @@ static int hollow_prepare(const struct engine_ctx *ctx, const void *params, void
 		rc = min_wall_3d(ctx->mesh, s->out.mesh, &s->min_wall_3d_mm, e);
 	if (!rc)
 		rc = slice_new(s->out.mesh, &s->slicer, e);
+	if (!rc && s->out.voids_optimised > 0) {
+		double t1 = progress_now_s();
+		rc = hl_slopes_check(s->out.mesh, ctx->mesh->nv, ctx->mesh->nt, s->layer_mm,
+				     s->layer_mm * tan(c->opt.alpha_rad), &s->slopes, e);
+		s->t_slopes = progress_now_s() - t1;
+	} else {
+		s->slopes.worst_layer = -1;
+	}
 	if (!rc)
 		rc = start_verify(s, s->out.mesh, e);
 	/* layer outputs print the pixels: beads split off the optimised voids
@@ -513,6 +524,12 @@ static int hollow_metrics(void *state, struct metrics *m, struct err *e)
 				  : 0);
 	rc |= metrics_num(m, "hollow.void_volume_mm3", o->void_volume_mm3 - s->frag.volume_mm3);
 	rc |= metrics_int(m, "hollow.fragments", (long long)s->frag.voids);
+	rc |= metrics_num(m, "hollow.polygon_slopes.excess_mm2", s->slopes.excess_mm2);
+	rc |= metrics_num(m, "hollow.polygon_slopes.worst_mm2", s->slopes.worst_mm2);
+	rc |= metrics_int(m, "hollow.polygon_slopes.worst_layer", s->slopes.worst_layer);
+	rc |= metrics_int(m, "hollow.polygon_slopes.layers_over", s->slopes.layers_over);
+	rc |= metrics_int(m, "hollow.polygon_slopes.layers_checked", s->slopes.layers_checked);
+	rc |= metrics_num(m, "hollow.polygon_slopes.seconds", s->t_slopes);
 	rc |= metrics_num(m, "hollow.fragment_mm3", s->frag.volume_mm3);
 	rc |= metrics_num(m, "hollow.part_volume_mm3", o->part_volume_mm3);
 	rc |= metrics_num(m, "hollow.interior_overhang_mm2", s->rep.interior_overhang_mm2);

@@ -57,6 +57,9 @@ if h.get("voids_dropped_for_fill"):
 between = h["verify"]["min_wall_between_mm"]
 extra += "  slope excess %.3f px (tolerance %.1f)" % (h["verify"]["slope_excess_px"],
                                                    h["verify"]["tolerance_px"])
+if h["polygon_slopes"]["layers_checked"]:
+    extra += "  polygons: excess %.4f mm2 on %d layers" % (h["polygon_slopes"]["excess_mm2"],
+                                                        h["polygon_slopes"]["layers_over"])
 print("%-10s a=%-2s %-11s rounds<=%-2s %5.1f %%  %9.4f  %3d (%3d+%3d)  %6d  %5.2f %5s  %6.2f %6.3f %6.3f  %7.1f (opt %6.1f fill %6.1f)  %5d%s%s"
       % (sys.argv[3], sys.argv[4], sys.argv[5], sys.argv[6], 100 * h["volume_reduction"],
          h["interior_overhang_mm2"], h["voids"], h["voids_optimised"], h["voids_fill"],

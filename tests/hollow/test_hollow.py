@@ -101,7 +101,7 @@ class HollowTest(unittest.TestCase):
             self.assertGreaterEqual(h["voids_optimised"], 1)
             self.assertEqual(h["voids_fill"], 0)
             self.assertFalse(h["budget_spent"])
-            optimised_slopes_ok(self, h["verify"], max_px)
+            optimised_slopes_ok(self, h, max_px)
             self.assertEqual(h["verify"]["islands"], 0)
             # walls never thinner than allowed (1 pixel of rasterisation)
             self.assertGreaterEqual(h["min_wall_3d_mm"], 0.8 - 0.06)
@@ -275,7 +275,7 @@ class HollowTest(unittest.TestCase):
         self.assertEqual(h["groups_failed"], 0, h)
         self.assertGreaterEqual(h["voids_optimised"], 2, h)  # 3 measured, 18.4 %
         self.assertGreater(h["volume_reduction"], 0.1)
-        optimised_slopes_ok(self, h["verify"], 3)
+        optimised_slopes_ok(self, h, 3)
         self.assertEqual(h["verify"]["islands"], 0)
         self.assertGreaterEqual(h["min_wall_mm"], 1.0 - 0.06)
         between_walls_ok(self, h["verify"])

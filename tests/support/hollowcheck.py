@@ -1,19 +1,25 @@
 """Checks shared by the hollow engine's end-to-end tests."""
 
 # The optimiser's voids (paper 004's contours, fill=false) read a few pixels
-# over the 0.2 px tolerance of the sub-pixel check, at contour corners.
-# Most likely their offsets grow a convex corner of solid mitred where the
-# rule allows only the round growth: a 90 degree corner then overhangs by
-# r (sqrt 2 - 1), r = layer tan(alpha) = 1.064 px at SL1 pitch, i.e.
-# 0.44 px (the camel reads 0.43); the sub-pixel model's own corner error
-# (0.19 px on exact pyramids) is part of it.  Measured: the 12 mm cube 1 px at alpha 45 (excess
-# 0.32 px) and 6 px at alpha 30 (0.36), the
-# letter P at 50 mm 2 px (0.22), the camel at 50 mm 17 px on 15 layers
-# (0.43).  Open in issue 22; bounded here so that it cannot grow unseen.
-MITRE_EXCESS_PX = 0.45
+# over the 0.2 px tolerance of the sub-pixel check, at contour corners and
+# zigzags a pixel wide.  Their polygons meet the exact rule there
+# (hollow.polygon_slopes, engine/hollow/slopes.c: 0 mm2 of excess on the
+# 8 mm cube at alpha 45 and 30, where the images read 2 and 13 px, excess
+# 0.33 and 0.39 px; the camel's 17 px on 15 layers, 0.43 px, against 2
+# layers and 0.0011 mm2 on its polygons), so what the images read is the
+# one-edge-per-grey-pixel model's corner error (0.19 px on exact pyramids,
+# docs/verify.md).  Open in issue 22; bounded here so that it cannot grow
+# unseen.
+PIXEL_MODEL_EXCESS_PX = 0.45
 
 
-def optimised_slopes_ok(t, v, max_px):
-    """v: a verify report of a part hollowed by the optimiser alone."""
+def optimised_slopes_ok(t, h, max_px, max_polygon_mm2=0.0):
+    """h: the hollow metrics of a part hollowed by the optimiser alone:
+    the verifier's pixel reading bounded, the polygons' own excess (the
+    exact rule, hollow.polygon_slopes) at most max_polygon_mm2."""
+    v = h["verify"]
     t.assertLessEqual(v["interior_overhang_px"], max_px, v)
-    t.assertLess(v["slope_excess_px"], MITRE_EXCESS_PX, v)
+    t.assertLess(v["slope_excess_px"], PIXEL_MODEL_EXCESS_PX, v)
+    ps = h["polygon_slopes"]
+    t.assertGreater(ps["layers_checked"], 0, ps)
+    t.assertLessEqual(ps["excess_mm2"], max_polygon_mm2, ps)
