@@ -48,6 +48,17 @@ static void tri(struct mesh *m, uint32_t a, uint32_t b, uint32_t c, int inward)
 	q[2] = inward ? b : c;
 }
 
+/* The four side quads between square rings b (below) and t (above),
+ * corners counter-clockwise seen from above. */
+static void sides(struct mesh *m, const uint32_t b[4], const uint32_t t[4], int inward)
+{
+	for (int i = 0; i < 4; i++) {
+		int j = (i + 1) % 4;
+		tri(m, b[i], b[j], t[j], inward);
+		tri(m, b[i], t[j], t[i], inward);
+	}
+}
+
 /* A cavity: square [lo, hi]^2, vertical walls from z0 to z1, a square
  * pyramid roof to (centre, z1 + h); its surface faces into the cavity. */
 static void add_pyramid_cavity(struct mesh *m, double lo, double hi, double z0, double z1,
@@ -68,12 +79,9 @@ static void add_pyramid_cavity(struct mesh *m, double lo, double hi, double z0, 
 	/* outward orientation (CCW seen from outside), flipped: inward */
 	tri(m, b[0], b[2], b[1], 1);
 	tri(m, b[0], b[3], b[2], 1);
-	for (int i = 0; i < 4; i++) {
-		int j = (i + 1) % 4;
-		tri(m, b[i], b[j], t[j], 1);
-		tri(m, b[i], t[j], t[i], 1);
-		tri(m, t[i], t[j], ap, 1);
-	}
+	sides(m, b, t, 1);
+	for (int i = 0; i < 4; i++)
+		tri(m, t[i], t[(i + 1) % 4], ap, 1);
 }
 
 static void test_flat_ceiling_fails(void)
@@ -152,11 +160,7 @@ static void add_frustum(struct mesh *m, double lo0, double hi0, double z0, doubl
 	tri(m, b[0], b[3], b[2], 0);
 	tri(m, t[0], t[1], t[2], 0);
 	tri(m, t[0], t[2], t[3], 0);
-	for (int i = 0; i < 4; i++) {
-		int j = (i + 1) % 4;
-		tri(m, b[i], b[j], t[j], 0);
-		tri(m, b[i], t[j], t[i], 0);
-	}
+	sides(m, b, t, 0);
 }
 
 /* A pillar of solid standing in a cavity and widening at exactly 45
