@@ -178,6 +178,7 @@ struct hy_job {
 	struct hy_stack_report rep;
 	struct slicer *slicer;
 	struct mesh *result;
+	double mesh_iso;             /* its iso level (hy_stack_mesh) */
 	struct paths voids;
 	float *field;                /* void field for G-code regions */
 	struct box3 box;
@@ -605,7 +606,8 @@ static int hy_result_mesh(void *state, const struct mesh **out, struct err *e)
 		double vox = s->p.mesh_voxel_mm > 0 ? s->p.mesh_voxel_mm : 0.25;
 		int bx = (int)fmax(1, round(vox / s->st.pitch_mm));
 		int bz = (int)fmax(1, round(vox / s->st.layer_mm));
-		if ((rc = hy_stack_mesh(&s->st, bx, bz, HY_MESH_MAX_TRIANGLES, &s->result, e)) != 0) {
+		if ((rc = hy_stack_mesh(&s->st, bx, bz, HY_MESH_MAX_TRIANGLES, &s->result,
+					 &s->mesh_iso, e)) != 0) {
 			if (rc == ERR_LIMIT)
 				snprintf(e->field, sizeof e->field, "mesh_voxel_mm");
 			return rc;
@@ -670,6 +672,13 @@ static int hy_metrics(void *state, struct metrics *m, struct err *e)
 	rc |= metrics_num(m, "hybrid.weight_fraction",
 			  r->part_mm3 > 0 ? r->material_mm3 / r->part_mm3 : NAN);
 	rc |= metrics_num(m, "hybrid.material_mm3", r->material_mm3);
+	if (s->result) {
+		double vol;
+		struct vec3 mom;
+		mesh_mass(s->result, &vol, &mom);
+		rc |= metrics_num(m, "hybrid.mesh.iso", s->mesh_iso);
+		rc |= metrics_num(m, "hybrid.mesh.volume_mm3", vol);
+	}
 	rc |= metrics_num(m, "hybrid.part_grid_mm3", r->part_mm3);
 	rc |= metrics_num(m, "hybrid.support_filled_mm3",
 			  r->filled_px * s->st.pitch_mm * s->st.pitch_mm * s->st.layer_mm);

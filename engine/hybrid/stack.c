@@ -821,8 +821,15 @@ int hy_stack_fea_grid(const struct hy_stack *st, struct box3 box, double h_mm, i
 	return 0;
 }
 
+/* The mesh's iso level (hy_stack_mesh): at most this many extractions,
+ * levels within [LO, HI], volume within REL of the material's. */
+#define HY_ISO_PASSES 6
+#define HY_ISO_LO 0.25
+#define HY_ISO_HI 0.75
+#define HY_ISO_REL 0.002
+
 int hy_stack_mesh(const struct hy_stack *st, int bx, int bz, size_t max_triangles,
-		  struct mesh **out, struct err *e)
+		  struct mesh **out, double *iso_used, struct err *e)
 {
 	int nx, ny, nz;
 	float *f;
@@ -861,7 +868,49 @@ int hy_stack_mesh(const struct hy_stack *st, int bx, int bz, size_t max_triangle
 		mem_free(f);
 		return ERR_SET(e, ERR_INTERNAL, "hybrid: mirrored design grid");
 	}
-	rc = mesh_isosurface(f, nx, ny, nz, lo, step, 0.5f, max_triangles, out, e);
+	/* the iso level that keeps the material's volume: block averages round
+	 * the cells' void corners (solid gains there) and the part's convex
+	 * edges (it loses), and marching at 1/2 keeps neither sum; the volume
+	 * falls as the level rises, so a secant on the level (clamped to
+	 * [HY_ISO_LO, HY_ISO_HI]) meets it within HY_ISO_REL in a few passes */
+	{
+		double want = 0, vol[2], iso[2] = {0.5, 0.55};
+		struct vec3 mom;
+		struct mesh *m = NULL;
+
+		for (size_t i = 0; i < nf; i++)
+			want += f[i];
+		want *= step.x * step.y * step.z;
+		for (int pass = 0; pass < HY_ISO_PASSES; pass++) {
+			double t = pass < 2 ? iso[pass] : iso[1];
+			if (pass >= 2) {
+				/* secant through the last two */
+				double d = vol[1] - vol[0];
+				t = fabs(d) > 1e-12 ? iso[1] + (want - vol[1]) * (iso[1] - iso[0]) / d
+						    : iso[1];
+				t = t < HY_ISO_LO ? HY_ISO_LO : t > HY_ISO_HI ? HY_ISO_HI : t;
+				iso[0] = iso[1];
+				vol[0] = vol[1];
+				iso[1] = t;
+			}
+			mesh_free(m);
+			m = NULL;
+			rc = mesh_isosurface(f, nx, ny, nz, lo, step, (float)t, max_triangles, &m, e);
+			if (rc)
+				break;
+			mesh_mass(m, &vol[pass < 2 ? pass : 1], &mom);
+			if (pass >= 1 && fabs(vol[pass < 2 ? pass : 1] - want) <= HY_ISO_REL * want)
+				break;
+		}
+		/* the last level tried is the one kept (each pass starts nearer) */
+		if (!rc) {
+			*out = m;
+			if (iso_used)
+				*iso_used = iso[1];
+		} else {
+			mesh_free(m);
+		}
+	}
 	mem_free(f);
 	return rc;
 }
