@@ -874,7 +874,7 @@ int hy_stack_mesh(const struct hy_stack *st, int bx, int bz, size_t max_triangle
 	 * falls as the level rises, so a secant on the level (clamped to
 	 * [HY_ISO_LO, HY_ISO_HI]) meets it within HY_ISO_REL in a few passes */
 	{
-		double want = 0, vol[2], iso[2] = {0.5, 0.55};
+		double want = 0, vol[2], iso[2] = {0.5, 0.55}, used = 0.5;
 		struct vec3 mom;
 		struct mesh *m = NULL;
 
@@ -898,15 +898,16 @@ int hy_stack_mesh(const struct hy_stack *st, int bx, int bz, size_t max_triangle
 			rc = mesh_isosurface(f, nx, ny, nz, lo, step, (float)t, max_triangles, &m, e);
 			if (rc)
 				break;
+			used = t;
 			mesh_mass(m, &vol[pass < 2 ? pass : 1], &mom);
-			if (pass >= 1 && fabs(vol[pass < 2 ? pass : 1] - want) <= HY_ISO_REL * want)
+			if (fabs(vol[pass < 2 ? pass : 1] - want) <= HY_ISO_REL * want)
 				break;
 		}
 		/* the last level tried is the one kept (each pass starts nearer) */
 		if (!rc) {
 			*out = m;
 			if (iso_used)
-				*iso_used = iso[1];
+				*iso_used = used;
 		} else {
 			mesh_free(m);
 		}
