@@ -29,7 +29,7 @@ struct mesh;
 struct err;
 
 struct hl_slopes {
-	double excess_mm2;    /* sum over layers of area(excess(k)) */
+	double excess_mm2;    /* sum of area(excess(k)) over layers above HL_SLOPES_MIN_MM2 */
 	double worst_mm2;     /* the largest layer's */
 	int worst_layer;      /* its k + 1 (the layer holding the solid), -1: none */
 	int layers_over;      /* layers whose excess passes HL_SLOPES_MIN_MM2 */
@@ -43,8 +43,9 @@ struct hl_slopes {
 /* Check the result mesh res (its first part_nv / part_nt vertices and
  * triangles the part, the optimised voids' surfaces after them) at print
  * layers of layer_mm (layer k centred at (k + 1/2) layer_mm) against
- * reach_mm = layer_mm tan(alpha).  No void: all zero.  0, ERR_NOMEM or
- * an error of the slicer or of Clipper. */
+ * reach_mm = layer_mm tan(alpha).  No void: all zero.  0, ERR_PARAM
+ * (reach_mm <= 0 with voids), ERR_NOMEM or an error of the slicer or of
+ * Clipper. */
 int hl_slopes_check(const struct mesh *res, size_t part_nv, size_t part_nt, double layer_mm,
 		    double reach_mm, struct hl_slopes *out, struct err *e);
 

@@ -883,27 +883,37 @@ int hy_stack_mesh(const struct hy_stack *st, int bx, int bz, size_t max_triangle
 		want *= step.x * step.y * step.z;
 		for (int pass = 0; pass < HY_ISO_PASSES; pass++) {
 			double t = pass < 2 ? iso[pass] : iso[1];
+			struct mesh *cand = NULL;
 			if (pass >= 2) {
 				/* secant through the last two */
 				double d = vol[1] - vol[0];
 				t = fabs(d) > 1e-12 ? iso[1] + (want - vol[1]) * (iso[1] - iso[0]) / d
 						    : iso[1];
 				t = t < HY_ISO_LO ? HY_ISO_LO : t > HY_ISO_HI ? HY_ISO_HI : t;
+				if (t == iso[1])
+					break; /* clamped again: the same level */
 				iso[0] = iso[1];
 				vol[0] = vol[1];
 				iso[1] = t;
 			}
-			mesh_free(m);
-			m = NULL;
-			rc = mesh_isosurface(f, nx, ny, nz, lo, step, (float)t, max_triangles, &m, e);
-			if (rc)
+			rc = mesh_isosurface(f, nx, ny, nz, lo, step, (float)t, max_triangles, &cand, e);
+			if (rc) {
+				/* a level past the triangle cap: keep the last mesh made */
+				if (rc == ERR_LIMIT && m) {
+					rc = 0;
+					err_clear(e);
+				}
 				break;
+			}
+			mesh_free(m);
+			m = cand;
 			used = t;
 			mesh_mass(m, &vol[pass < 2 ? pass : 1], &mom);
 			if (fabs(vol[pass < 2 ? pass : 1] - want) <= HY_ISO_REL * want)
 				break;
 		}
-		/* the last level tried is the one kept (each pass starts nearer) */
+		/* the last mesh made is kept (the secant aims at the volume; after
+		 * HY_ISO_PASSES it may still miss HY_ISO_REL: mesh.volume_mm3 says) */
 		if (!rc) {
 			*out = m;
 			if (iso_used)

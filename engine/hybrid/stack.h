@@ -100,7 +100,7 @@ int hy_stack_fea_grid(const struct hy_stack *st, struct box3 box, double h_mm, i
 		      size_t max_elements, struct fea_grid *g, struct err *e);
 /* The material as a closed manifold mesh: block averages of bx x bx
  * pixels x bz layers, marching tetrahedra (mesh/isosurface.h) at the
- * level whose mesh keeps the material's volume (within 0.2 %, the level
+ * level that aims at the material's volume (a secant, 0.2 %, the level
  * in [0.25, 0.75]; into *iso_used, may be NULL). */
 int hy_stack_mesh(const struct hy_stack *st, int bx, int bz, size_t max_triangles,
 		  struct mesh **out, double *iso_used, struct err *e);
