@@ -178,7 +178,7 @@ struct hy_job {
 	struct hy_stack_report rep;
 	struct slicer *slicer;
 	struct mesh *result;
-	double mesh_iso;             /* its iso level (hy_stack_mesh) */
+	struct hy_mesh_fit mesh_fit; /* its iso level and volume (hy_stack_mesh) */
 	struct paths voids;
 	float *field;                /* void field for G-code regions */
 	struct box3 box;
@@ -607,7 +607,7 @@ static int hy_result_mesh(void *state, const struct mesh **out, struct err *e)
 		int bx = (int)fmax(1, round(vox / s->st.pitch_mm));
 		int bz = (int)fmax(1, round(vox / s->st.layer_mm));
 		if ((rc = hy_stack_mesh(&s->st, bx, bz, HY_MESH_MAX_TRIANGLES, &s->result,
-					 &s->mesh_iso, e)) != 0) {
+					 &s->mesh_fit, e)) != 0) {
 			if (rc == ERR_LIMIT)
 				snprintf(e->field, sizeof e->field, "mesh_voxel_mm");
 			return rc;
@@ -673,11 +673,8 @@ static int hy_metrics(void *state, struct metrics *m, struct err *e)
 			  r->part_mm3 > 0 ? r->material_mm3 / r->part_mm3 : NAN);
 	rc |= metrics_num(m, "hybrid.material_mm3", r->material_mm3);
 	if (s->result) {
-		double vol;
-		struct vec3 mom;
-		mesh_mass(s->result, &vol, &mom);
-		rc |= metrics_num(m, "hybrid.mesh.iso", s->mesh_iso);
-		rc |= metrics_num(m, "hybrid.mesh.volume_mm3", vol);
+		rc |= metrics_num(m, "hybrid.mesh.iso", s->mesh_fit.iso);
+		rc |= metrics_num(m, "hybrid.mesh.volume_mm3", s->mesh_fit.volume_mm3);
 	}
 	rc |= metrics_num(m, "hybrid.part_grid_mm3", r->part_mm3);
 	rc |= metrics_num(m, "hybrid.support_filled_mm3",

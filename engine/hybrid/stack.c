@@ -829,7 +829,7 @@ int hy_stack_fea_grid(const struct hy_stack *st, struct box3 box, double h_mm, i
 #define HY_ISO_REL 0.002
 
 int hy_stack_mesh(const struct hy_stack *st, int bx, int bz, size_t max_triangles,
-		  struct mesh **out, double *iso_used, struct err *e)
+		  struct mesh **out, struct hy_mesh_fit *fit, struct err *e)
 {
 	int nx, ny, nz;
 	float *f;
@@ -872,9 +872,9 @@ int hy_stack_mesh(const struct hy_stack *st, int bx, int bz, size_t max_triangle
 	 * the cells' void corners (solid gains there) and the part's convex
 	 * edges (it loses), and marching at 1/2 keeps neither sum; the volume
 	 * falls as the level rises, so a secant on the level (clamped to
-	 * [HY_ISO_LO, HY_ISO_HI]) meets it within HY_ISO_REL in a few passes */
+	 * [HY_ISO_LO, HY_ISO_HI]) aims at it, stopping within HY_ISO_REL */
 	{
-		double want = 0, vol[2], iso[2] = {0.5, 0.55}, used = 0.5;
+		double want = 0, vol[2], iso[2] = {0.5, 0.55}, used = 0.5, used_vol = 0;
 		struct vec3 mom;
 		struct mesh *m = NULL;
 
@@ -908,16 +908,19 @@ int hy_stack_mesh(const struct hy_stack *st, int bx, int bz, size_t max_triangle
 			mesh_free(m);
 			m = cand;
 			used = t;
-			mesh_mass(m, &vol[pass < 2 ? pass : 1], &mom);
-			if (fabs(vol[pass < 2 ? pass : 1] - want) <= HY_ISO_REL * want)
+			mesh_mass(m, &used_vol, &mom);
+			vol[pass < 2 ? pass : 1] = used_vol;
+			if (fabs(used_vol - want) <= HY_ISO_REL * want)
 				break;
 		}
 		/* the last mesh made is kept (the secant aims at the volume; after
 		 * HY_ISO_PASSES it may still miss HY_ISO_REL: mesh.volume_mm3 says) */
 		if (!rc) {
 			*out = m;
-			if (iso_used)
-				*iso_used = used;
+			if (fit) {
+				fit->iso = used;
+				fit->volume_mm3 = used_vol;
+			}
 		} else {
 			mesh_free(m);
 		}

@@ -101,9 +101,14 @@ int hy_stack_fea_grid(const struct hy_stack *st, struct box3 box, double h_mm, i
 /* The material as a closed manifold mesh: block averages of bx x bx
  * pixels x bz layers, marching tetrahedra (mesh/isosurface.h) at the
  * level that aims at the material's volume (a secant, 0.2 %, the level
- * in [0.25, 0.75]; into *iso_used, may be NULL). */
+ * in [0.25, 0.75]); fit (may be NULL) receives the level used and the
+ * mesh's volume. */
+struct hy_mesh_fit {
+	double iso;        /* iso level of the mesh kept */
+	double volume_mm3; /* its volume (divergence theorem) */
+};
 int hy_stack_mesh(const struct hy_stack *st, int bx, int bz, size_t max_triangles,
-		  struct mesh **out, double *iso_used, struct err *e);
+		  struct mesh **out, struct hy_mesh_fit *fit, struct err *e);
 void hy_stack_fini(struct hy_stack *st);
 
 #endif
