@@ -445,7 +445,7 @@ static int hy_prepare(const struct engine_ctx *ctx, const void *params, void **o
 		      struct err *e)
 {
 	struct hy_job *s;
-	double alpha, t0;
+	double alpha = ctx->common->alpha_deg * M_PI / 180, layer_mm = ctx->layer_mm, t0;
 	int layers, rc;
 
 	if (!ctx->mesh)
@@ -459,13 +459,20 @@ static int hy_prepare(const struct engine_ctx *ctx, const void *params, void **o
 	s->box = ctx->report->bbox;
 	s->shell_mm = ctx->common->shell_mm > 0 ? ctx->common->shell_mm : s->p.skin_mm;
 	s->antialias = ctx->printer->kind == PRINTER_RESIN ? ctx->printer->resin.antialias : 0;
-	s->fea_voxel_mm = s->p.fea_voxel_mm > 0
-				  ? s->p.fea_voxel_mm
-				  : fmax(box3_size(s->box).z / HY_FEA_DIV, 2 * ctx->layer_mm);
 	s->pitch_mm = s->p.grid_mm > 0			   ? s->p.grid_mm
 		      : ctx->want_raster && ctx->map ? sqrt(raster_map_pixel_area_mm2(ctx->map))
 						     : 0.1;
-	layers = layer_count_for(s->box.hi.z, ctx->layer_mm);
+	/* A mesh output has no print layers: its design layers are tall enough
+	 * for the support rule to widen a cavity by one grid pixel a layer at
+	 * alpha.  At the print layer (0.05 mm under 0.1 mm pixels at 45 deg:
+	 * half a pixel) no cavity could widen below its ridge and the rule
+	 * filled every void. */
+	if (!ctx->want_raster && !ctx->want_region)
+		layer_mm = fmax(layer_mm, s->pitch_mm / tan(alpha));
+	s->fea_voxel_mm = s->p.fea_voxel_mm > 0
+				  ? s->p.fea_voxel_mm
+				  : fmax(box3_size(s->box).z / HY_FEA_DIV, 2 * layer_mm);
+	layers = layer_count_for(s->box.hi.z, layer_mm);
 	if (layers < 1) {
 		rc = ERR_SET(e, ERR_GEOMETRY, "the part has no height (%g mm)", s->box.hi.z);
 		goto fail;
@@ -476,7 +483,6 @@ static int hy_prepare(const struct engine_ctx *ctx, const void *params, void **o
 	if ((rc = structures(s, ctx, e)) != 0)
 		goto fail;
 	s->s_structures = progress_now_s() - t0;
-	alpha = ctx->common->alpha_deg * M_PI / 180;
 	s->tcs_alpha_deg = s->p.tcs_alpha_deg > 0
 				   ? s->p.tcs_alpha_deg
 				   : fmax(ctx->common->alpha_deg,
@@ -490,11 +496,11 @@ static int hy_prepare(const struct engine_ctx *ctx, const void *params, void **o
 	s->d.tcs_cell_mm = s->p.tcs_cell_mm;
 	s->d.column_mm = s->p.column_mm;
 	s->d.column_spacing_mm = s->p.column_spacing_mm;
-	s->d.r_alpha_mm = ctx->layer_mm * tan(alpha);
-	s->d.r_tcs_mm = ctx->layer_mm * tan(s->tcs_alpha_deg * M_PI / 180);
+	s->d.r_alpha_mm = layer_mm * tan(alpha);
+	s->d.r_tcs_mm = layer_mm * tan(s->tcs_alpha_deg * M_PI / 180);
 	s->d.threads = ctx->threads;
 	s->d.seed = (uint64_t)s->p.seed;
-	if ((rc = hy_stack_init(&s->st, ctx->mesh, s->box, s->pitch_mm, ctx->layer_mm, layers,
+	if ((rc = hy_stack_init(&s->st, ctx->mesh, s->box, s->pitch_mm, layer_mm, layers,
 				s->shell_mm, ctx->progress, e)) != 0)
 		goto fail;
 	s->rep.seconds_interior = progress_now_s() - t0 - s->s_structures;

@@ -183,6 +183,20 @@ class HybridCli(unittest.TestCase):
         self.assertAlmostEqual(vol, mat, delta=0.005 * mat)
         self.assertAlmostEqual(m["hybrid"]["mesh"]["volume_mm3"], vol, delta=1e-3 * vol)
         self.assertTrue(0.25 <= m["hybrid"]["mesh"]["iso"] <= 0.75, m["hybrid"]["mesh"])
+        # at the printer's default 0.05 mm layers a mesh output designs on
+        # layers of pixel / tan(alpha) (0.1 mm here): the same hollow design,
+        # not a part filled solid by a support rule that cannot widen a
+        # cavity by half a pixel (weight fraction 1.0 before)
+        out2 = self.path("box_default_layers.stl")
+        m2 = self.job(box, out2, "--set", "structure=mfs", "--set", "compliance=false")
+        w, w2 = m["hybrid"]["weight_fraction"], m2["hybrid"]["weight_fraction"]
+        print(f"mesh at default layers: weight fraction {w2:.4f} (0.1 mm layers {w:.4f})")
+        self.assertLess(w2, 0.8)
+        self.assertAlmostEqual(w2, w, delta=0.01)
+        count2, _, vol2, _ = stl_edges(out2)
+        self.assertEqual([e for e, c in count2.items() if c != 2], [])
+        self.assertAlmostEqual(vol2, m2["hybrid"]["material_mm3"],
+                               delta=0.005 * m2["hybrid"]["material_mm3"])
 
     def test_gcode(self):
         box = self.path("box_g.stl")
