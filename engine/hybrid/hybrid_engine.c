@@ -441,6 +441,26 @@ static int compliance(struct hy_job *s, const struct engine_ctx *ctx, struct err
 	return rc;
 }
 
+/* A layer output whose layers may overhang less than one design pixel
+ * (alpha 30 at 0.05 mm layers on 0.047 mm pixels: 0.029 mm): the support
+ * rule's whole pixels cannot widen a cavity under its ridge, so the MFS
+ * cells fill; say so in the job's warnings. */
+static int warn_sub_pixel(struct metrics *m, double alpha_deg, double layer_mm, double reach_mm,
+			  double pitch_mm, struct err *e)
+{
+	char msg[400];
+
+	snprintf(msg, sizeof msg,
+		 "hybrid: at alpha_deg %g and layer_mm %g a layer may overhang %.3f mm, less than "
+		 "the %.3f mm design pixel, so no cavity can widen below its roof and most voids are "
+		 "filled (see hybrid.support_filled_mm3); raise layer_mm or alpha_deg, or write a "
+		 "mesh (stl/obj), which designs on layers of pixel / tan(alpha)",
+		 alpha_deg, layer_mm, reach_mm, pitch_mm);
+	if (metrics_append_str(m, "warnings", msg))
+		return ERR_SET(e, ERR_NOMEM, "out of memory recording a warning");
+	return 0;
+}
+
 static int hy_prepare(const struct engine_ctx *ctx, const void *params, void **out,
 		      struct err *e)
 {
@@ -498,6 +518,10 @@ static int hy_prepare(const struct engine_ctx *ctx, const void *params, void **o
 	s->d.column_spacing_mm = s->p.column_spacing_mm;
 	s->d.r_alpha_mm = layer_mm * tan(alpha);
 	s->d.r_tcs_mm = layer_mm * tan(s->tcs_alpha_deg * M_PI / 180);
+	if (s->d.r_alpha_mm < s->pitch_mm && ctx->metrics &&
+	    (rc = warn_sub_pixel(ctx->metrics, ctx->common->alpha_deg, layer_mm,
+				 s->d.r_alpha_mm, s->pitch_mm, e)) != 0)
+		goto fail;
 	s->d.threads = ctx->threads;
 	s->d.seed = (uint64_t)s->p.seed;
 	if ((rc = hy_stack_init(&s->st, ctx->mesh, s->box, s->pitch_mm, layer_mm, layers,

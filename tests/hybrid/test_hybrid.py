@@ -221,6 +221,23 @@ class HybridCli(unittest.TestCase):
                 self.assertIn(field, p.stderr)
                 self.assertEqual(len(p.stderr.strip().splitlines()), 1, p.stderr)
 
+    def test_sub_pixel_slope_warns(self):
+        # alpha 30 at 0.05 mm layers on the SL1's 0.047 mm pixel: a layer may
+        # overhang 0.029 mm, under a pixel, so the cells fill; the job says so
+        box = self.path("box_w.stl")
+        write_box_stl(box, 12, 10, 8)
+        warn = "less than the 0.047 mm design pixel"
+        for alpha, warned in (("30", True), ("45", False)):
+            with self.subTest(alpha=alpha):
+                m = self.job(box, self.path(f"w{alpha}.sl1"), "--set", "structure=mfs",
+                             "--set", f"alpha_deg={alpha}", "--set", "compliance=false")
+                hits = [w for w in m.get("warnings", []) if warn in w]
+                self.assertEqual(bool(hits), warned, m.get("warnings"))
+                if warned:
+                    self.assertGreater(m["hybrid"]["weight_fraction"], 0.9)
+                else:
+                    self.assertLess(m["hybrid"]["weight_fraction"], 0.8)
+
 
 if __name__ == "__main__":
     unittest.main(verbosity=2)
