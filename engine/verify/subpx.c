@@ -4,6 +4,8 @@
 #include <math.h>
 #include <stddef.h>
 
+#include "engine/verify/corner.h"
+
 int verify_subpx_gray(const struct verify_subpx_img *im, int x, int y)
 {
 	int cx = x - im->x0, cy = y - im->y0;
@@ -37,8 +39,7 @@ static double edge_offset(double nx, double ny, double c)
 	return a * (c - 0.5);
 }
 
-/* Clip polygon (pixel units) to n.u <= d (Sutherland-Hodgman, one plane). */
-static void clip_half(double *ux, double *uy, int *n, double nx, double ny, double d)
+void verify_subpx_clip(double *ux, double *uy, int *n, double nx, double ny, double d)
 {
 	double ox[8], oy[8];
 	int m = 0;
@@ -83,37 +84,93 @@ static int sobel_normal(const struct verify_subpx_img *im, int x, int y, double 
 	return 1;
 }
 
-void verify_subpx_region(const struct verify_subpx_img *im, int x, int y,
-			 struct verify_subpx_poly *out)
+int verify_subpx_line(const struct verify_subpx_img *im, int x, int y, double *nx, double *ny,
+		      double *d)
 {
-	static const double sq_x[4] = {-0.5, 0.5, 0.5, -0.5};
-	static const double sq_y[4] = {-0.5, -0.5, 0.5, 0.5};
-	double ux[8], uy[8], c, nx, ny;
-	int g = verify_subpx_gray(im, x, y), n = 4;
+	int g = verify_subpx_gray(im, x, y);
 
-	out->n = 0;
-	if (g == 0)
-		return;
-	for (int i = 0; i < 4; i++) {
-		ux[i] = sq_x[i];
-		uy[i] = sq_y[i];
-	}
-	c = g / 255.0;
-	if (g < 255) {
-		if (!sobel_normal(im, x, y, &nx, &ny)) {
-			/* no direction: a centred square of the same area */
-			for (int i = 0; i < 4; i++) {
-				ux[i] = sq_x[i] * sqrt(c);
-				uy[i] = sq_y[i] * sqrt(c);
-			}
-		} else {
-			clip_half(ux, uy, &n, nx, ny, edge_offset(nx, ny, c));
-		}
-	}
+	if (g == 0 || g == 255 || !sobel_normal(im, x, y, nx, ny))
+		return 0;
+	*d = edge_offset(*nx, *ny, g / 255.0);
+	return 1;
+}
+
+/* The unit square centred on the origin clipped to n.u <= d for each of
+ * the nh half-planes, to mm at pixel (x, y); 0 when empty. */
+static int square_part(const struct verify_subpx_img *im, int x, int y, const double *nx,
+		       const double *ny, const double *d, int nh, struct verify_subpx_poly *out)
+{
+	double ux[8] = {-0.5, 0.5, 0.5, -0.5}, uy[8] = {-0.5, -0.5, 0.5, 0.5};
+	int n = 4;
+
+	for (int k = 0; k < nh && n; k++)
+		verify_subpx_clip(ux, uy, &n, nx[k], ny[k], d[k]);
 	out->n = n;
 	for (int i = 0; i < n; i++) {
 		out->x[i] = (x + ux[i]) * im->px_mm;
 		out->y[i] = (y + uy[i]) * im->py_mm;
+	}
+	return n > 0;
+}
+
+void verify_subpx_region(const struct verify_subpx_img *im, int x, int y,
+			 struct verify_subpx_region *out)
+{
+	struct verify_corner k;
+	double nx, ny, d;
+	int g = verify_subpx_gray(im, x, y);
+
+	out->parts = 0;
+	out->has_tip = 0;
+	out->corner = 0;
+	if (g == 0)
+		return;
+	if (g == 255) {
+		out->parts = square_part(im, x, y, NULL, NULL, NULL, 0, &out->part[0]);
+		return;
+	}
+	k.n = 0;
+	if (!im->one_edge)
+		verify_corner_fit(im, x, y, &k);
+	if (k.n) {
+		out->corner = 1;
+		if (k.convex) {
+			out->parts = square_part(im, x, y, k.nx, k.ny, k.d, k.n, &out->part[0]);
+		} else {
+			/* the union of the square's parts in each half-plane */
+			for (int e = 0; e < k.n; e++)
+				out->parts += square_part(im, x, y, &k.nx[e], &k.ny[e], &k.d[e], 1,
+							  &out->part[out->parts]);
+		}
+		/* the corner itself, inside the pixel */
+		{
+			double det = k.nx[0] * k.ny[1] - k.ny[0] * k.nx[1], tx, ty;
+			if (fabs(det) > 1e-9) {
+				tx = (k.d[0] * k.ny[1] - k.d[1] * k.ny[0]) / det;
+				ty = (k.nx[0] * k.d[1] - k.nx[1] * k.d[0]) / det;
+				if (fabs(tx) <= 0.5 && fabs(ty) <= 0.5) {
+					out->has_tip = 1;
+					out->tip_x = (x + tx) * im->px_mm;
+					out->tip_y = (y + ty) * im->py_mm;
+				}
+			}
+		}
+		return;
+	}
+	if (verify_subpx_line(im, x, y, &nx, &ny, &d)) {
+		out->parts = square_part(im, x, y, &nx, &ny, &d, 1, &out->part[0]);
+		return;
+	}
+	/* no direction: a centred square of the same area */
+	{
+		double h = 0.5 * sqrt(g / 255.0);
+		double sx[4] = {-h, h, h, -h}, sy[4] = {-h, -h, h, h};
+		out->parts = 1;
+		out->part[0].n = 4;
+		for (int i = 0; i < 4; i++) {
+			out->part[0].x[i] = (x + sx[i]) * im->px_mm;
+			out->part[0].y[i] = (y + sy[i]) * im->py_mm;
+		}
 	}
 }
 
@@ -157,9 +214,18 @@ double verify_subpx_poly_dist(const struct verify_subpx_poly *p, double x_mm, do
 	return inside ? 0 : sqrt(best);
 }
 
+double verify_subpx_region_dist(const struct verify_subpx_region *r, double x_mm, double y_mm)
+{
+	double best = INFINITY;
+
+	for (int k = 0; k < r->parts && best > 0; k++)
+		best = fmin(best, verify_subpx_poly_dist(&r->part[k], x_mm, y_mm));
+	return best;
+}
+
 double verify_subpx_gap_mm(const struct verify_subpx_img *im, int x, int y)
 {
-	struct verify_subpx_poly p;
+	struct verify_subpx_region r;
 	double gap = 0;
 	int g = verify_subpx_gray(im, x, y);
 
@@ -167,19 +233,88 @@ double verify_subpx_gap_mm(const struct verify_subpx_img *im, int x, int y)
 		return 0;
 	if (g == 0)
 		return INFINITY;
-	verify_subpx_region(im, x, y, &p);
-	/* distance to a convex set is convex: its maximum over the square
-	 * is at a corner */
-	for (int j = -1; j <= 1; j += 2)
-		for (int i = -1; i <= 1; i += 2)
-			gap = fmax(gap, verify_subpx_poly_dist(&p, (x + i * 0.5) * im->px_mm,
-								(y + j * 0.5) * im->py_mm));
-	return gap;
+	verify_subpx_region(im, x, y, &r);
+	if (r.parts <= 1) {
+		/* distance to a convex set is convex: its maximum over the
+		 * square is at a corner */
+		for (int j = -1; j <= 1; j += 2)
+			for (int i = -1; i <= 1; i += 2)
+				gap = fmax(gap, verify_subpx_poly_dist(&r.part[0], (x + i * 0.5) * im->px_mm,
+									(y + j * 0.5) * im->py_mm));
+		return gap;
+	}
+	/* the union of two (a concave corner): the farthest point of the
+	 * square lies in the void's wedge, where the distance to the region
+	 * is the smaller of the distances to the wedge's two sides, neither
+	 * surrounding a point inside: on the square's boundary.  Sampled
+	 * there every 1/16 pixel, plus the 1/32 pixel the samples may miss
+	 * (distance is 1-Lipschitz) */
+	for (int s = 0; s < 64; s++) {
+		double t = (s % 16) / 16.0 - 0.5, u, v;
+		switch (s / 16) {
+		case 0: u = t; v = -0.5; break;
+		case 1: u = 0.5; v = t; break;
+		case 2: u = -t; v = 0.5; break;
+		default: u = -0.5; v = -t; break;
+		}
+		gap = fmax(gap, verify_subpx_region_dist(&r, (x + u) * im->px_mm, (y + v) * im->py_mm));
+	}
+	return gap + fmax(im->px_mm, im->py_mm) / 32;
 }
 
-/* Distance (mm) from a point to the solid of `below` within the window. */
-static double dist_below(const struct verify_subpx_img *below, int x, int y, int win,
-			 double sx, double sy)
+/* The grey pixels of `below` in a window, their regions computed once
+ * for every point measured against them. */
+#define WIN_GREY_MAX 32
+struct window {
+	int x0, y0, side, n_grey;
+	short grey_at[(2 * VERIFY_SUBPX_WIN_MAX + 1) * (2 * VERIFY_SUBPX_WIN_MAX + 1)];
+	struct verify_subpx_region grey[WIN_GREY_MAX];
+};
+
+/* Start w for the window of half-size win around (x, y), its regions
+ * computed when first needed; 0 when it does not fit (then they are
+ * computed per point). */
+static int window_init(int x, int y, int win, struct window *w)
+{
+	if (win > VERIFY_SUBPX_WIN_MAX)
+		return 0;
+	w->x0 = x - win;
+	w->y0 = y - win;
+	w->side = 2 * win + 1;
+	w->n_grey = 0;
+	for (int k = 0; k < w->side * w->side; k++)
+		w->grey_at[k] = -1;
+	return 1;
+}
+
+/* Region of grey pixel (i, j) of `below`: from w when it holds it (or
+ * has room for it), else in *tmp. */
+static const struct verify_subpx_region *window_region(const struct verify_subpx_img *below,
+						       struct window *w, int i, int j,
+						       struct verify_subpx_region *tmp)
+{
+	short *at;
+
+	if (!w) {
+		verify_subpx_region(below, i, j, tmp);
+		return tmp;
+	}
+	at = &w->grey_at[(j - w->y0) * w->side + (i - w->x0)];
+	if (*at >= 0)
+		return &w->grey[*at];
+	if (w->n_grey == WIN_GREY_MAX) {
+		verify_subpx_region(below, i, j, tmp);
+		return tmp;
+	}
+	verify_subpx_region(below, i, j, &w->grey[w->n_grey]);
+	*at = (short)w->n_grey++;
+	return &w->grey[*at];
+}
+
+/* Distance (mm) from a point to the solid of `below` within the window
+ * (w: its regions, or NULL). */
+static double dist_below(const struct verify_subpx_img *below, struct window *w, int x,
+			 int y, int win, double sx, double sy)
 {
 	double px = below->px_mm, py = below->py_mm, best = INFINITY;
 	double half_diag = 0.5 * hypot(px, py);
@@ -188,7 +323,6 @@ static double dist_below(const struct verify_subpx_img *below, int x, int y, int
 		for (int i = x - win; i <= x + win; i++) {
 			int g = verify_subpx_gray(below, i, j);
 			double cx = i * px, cy = j * py, d;
-			struct verify_subpx_poly p;
 			if (g == 0)
 				continue;
 			if (hypot(sx - cx, sy - cy) - half_diag >= best)
@@ -199,8 +333,9 @@ static double dist_below(const struct verify_subpx_img *below, int x, int y, int
 				double ey = fmax(fabs(sy - cy) - py / 2, 0);
 				d = hypot(ex, ey);
 			} else {
-				verify_subpx_region(below, i, j, &p);
-				d = verify_subpx_poly_dist(&p, sx, sy);
+				struct verify_subpx_region tmp;
+				d = verify_subpx_region_dist(window_region(below, w, i, j, &tmp), sx,
+							     sy);
 			}
 			if (d < best)
 				best = d;
@@ -225,23 +360,27 @@ static int valley(const struct verify_subpx_img *im, int x, int y, int g)
 double verify_subpx_far_mm(const struct verify_subpx_img *below,
 			   const struct verify_subpx_img *above, int x, int y, int win_px)
 {
-	struct verify_subpx_poly q;
+	struct verify_subpx_region q;
+	struct window wbuf, *w = &wbuf;
 	double far = -INFINITY, px = above->px_mm, py = above->py_mm;
 	int g = verify_subpx_gray(above, x, y);
 
 	if (g == 0)
 		return -INFINITY;
-	if (g < 255 && valley(above, x, y, g)) {
+	if (!window_init(x, y, win_px, w))
+		w = NULL;
+	verify_subpx_region(above, x, y, &q);
+	if (g < 255 && !q.corner && valley(above, x, y, g)) {
 		/* the square less a disc holding the void of the 3 x 3
 		 * neighbourhood, at that void's centroid: a closing cavity's
 		 * last hole */
 		double m = 0, mx = 0, my = 0, rho;
 		for (int j = -1; j <= 1; j++)
 			for (int i = -1; i <= 1; i++) {
-				double w = 1 - verify_subpx_gray(above, x + i, y + j) / 255.0;
-				m += w;
-				mx += w * i;
-				my += w * j;
+				double wt = 1 - verify_subpx_gray(above, x + i, y + j) / 255.0;
+				m += wt;
+				mx += wt * i;
+				my += wt * j;
 			}
 		mx /= m;
 		my /= m;
@@ -251,27 +390,31 @@ double verify_subpx_far_mm(const struct verify_subpx_img *below,
 				double u = -0.5 + i * 0.25, v = -0.5 + j * 0.25;
 				if (hypot(u - mx, v - my) < rho)
 					continue;
-				far = fmax(far, dist_below(below, x, y, win_px, (x + u) * px,
+				far = fmax(far, dist_below(below, w, x, y, win_px, (x + u) * px,
 							   (y + v) * py));
 			}
 		for (int k = 0; k < 16; k++) {
 			double u = mx + rho * cos(k * M_PI / 8), v = my + rho * sin(k * M_PI / 8);
 			if (fabs(u) > 0.5 || fabs(v) > 0.5)
 				continue;
-			far = fmax(far, dist_below(below, x, y, win_px, (x + u) * px, (y + v) * py));
+			far = fmax(far,
+				   dist_below(below, w, x, y, win_px, (x + u) * px, (y + v) * py));
 		}
 		return far;
 	}
-	verify_subpx_region(above, x, y, &q);
-	for (int k = 0; k < q.n; k++)
-		far = fmax(far, dist_below(below, x, y, win_px, q.x[k], q.y[k]));
+	for (int p = 0; p < q.parts; p++)
+		for (int k = 0; k < q.part[p].n; k++)
+			far = fmax(far, dist_below(below, w, x, y, win_px, q.part[p].x[k],
+						   q.part[p].y[k]));
+	if (q.has_tip)
+		far = fmax(far, dist_below(below, w, x, y, win_px, q.tip_x, q.tip_y));
 	for (int j = 0; j <= 4; j++)
 		for (int i = 0; i <= 4; i++) {
 			double sx = (x - 0.5 + i * 0.25) * above->px_mm;
 			double sy = (y - 0.5 + j * 0.25) * above->py_mm;
-			if (verify_subpx_poly_dist(&q, sx, sy) > 0)
+			if (verify_subpx_region_dist(&q, sx, sy) > 0)
 				continue;
-			far = fmax(far, dist_below(below, x, y, win_px, sx, sy));
+			far = fmax(far, dist_below(below, w, x, y, win_px, sx, sy));
 		}
 	return far;
 }

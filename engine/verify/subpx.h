@@ -26,19 +26,34 @@
 
 #include <stdint.h>
 
+#include "engine/verify/corner.h"
+
 /* A crop of one layer: gray[(y - y0) * w + (x - x0)] for image pixel
  * (x, y) inside it (borrowed). */
 struct verify_subpx_img {
 	const uint8_t *gray;
 	int x0, y0, w, h;
 	double px_mm, py_mm; /* pitch along x (columns) and y (rows) */
+	int one_edge;        /* 1: one straight edge in every grey pixel, no
+			      * corners (the model's comparison in tests) */
 };
 
-/* A pixel's solid region: a convex polygon of at most 5 vertices in mm,
- * image-pixel origin, wound consistently; n == 0 when empty. */
+/* A convex polygon of at most 6 vertices in mm, image-pixel origin,
+ * wound consistently; n == 0 when empty. */
 struct verify_subpx_poly {
 	int n;
 	double x[8], y[8];
+};
+
+/* A pixel's solid region: the union of `parts` convex polygons (0: empty;
+ * 2 only where the solid is concave, around a corner of void).  corner:
+ * by the two-edge model (corner.h); has_tip: (tip_x, tip_y), mm, is
+ * where its two edges meet, inside the pixel (a point of the region's
+ * boundary that is a vertex of no part when the solid is the union). */
+struct verify_subpx_region {
+	int parts, corner, has_tip;
+	struct verify_subpx_poly part[2];
+	double tip_x, tip_y;
 };
 
 /* Gray of image pixel (x, y), 0 beyond the crop. */
@@ -46,7 +61,18 @@ int verify_subpx_gray(const struct verify_subpx_img *im, int x, int y);
 
 /* Region of image pixel (x, y) by the model above. */
 void verify_subpx_region(const struct verify_subpx_img *im, int x, int y,
-			 struct verify_subpx_poly *out);
+			 struct verify_subpx_region *out);
+
+/* The one straight edge of grey pixel (x, y): the half-plane n.u <= d
+ * (pixel units, origin at the pixel's centre, n the unit normal from
+ * solid to void) whose part of the square has the pixel's coverage.
+ * Returns 0 (outputs untouched) for gray 0 or 255 or no gradient. */
+int verify_subpx_line(const struct verify_subpx_img *im, int x, int y, double *nx, double *ny,
+		      double *d);
+
+/* Clip polygon (ux, uy)[*n] (pixel units, at most 8 vertices in and out:
+ * a square and up to 4 half-planes) to n.u <= d (Sutherland-Hodgman). */
+void verify_subpx_clip(double *ux, double *uy, int *n, double nx, double ny, double d);
 
 /* Largest distance (mm) from a point of pixel (x, y)'s square to its
  * region: 0 for gray 255, at most half the pixel diagonal. */
@@ -54,6 +80,13 @@ double verify_subpx_gap_mm(const struct verify_subpx_img *im, int x, int y);
 
 /* Distance (mm) from point (x_mm, y_mm) to polygon p (0 inside). */
 double verify_subpx_poly_dist(const struct verify_subpx_poly *p, double x_mm, double y_mm);
+
+/* Distance (mm) from point (x_mm, y_mm) to region r (0 inside). */
+double verify_subpx_region_dist(const struct verify_subpx_region *r, double x_mm, double y_mm);
+
+/* Largest window (win_px) whose regions verify_subpx_far_mm keeps for
+ * all its points; beyond it they are computed per point. */
+#define VERIFY_SUBPX_WIN_MAX 8
 
 /* Largest distance (mm) from a point of the region of pixel (x, y) of
  * layer `above` to the solid of layer `below` (the union of its pixels'
