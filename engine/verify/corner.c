@@ -16,25 +16,6 @@
 #define MAX_ITER 20
 #define NPAR 4             /* (angle, offset) per edge */
 
-double verify_corner_area(const struct verify_corner *k, double i, double j)
-{
-	double ux[8] = {i - 0.5, i + 0.5, i + 0.5, i - 0.5};
-	double uy[8] = {j - 0.5, j - 0.5, j + 0.5, j + 0.5};
-	double a = 0, s = k->convex ? 1 : -1;
-	int n = 4;
-
-	/* convex: the square clipped to every half-plane; concave: 1 less
-	 * the square clipped to every complement (the void's convex part) */
-	for (int e = 0; e < k->n && n; e++)
-		verify_subpx_clip(ux, uy, &n, s * k->nx[e], s * k->ny[e], s * k->d[e]);
-	for (int p = 0; p < n; p++) {
-		int q = (p + 1) % n;
-		a += ux[p] * uy[q] - ux[q] * uy[p];
-	}
-	a = fabs(a) / 2;
-	return k->convex ? a : 1 - a;
-}
-
 /* Coverage of the unit square centred at (i, j) by n.u <= d (n unit): the
  * forward form of subpx.c's edge offset.  With a >= b the absolute
  * components and s = (a + b) / 2: (d' + s)^2 / (2ab) while the line cuts
@@ -59,6 +40,38 @@ static double line_area(double nx, double ny, double d, double i, double j)
 	if (b > 1e-12 && dd > s - b)
 		return 1 - (s - dd) * (s - dd) / (2 * a * b);
 	return 0.5 + dd / a;
+}
+
+double verify_corner_area(const struct verify_corner *k, double i, double j)
+{
+	double ux[8] = {i - 0.5, i + 0.5, i + 0.5, i - 0.5};
+	double uy[8] = {j - 0.5, j - 0.5, j + 0.5, j + 0.5};
+	double a = 0, s = k->convex ? 1 : -1, f[2];
+	int n = 4, cut[2];
+
+	/* the convex side: the solid when convex, else the void (the square
+	 * in both complements); a square wholly on one side of an edge needs
+	 * no clipping */
+	for (int e = 0; e < 2; e++) {
+		double h = (fabs(k->nx[e]) + fabs(k->ny[e])) / 2;
+		f[e] = s * (k->nx[e] * i + k->ny[e] * j - k->d[e]); /* > 0: outside the side */
+		if (f[e] >= h)
+			return k->convex ? 0 : 1;
+		cut[e] = f[e] > -h;
+	}
+	if (!cut[0] || !cut[1]) {
+		int e = cut[0] ? 0 : 1;
+		a = cut[e] ? line_area(s * k->nx[e], s * k->ny[e], s * k->d[e], i, j) : 1;
+		return k->convex ? a : 1 - a;
+	}
+	for (int e = 0; e < 2 && n; e++)
+		verify_subpx_clip(ux, uy, &n, s * k->nx[e], s * k->ny[e], s * k->d[e]);
+	for (int p = 0; p < n; p++) {
+		int q = (p + 1) % n;
+		a += ux[p] * uy[q] - ux[q] * uy[p];
+	}
+	a = fabs(a) / 2;
+	return k->convex ? a : 1 - a;
 }
 
 /* Parameters (angle, offset) per edge to a corner. */
@@ -215,33 +228,39 @@ static int corner_start(const struct edges *ed, double *th)
 	return best >= VERIFY_CORNER_MIN_TURN_DEG * M_PI / 180;
 }
 
-/* Fit both phases; 1 with *k set when the better passes corner.h's
+/* Refine phase `convex` from th; 1 with *k set when it passes corner.h's
  * tests against sse_line, the one straight edge's error. */
-static int fit_edges(const struct edges *ed, const double *c, const double *w, double sse_line,
-		     struct verify_corner *k)
+static int fit_phase(const double *th0, int convex, const double *c, const double *w,
+		     double sse_line, struct verify_corner *k)
 {
-	double th[2][NPAR], sse[2], r[NWIN];
-	int best;
+	double th[NPAR], r[NWIN];
 
-	if (!corner_start(ed, th[0]))
-		return 0;
-	memcpy(th[1], th[0], sizeof th[0]);
-	sse[0] = corner_refine(th[0], 0, c, w);
-	sse[1] = corner_refine(th[1], 1, c, w);
-	best = sse[1] < sse[0];
-	if (!(sse[best] <= VERIFY_CORNER_GAIN * sse_line))
+	memcpy(th, th0, sizeof th);
+	if (!(corner_refine(th, convex, c, w) <= VERIFY_CORNER_GAIN * sse_line))
 		return 0;
 	/* every pixel of the window explained, not only on average: not so
 	 * where it holds a third edge */
-	corner_sse(th[best], best, c, w, r);
+	corner_sse(th, convex, c, w, r);
 	for (int t = 0; t < NWIN; t++)
 		if (fabs(r[t]) > VERIFY_CORNER_FIT_TOL)
 			return 0;
-	if (fabs(remainder(th[best][0] - th[best][2], 2 * M_PI)) <
-	    VERIFY_CORNER_MIN_TURN_DEG * M_PI / 180)
+	if (fabs(remainder(th[0] - th[2], 2 * M_PI)) < VERIFY_CORNER_MIN_TURN_DEG * M_PI / 180)
 		return 0;
-	corner_set(k, th[best], best);
+	corner_set(k, th, convex);
 	return 1;
+}
+
+/* Fit the phase that starts nearer first, the other when it fails. */
+static int fit_edges(const struct edges *ed, const double *c, const double *w, double sse_line,
+		     struct verify_corner *k)
+{
+	double th[NPAR];
+	int first;
+
+	if (!corner_start(ed, th))
+		return 0;
+	first = corner_sse(th, 1, c, w, NULL) < corner_sse(th, 0, c, w, NULL);
+	return fit_phase(th, first, c, w, sse_line, k) || fit_phase(th, !first, c, w, sse_line, k);
 }
 
 void verify_corner_fit(const struct verify_subpx_img *im, int x, int y, struct verify_corner *k)

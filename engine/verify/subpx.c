@@ -3,8 +3,64 @@
 
 #include <math.h>
 #include <stddef.h>
+#include <string.h>
 
+#include "engine/core/err.h"
+#include "engine/core/mem.h"
 #include "engine/verify/corner.h"
+
+int verify_subpx_fits_size(struct verify_subpx_fits *f, size_t pixels, size_t grey)
+{
+	if (pixels > f->at_cap) {
+		mem_free(f->at);
+		f->at = mem_alloc(pixels * sizeof *f->at);
+		f->at_cap = f->at ? pixels : 0;
+		f->n = 0;
+		if (!f->at)
+			return ERR_NOMEM;
+		for (size_t i = 0; i < pixels; i++)
+			f->at[i] = -1;
+	}
+	return mem_grow((void **)&f->fit, &f->cap, grey, sizeof *f->fit);
+}
+
+void verify_subpx_fits_reset(struct verify_subpx_fits *f)
+{
+	for (size_t k = 0; k < f->n; k++)
+		f->at[f->fit[k].px] = -1;
+	f->n = 0;
+}
+
+void verify_subpx_fits_fini(struct verify_subpx_fits *f)
+{
+	mem_free(f->at);
+	mem_free(f->fit);
+	memset(f, 0, sizeof *f);
+}
+
+/* The corner fit of grey pixel (x, y), from im's fits when it holds it
+ * (storing it there when made). */
+static void corner_of(const struct verify_subpx_img *im, int x, int y, struct verify_corner *k)
+{
+	struct verify_subpx_fits *f = im->fits;
+	size_t px;
+
+	if (!f) {
+		verify_corner_fit(im, x, y, k);
+		return;
+	}
+	px = (size_t)(y - im->y0) * (size_t)im->w + (size_t)(x - im->x0);
+	if (f->at[px] >= 0) {
+		*k = f->fit[f->at[px]].k;
+		return;
+	}
+	verify_corner_fit(im, x, y, k);
+	if (f->n < f->cap) {
+		f->fit[f->n].px = px;
+		f->fit[f->n].k = *k;
+		f->at[px] = (int32_t)f->n++;
+	}
+}
 
 int verify_subpx_gray(const struct verify_subpx_img *im, int x, int y)
 {
@@ -131,7 +187,7 @@ void verify_subpx_region(const struct verify_subpx_img *im, int x, int y,
 	}
 	k.n = 0;
 	if (!im->one_edge)
-		verify_corner_fit(im, x, y, &k);
+		corner_of(im, x, y, &k);
 	if (k.n) {
 		out->corner = 1;
 		if (k.convex) {
@@ -262,59 +318,9 @@ double verify_subpx_gap_mm(const struct verify_subpx_img *im, int x, int y)
 	return gap + fmax(im->px_mm, im->py_mm) / 32;
 }
 
-/* The grey pixels of `below` in a window, their regions computed once
- * for every point measured against them. */
-#define WIN_GREY_MAX 32
-struct window {
-	int x0, y0, side, n_grey;
-	short grey_at[(2 * VERIFY_SUBPX_WIN_MAX + 1) * (2 * VERIFY_SUBPX_WIN_MAX + 1)];
-	struct verify_subpx_region grey[WIN_GREY_MAX];
-};
-
-/* Start w for the window of half-size win around (x, y), its regions
- * computed when first needed; 0 when it does not fit (then they are
- * computed per point). */
-static int window_init(int x, int y, int win, struct window *w)
-{
-	if (win > VERIFY_SUBPX_WIN_MAX)
-		return 0;
-	w->x0 = x - win;
-	w->y0 = y - win;
-	w->side = 2 * win + 1;
-	w->n_grey = 0;
-	for (int k = 0; k < w->side * w->side; k++)
-		w->grey_at[k] = -1;
-	return 1;
-}
-
-/* Region of grey pixel (i, j) of `below`: from w when it holds it (or
- * has room for it), else in *tmp. */
-static const struct verify_subpx_region *window_region(const struct verify_subpx_img *below,
-						       struct window *w, int i, int j,
-						       struct verify_subpx_region *tmp)
-{
-	short *at;
-
-	if (!w) {
-		verify_subpx_region(below, i, j, tmp);
-		return tmp;
-	}
-	at = &w->grey_at[(j - w->y0) * w->side + (i - w->x0)];
-	if (*at >= 0)
-		return &w->grey[*at];
-	if (w->n_grey == WIN_GREY_MAX) {
-		verify_subpx_region(below, i, j, tmp);
-		return tmp;
-	}
-	verify_subpx_region(below, i, j, &w->grey[w->n_grey]);
-	*at = (short)w->n_grey++;
-	return &w->grey[*at];
-}
-
-/* Distance (mm) from a point to the solid of `below` within the window
- * (w: its regions, or NULL). */
-static double dist_below(const struct verify_subpx_img *below, struct window *w, int x,
-			 int y, int win, double sx, double sy)
+/* Distance (mm) from a point to the solid of `below` within the window. */
+static double dist_below(const struct verify_subpx_img *below, int x, int y, int win, double sx,
+			 double sy)
 {
 	double px = below->px_mm, py = below->py_mm, best = INFINITY;
 	double half_diag = 0.5 * hypot(px, py);
@@ -333,9 +339,9 @@ static double dist_below(const struct verify_subpx_img *below, struct window *w,
 				double ey = fmax(fabs(sy - cy) - py / 2, 0);
 				d = hypot(ex, ey);
 			} else {
-				struct verify_subpx_region tmp;
-				d = verify_subpx_region_dist(window_region(below, w, i, j, &tmp), sx,
-							     sy);
+				struct verify_subpx_region r;
+				verify_subpx_region(below, i, j, &r);
+				d = verify_subpx_region_dist(&r, sx, sy);
 			}
 			if (d < best)
 				best = d;
@@ -361,14 +367,11 @@ double verify_subpx_far_mm(const struct verify_subpx_img *below,
 			   const struct verify_subpx_img *above, int x, int y, int win_px)
 {
 	struct verify_subpx_region q;
-	struct window wbuf, *w = &wbuf;
 	double far = -INFINITY, px = above->px_mm, py = above->py_mm;
 	int g = verify_subpx_gray(above, x, y);
 
 	if (g == 0)
 		return -INFINITY;
-	if (!window_init(x, y, win_px, w))
-		w = NULL;
 	verify_subpx_region(above, x, y, &q);
 	if (g < 255 && !q.corner && valley(above, x, y, g)) {
 		/* the square less a disc holding the void of the 3 x 3
@@ -390,7 +393,7 @@ double verify_subpx_far_mm(const struct verify_subpx_img *below,
 				double u = -0.5 + i * 0.25, v = -0.5 + j * 0.25;
 				if (hypot(u - mx, v - my) < rho)
 					continue;
-				far = fmax(far, dist_below(below, w, x, y, win_px, (x + u) * px,
+				far = fmax(far, dist_below(below, x, y, win_px, (x + u) * px,
 							   (y + v) * py));
 			}
 		for (int k = 0; k < 16; k++) {
@@ -398,23 +401,23 @@ double verify_subpx_far_mm(const struct verify_subpx_img *below,
 			if (fabs(u) > 0.5 || fabs(v) > 0.5)
 				continue;
 			far = fmax(far,
-				   dist_below(below, w, x, y, win_px, (x + u) * px, (y + v) * py));
+				   dist_below(below, x, y, win_px, (x + u) * px, (y + v) * py));
 		}
 		return far;
 	}
 	for (int p = 0; p < q.parts; p++)
 		for (int k = 0; k < q.part[p].n; k++)
-			far = fmax(far, dist_below(below, w, x, y, win_px, q.part[p].x[k],
+			far = fmax(far, dist_below(below, x, y, win_px, q.part[p].x[k],
 						   q.part[p].y[k]));
 	if (q.has_tip)
-		far = fmax(far, dist_below(below, w, x, y, win_px, q.tip_x, q.tip_y));
+		far = fmax(far, dist_below(below, x, y, win_px, q.tip_x, q.tip_y));
 	for (int j = 0; j <= 4; j++)
 		for (int i = 0; i <= 4; i++) {
 			double sx = (x - 0.5 + i * 0.25) * above->px_mm;
 			double sy = (y - 0.5 + j * 0.25) * above->py_mm;
 			if (verify_subpx_region_dist(&q, sx, sy) > 0)
 				continue;
-			far = fmax(far, dist_below(below, w, x, y, win_px, sx, sy));
+			far = fmax(far, dist_below(below, x, y, win_px, sx, sy));
 		}
 	return far;
 }

@@ -24,9 +24,23 @@
 #ifndef INFILLD_VERIFY_SUBPX_H
 #define INFILLD_VERIFY_SUBPX_H
 
+#include <stddef.h>
 #include <stdint.h>
 
 #include "engine/verify/corner.h"
+
+/* The corner fits made on one layer's crop, so that a grey pixel is
+ * fitted once however often it is measured (corner.h: a fit costs some
+ * thousands of clipped squares). */
+struct verify_subpx_fits {
+	int32_t *at;      /* per crop pixel: index in fit, -1 not fitted yet */
+	size_t at_cap;
+	struct verify_subpx_fit {
+		size_t px;                /* crop pixel */
+		struct verify_corner k;   /* k.n == 0: no corner */
+	} *fit;
+	size_t n, cap;    /* cap >= the crop's grey pixels */
+};
 
 /* A crop of one layer: gray[(y - y0) * w + (x - x0)] for image pixel
  * (x, y) inside it (borrowed). */
@@ -36,7 +50,18 @@ struct verify_subpx_img {
 	double px_mm, py_mm; /* pitch along x (columns) and y (rows) */
 	int one_edge;        /* 1: one straight edge in every grey pixel, no
 			      * corners (the model's comparison in tests) */
+	struct verify_subpx_fits *fits; /* this layer's fits (borrowed, filled
+					 * as pixels are measured); NULL:
+					 * fitted on every call */
 };
+
+/* Size f for a crop of `pixels` pixels, `grey` of them grey (0 < gray <
+ * 255), after verify_subpx_fits_reset: 0 or ERR_NOMEM (f then unusable
+ * until a successful call; freed by verify_subpx_fits_fini). */
+int verify_subpx_fits_size(struct verify_subpx_fits *f, size_t pixels, size_t grey);
+/* Forget the fits (before the crop holds another layer): O(fits). */
+void verify_subpx_fits_reset(struct verify_subpx_fits *f);
+void verify_subpx_fits_fini(struct verify_subpx_fits *f);
 
 /* A convex polygon of at most 6 vertices in mm, image-pixel origin,
  * wound consistently; n == 0 when empty. */
@@ -83,10 +108,6 @@ double verify_subpx_poly_dist(const struct verify_subpx_poly *p, double x_mm, do
 
 /* Distance (mm) from point (x_mm, y_mm) to region r (0 inside). */
 double verify_subpx_region_dist(const struct verify_subpx_region *r, double x_mm, double y_mm);
-
-/* Largest window (win_px) whose regions verify_subpx_far_mm keeps for
- * all its points; beyond it they are computed per point. */
-#define VERIFY_SUBPX_WIN_MAX 8
 
 /* Largest distance (mm) from a point of the region of pixel (x, y) of
  * layer `above` to the solid of layer `below` (the union of its pixels'
