@@ -3,6 +3,7 @@
 
 #include <math.h>
 #include <stddef.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "engine/core/err.h"
@@ -363,6 +364,109 @@ static int valley(const struct verify_subpx_img *im, int x, int y, int g)
 	return 0;
 }
 
+/* The last hole of a closing roof: grey pixel (x, y) of `above` in a
+ * small void of `above` that closes (its 8-connected pixels below 255 fit
+ * a HOLE_MAX_PX square).  Its few grey pixels do not determine its shape
+ * (a square hole and a disc of its area have nearly the same coverage),
+ * so it is read as the roof closing evenly: the solid of `above` there
+ * is the solid of `below` grown by t, t such that the void this leaves
+ * in the hole's window (its bounding box and one pixel more) has the
+ * window's void area, by HOLE_SAMPLES^2 points a pixel.  Taken only when
+ * it gives every pixel of the window its coverage within HOLE_TOL (a hole
+ * off the middle of the hole below, or of another shape, is not this);
+ * then *far (mm) is t where the hole's edge crosses pixel (x, y), else
+ * the largest distance of its points.  Returns 0 when not taken.  Cost:
+ * HOLE_SAMPLES^2 distances (dist_below) per pixel of the window. */
+#define HOLE_MAX_PX 8
+#define HOLE_SAMPLES 6
+#define HOLE_TOL 0.1
+#define HOLE_WIN (HOLE_MAX_PX + 2)
+#define HOLE_N (HOLE_WIN * HOLE_WIN * HOLE_SAMPLES * HOLE_SAMPLES)
+
+static int cmp_desc(const void *a, const void *b)
+{
+	float u = *(const float *)a, v = *(const float *)b;
+
+	return (u < v) - (u > v);
+}
+
+static int closing_hole(const struct verify_subpx_img *below, const struct verify_subpx_img *above,
+			int x, int y, int win_px, double *far)
+{
+	int stack[HOLE_MAX_PX * HOLE_MAX_PX + 1], sp = 0, seen = 0, wx0, wy0, ww, wh;
+	int x0 = x, y0 = y, x1 = x, y1 = y, gx[HOLE_MAX_PX * HOLE_MAX_PX], gy[HOLE_MAX_PX * HOLE_MAX_PX];
+	float d[HOLE_N], sorted[HOLE_N]; /* mm; 29 KB of stack */
+	double v = 0, t, best = -INFINITY;
+	const int ss = HOLE_SAMPLES * HOLE_SAMPLES;
+	int n = 0, nv, cross = 0;
+
+	/* the hole: flood of the pixels below 255, capped */
+	gx[seen] = x;
+	gy[seen++] = y;
+	stack[sp++] = 0;
+	while (sp) {
+		int q = stack[--sp];
+		for (int j = -1; j <= 1; j++)
+			for (int i = -1; i <= 1; i++) {
+				int ax = gx[q] + i, ay = gy[q] + j, dup = 0;
+				if (verify_subpx_gray(above, ax, ay) == 255)
+					continue;
+				for (int k = 0; k < seen && !dup; k++)
+					dup = gx[k] == ax && gy[k] == ay;
+				if (dup)
+					continue;
+				x0 = ax < x0 ? ax : x0;
+				x1 = ax > x1 ? ax : x1;
+				y0 = ay < y0 ? ay : y0;
+				y1 = ay > y1 ? ay : y1;
+				if (x1 - x0 >= HOLE_MAX_PX || y1 - y0 >= HOLE_MAX_PX ||
+				    seen == HOLE_MAX_PX * HOLE_MAX_PX)
+					return 0; /* not small: an edge, not a hole */
+				gx[seen] = ax;
+				gy[seen] = ay;
+				stack[sp++] = seen++;
+			}
+	}
+	wx0 = x0 - 1;
+	wy0 = y0 - 1;
+	ww = x1 - x0 + 3;
+	wh = y1 - y0 + 3;
+	for (int py = 0; py < wh; py++)
+		for (int px = 0; px < ww; px++) {
+			int cx = wx0 + px, cy = wy0 + py;
+			v += 1 - verify_subpx_gray(above, cx, cy) / 255.0;
+			for (int s = 0; s < ss; s++) {
+				double u = (s % HOLE_SAMPLES + 0.5) / HOLE_SAMPLES - 0.5;
+				double w = (s / HOLE_SAMPLES + 0.5) / HOLE_SAMPLES - 0.5;
+				d[n++] = (float)dist_below(below, cx, cy, win_px + 1,
+							   (cx + u) * above->px_mm,
+							   (cy + w) * above->py_mm);
+			}
+		}
+	memcpy(sorted, d, (size_t)n * sizeof *d);
+	qsort(sorted, (size_t)n, sizeof *sorted, cmp_desc);
+	nv = (int)lround(v * ss);
+	if (nv <= 0 || nv >= n || !isfinite(sorted[nv]))
+		return 0;
+	t = isfinite(sorted[nv - 1]) ? (sorted[nv - 1] + sorted[nv]) / 2 : sorted[nv];
+	for (int p = 0; p < ww * wh; p++) {
+		int cx = wx0 + p % ww, cy = wy0 + p / ww, in = 0;
+		for (int s = 0; s < ss; s++)
+			in += d[p * ss + s] <= t;
+		if (fabs((double)in / ss - verify_subpx_gray(above, cx, cy) / 255.0) > HOLE_TOL)
+			return 0;
+		if (cx == x && cy == y)
+			for (int s = 0; s < ss; s++) {
+				if (d[p * ss + s] > t)
+					cross = 1;
+				else
+					best = fmax(best, d[p * ss + s]);
+			}
+	}
+	*far = cross ? t : best;
+	return 1;
+}
+
 double verify_subpx_far_mm(const struct verify_subpx_img *below,
 			   const struct verify_subpx_img *above, int x, int y, int win_px)
 {
@@ -372,6 +476,8 @@ double verify_subpx_far_mm(const struct verify_subpx_img *below,
 
 	if (g == 0)
 		return -INFINITY;
+	if (g < 255 && !above->one_edge && closing_hole(below, above, x, y, win_px, &far))
+		return far;
 	verify_subpx_region(above, x, y, &q);
 	if (g < 255 && !q.corner && valley(above, x, y, g)) {
 		/* the square less a disc holding the void of the 3 x 3
