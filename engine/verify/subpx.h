@@ -8,7 +8,10 @@
  * is the gray gradient there (3 x 3 isotropic Sobel weights 1, sqrt 2,
  * 1), and its offset from the centre is the one at which the cut-off
  * part's area is g / 255 of the square (exact for a straight edge; the
- * inverse of the area of a square cut by a line).  A grey pixel with no
+ * inverse of the area of a square cut by a line).  Where that edge misses
+ * a neighbour's coverage, two edges fitted to the 5 x 5 neighbourhood
+ * when they explain it (corner.h): the square in both half-planes (a
+ * convex corner) or in either (a concave one).  A grey pixel with no
  * gradient (a speck alone) is a centred square of that area.  Pixels
  * beyond the crop are empty.  This is the reading of Gustavson and
  * Strand's anti-aliased distance transform (2011), kept as regions so
@@ -113,12 +116,18 @@ double verify_subpx_region_dist(const struct verify_subpx_region *r, double x_mm
  * layer `above` to the solid of layer `below` (the union of its pixels'
  * regions), looking at the pixels of `below` within win_px (Chebyshev)
  * of (x, y); INFINITY when none of them is solid (or the region is
- * empty: then -INFINITY).  Evaluated at the region's vertices and at
- * the points of a 5 x 5 grid over the square (quarter-pixel steps) that
- * lie in it: exact where the farthest point is a vertex (a slope's
- * edge), within an eighth of a pixel's diagonal on a ridge (where two
- * walls below are equally near).  The caller sizes win_px to cover
- * every pixel of `below` that can be nearest (verify.c). */
+ * empty: then -INFINITY).  Evaluated at the region's vertices, its
+ * corner's tip and the points of a 5 x 5 grid over the square
+ * (quarter-pixel steps) that lie in it: exact where the farthest point
+ * is a vertex (a slope's edge), within an eighth of a pixel's diagonal
+ * on a ridge (where two walls below are equally near).  Two readings of
+ * `above` need its neighbourhood: a pixel in a small hole that closes (a
+ * roof's last hole, whose shape its few grey pixels do not give) is
+ * read as `below`'s solid grown evenly to the hole's void area, where
+ * that gives the hole's pixels their coverage; else a valley pixel (a
+ * void thinner than the pixel) as the square less a disc of the void's
+ * area (docs/verify.md).  The caller sizes win_px to cover every pixel
+ * of `below` that can be nearest (verify.c). */
 double verify_subpx_far_mm(const struct verify_subpx_img *below,
 			   const struct verify_subpx_img *above, int x, int y, int win_px);
 
