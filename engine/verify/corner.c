@@ -13,7 +13,7 @@
 #define SIDE (2 * WIN + 1)
 #define NWIN (SIDE * SIDE)
 #define CENTRE_WEIGHT 4.0  /* the pixel's own coverage counts 4 times */
-#define MAX_ITER 20
+#define MAX_ITER 10
 #define NPAR 4             /* (angle, offset) per edge */
 
 /* Coverage of the unit square centred at (i, j) by n.u <= d (n unit): the
