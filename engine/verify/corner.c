@@ -4,7 +4,6 @@
 #include "engine/verify/corner.h"
 
 #include <math.h>
-#include <stdlib.h>
 #include <string.h>
 
 #include "engine/verify/subpx.h"
@@ -46,18 +45,18 @@ double verify_corner_area(const struct verify_corner *k, double i, double j)
 {
 	double ux[8] = {i - 0.5, i + 0.5, i + 0.5, i - 0.5};
 	double uy[8] = {j - 0.5, j - 0.5, j + 0.5, j + 0.5};
-	double a = 0, s = k->convex ? 1 : -1, f[2];
+	double a = 0, s = k->convex ? 1 : -1;
 	int n = 4, cut[2];
 
 	/* the convex side: the solid when convex, else the void (the square
 	 * in both complements); a square wholly on one side of an edge needs
 	 * no clipping */
 	for (int e = 0; e < 2; e++) {
-		double h = (fabs(k->nx[e]) + fabs(k->ny[e])) / 2;
-		f[e] = s * (k->nx[e] * i + k->ny[e] * j - k->d[e]); /* > 0: outside the side */
-		if (f[e] >= h)
+		double h = (fabs(k->nx[e]) + fabs(k->ny[e])) / 2; /* half the square's extent */
+		double f = s * (k->nx[e] * i + k->ny[e] * j - k->d[e]); /* > 0: outside the side */
+		if (f >= h)
 			return k->convex ? 0 : 1;
-		cut[e] = f[e] > -h;
+		cut[e] = f > -h;
 	}
 	if (!cut[0] || !cut[1]) {
 		int e = cut[0] ? 0 : 1;
@@ -271,19 +270,21 @@ void verify_corner_fit(const struct verify_subpx_img *im, int x, int y, struct v
 	k->n = 0;
 	if (!verify_subpx_line(im, x, y, &nx, &ny, &d))
 		return;
-	for (int t = 0; t < NWIN; t++) {
-		int i = t % SIDE - WIN, j = t / SIDE - WIN;
-		double e;
-		c[t] = verify_subpx_gray(im, x + i, y + j) / 255.0;
-		w[t] = i == 0 && j == 0 ? CENTRE_WEIGHT : 1;
-		e = line_area(nx, ny, d, i, j) - c[t];
-		sse_line += w[t] * e * e;
-		if (abs(i) <= 1 && abs(j) <= 1)
-			gate = fmax(gate, fabs(e));
-	}
+	for (int t = 0; t < NWIN; t++)
+		c[t] = verify_subpx_gray(im, x + t % SIDE - WIN, y + t / SIDE - WIN) / 255.0;
 	/* the one straight edge predicts the 8 neighbours: no corner */
+	for (int j = -1; j <= 1; j++)
+		for (int i = -1; i <= 1; i++)
+			gate = fmax(gate, fabs(line_area(nx, ny, d, i, j) -
+					       c[(j + WIN) * SIDE + i + WIN]));
 	if (gate <= VERIFY_CORNER_GATE)
 		return;
+	for (int t = 0; t < NWIN; t++) {
+		int i = t % SIDE - WIN, j = t / SIDE - WIN;
+		double e = line_area(nx, ny, d, i, j) - c[t];
+		w[t] = i == 0 && j == 0 ? CENTRE_WEIGHT : 1;
+		sse_line += w[t] * e * e;
+	}
 	ed.n = 0;
 	for (int t = 0; t < NWIN; t++) {
 		int i = t % SIDE - WIN, j = t / SIDE - WIN;

@@ -448,7 +448,11 @@ static int closing_hole(const struct verify_subpx_img *below, const struct verif
 	nv = (int)lround(v * ss);
 	if (nv <= 0 || nv >= n || !isfinite(sorted[nv]))
 		return 0;
-	t = isfinite(sorted[nv - 1]) ? (sorted[nv - 1] + sorted[nv]) / 2 : sorted[nv];
+	/* between the void's nearest point and the solid's farthest, at most
+	 * half a sample's diagonal past the latter (deep in the hole the
+	 * window may miss the nearest solid and read a void point farther) */
+	t = sorted[nv] + fmin(sorted[nv - 1] - sorted[nv],
+			      M_SQRT2 * fmax(above->px_mm, above->py_mm) / HOLE_SAMPLES) / 2;
 	for (int p = 0; p < ww * wh; p++) {
 		int cx = wx0 + p % ww, cy = wy0 + p / ww, in = 0;
 		for (int s = 0; s < ss; s++)
