@@ -4,7 +4,7 @@
  * r = layer tan(alpha): where a void narrows upwards, solid may advance at
  * most r a layer in every direction, round at convex corners.  The
  * verifier (engine/verify) reads it from the anti-aliased layer images,
- * one straight edge per grey pixel; this check reads it from the
+ * one or two straight edges per grey pixel; this check reads it from the
  * polygons the images are drawn from, so that a pixel model's error and
  * a geometric excess can be told apart.  For each print layer k holding
  * optimised voids V(k) = part(k) \ result(k):

@@ -136,9 +136,9 @@ int verify_overhangs(struct verify *v, int layer, struct err *e)
 	double hd = 0.5 * hypot(v->p.pixel_x_mm, v->p.pixel_y_mm), pa = v->p.pixel_x_mm * v->p.pixel_y_mm;
 	double ext2 = v->ext_reach_mm * v->ext_reach_mm;
 	struct verify_subpx_img below = {pc->gray, pc->x0, pc->y0, pc->w, pc->h, v->p.pixel_x_mm,
-					 v->p.pixel_y_mm};
+					 v->p.pixel_y_mm, 0, &pc->fits};
 	struct verify_subpx_img above = {c->gray, c->x0, c->y0, c->w, c->h, v->p.pixel_x_mm,
-					 v->p.pixel_y_mm};
+					 v->p.pixel_y_mm, 0, &c->fits};
 	long long out_px = 0;
 
 	if (np && (verify_grow_bytes((void **)&v->agg, &v->agg_cap, np * sizeof *v->agg) ||

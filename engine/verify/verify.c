@@ -68,6 +68,7 @@ static void crop_fini(struct crop *c)
 	mem_free(c->d2);
 	mem_free(c->near);
 	mem_free(c->any_d2);
+	verify_subpx_fits_fini(&c->fits);
 	memset(c, 0, sizeof *c);
 }
 
@@ -428,6 +429,7 @@ int verify_layer_ref(struct verify *v, const struct raster *r, const struct rast
 	struct crop *c, *pc;
 	int x0 = INT32_MAX, y0 = INT32_MAX, x1 = -1, y1 = -1, layer = v->next;
 	uint32_t ncomp = 0;
+	size_t grey = 0; /* pixels 0 < gray < 255 in the crop */
 
 	if (v->failed || v->finished)
 		return ERR_SET(e, ERR_INTERNAL, "verify: check already %s",
@@ -472,6 +474,7 @@ int verify_layer_ref(struct verify *v, const struct raster *r, const struct rast
 	}
 	if (layer == 0)
 		pc->w = 0;
+	verify_subpx_fits_reset(&c->fits);
 	v->cur_first = (uint32_t)v->nuf;
 	/* solid bounding box of this layer */
 	for (int y = 0; y < r->h; y++) {
@@ -515,8 +518,11 @@ int verify_layer_ref(struct verify *v, const struct raster *r, const struct rast
 			for (int x = 0; x < c->w; x++) {
 				c->solid[(size_t)y * (size_t)c->w + (size_t)x] = row[x] >= v->p.threshold;
 				c->gray[(size_t)y * (size_t)c->w + (size_t)x] = row[x];
+				grey += row[x] > 0 && row[x] < 255;
 			}
 		}
+		if (verify_subpx_fits_size(&c->fits, (size_t)c->w * (size_t)c->h, grey))
+			goto nomem;
 		c->any_ok = 0;
 		if (label_voids(v, &ncomp))
 			goto nomem;

@@ -12,6 +12,7 @@
 #include "engine/verify/between.h"
 #include "engine/verify/contact.h"
 #include "engine/verify/fins.h"
+#include "engine/verify/subpx.h"
 #include "engine/verify/verify.h"
 
 struct err;
@@ -31,6 +32,7 @@ struct crop {
 	float *any_d2;    /* squared distance (mm^2) to the nearest pixel with
 			   * gray > 0; computed on demand (any_ok) */
 	int any_ok;
+	struct verify_subpx_fits fits; /* corner fits made on this layer (subpx.h) */
 };
 
 struct rec {
