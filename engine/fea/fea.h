@@ -181,6 +181,11 @@ double *fea_solver_force(struct fea_solver *s);
  * 0 stays 0 and > 0 stays > 0); the next solve starts from the previous
  * displacement (warm start). */
 int fea_solver_set_rho(struct fea_solver *s, const float *rho, struct err *e);
+/* The relative residual the next solves reach (fea_opts.tol); ERR_PARAM
+ * field "tol" outside (0, 1).  An optimiser may rank its designs on loose
+ * solves and tighten for the result (the next solve starts from the last
+ * displacement). */
+int fea_solver_set_tol(struct fea_solver *s, double tol, struct err *e);
 /* Solve K(rho) u = f (f: fea_solver_force).  ERR_GEOMETRY if CG does not
  * reach tol within max_iter, or stalls above it (tol below the rounding
  * floor of K u); the message gives the true residual reached.  The

@@ -464,6 +464,14 @@ static void sub_block(void *vctx, size_t blk, int tid)
 		c->y[i] -= c->x[i];
 }
 
+int fea_solver_set_tol(struct fea_solver *s, double tol, struct err *e)
+{
+	if (!(tol > 0 && tol < 1))
+		return ERR_FIELD(e, "tol", "tolerance must be in (0, 1), not %g", tol);
+	s->opt.tol = tol;
+	return 0;
+}
+
 int fea_solve(struct fea_solver *s, struct fea_result *res, struct err *e)
 {
 	const size_t nv = 3 * (size_t)s->cs, nb = (nv + VBLOCK - 1) / VBLOCK;

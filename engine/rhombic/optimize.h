@@ -56,6 +56,9 @@ struct rh_stiff_opts {
 	int supersample;      /* cavity sample points per element axis */
 	double penal;         /* SIMP exponent of the element densities (fea_opts.penal) */
 	double rho_min;       /* density of the cavities' elements (fea_opts.rho_min) */
+	double fea_tol;       /* relative residual of the solves that rank the leaves
+				 (warm-started); the result's and the solid part's
+				 solves reach the FEA's default (1e-6).  0 = that default */
 	int binary;           /* eq. 10 at rho_min for every element of S_C (the paper's
 				 binary densities) instead of at each element's density */
 	size_t max_elements;

@@ -33,6 +33,9 @@
  * "Deviations": at the paper's 0.001^3 the solver's tolerance leaves the
  * cavities' displacements, whose energies rank the cells, undetermined). */
 #define RH_RHO_MIN 0.1
+/* Relative residual of the solves that rank the cells (docs/rhombic.md,
+ * "Stiffness": the ranking needs the energies, not the last digits). */
+#define RH_FEA_TOL 1e-3
 
 enum { RH_OBJ_STIFFNESS = 0, RH_OBJ_STABILITY };
 enum { RH_REFINE_ADAPTIVE = 0, RH_REFINE_UNIFORM };
@@ -51,6 +54,7 @@ struct rh_params {
 	double penal;
 	double rho_min;
 	int sensitivity;
+	double fea_tol;
 	char loads[4096];
 };
 
@@ -112,6 +116,11 @@ static const struct param_desc rh_desc[] = {
 	 .help = "Eq. 10 over the material a split adds: density = at each element's own density "
 		 "(elements are partly filled walls); binary = at rho_min for all of them (the "
 		 "paper's all-or-nothing elements)."},
+	{.name = "fea_tol", .type = PARAM_NUM, .offset = P(fea_tol), .min = 1e-8, .max = 0.1,
+	 .def = RH_FEA_TOL, .unit = "",
+	 .help = "Relative residual of the FEA solves that rank the cells (each starts from the "
+		 "last displacement); the result's and the solid part's compliance are solved to "
+		 "1e-6."},
 	{.name = "loads", .type = PARAM_STR, .offset = P(loads), .max = 4095, .str_cap = 4096,
 	 .unit = "",
 	 .help = "Load case of the stiffness objective in the FEA text form (docs/fea.md), e.g. "
@@ -191,6 +200,7 @@ static int run_stiffness(struct rh_job *s, const struct engine_ctx *ctx, int ada
 	o.penal = s->p.penal;
 	o.rho_min = s->p.rho_min;
 	o.binary = s->p.sensitivity == 1;
+	o.fea_tol = s->p.fea_tol;
 	o.max_elements = RH_FEA_MAX;
 	o.threads = ctx->threads;
 	o.progress = ctx->progress;
@@ -450,6 +460,7 @@ static int rh_metrics(void *state, struct metrics *m, struct err *e)
 		rc |= metrics_int(m, "rhombic.fea_elements", (long long)r->elements);
 		rc |= metrics_int(m, "rhombic.fea_solves", (long long)r->nhist);
 		rc |= metrics_num(m, "rhombic.fea_solve_s", r->solve_s);
+		rc |= metrics_num(m, "rhombic.fea_tol", s->p.fea_tol);
 		rc |= metrics_str(m, "rhombic.loads", s->loads_text);
 		/* per solve: the compliance-vs-volume curve (the solid's last) */
 		for (size_t i = 0; i < r->nhist; i++) {

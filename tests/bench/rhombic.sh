@@ -107,10 +107,26 @@ PY
 # $TMP/curve.png (docs/rhombic.md shows it).
 CURVE_MESH=${CURVE_MESH:-bunny.stl}
 CURVE_VF=${CURVE_VF:-0.7}
-# 1 mm elements (25k on the bunny): at the automatic 0.3 mm (400k) the
-# adaptive run to 0.7 did not end within 13 min on 2 shared cores (the
-# multigrid needs ~100 CG iterations per solve on such parts, docs/fea.md).
+# 1 mm elements (25k on the bunny); large mode also times the adaptive run
+# at the automatic element size (0.54 mm, 372k elements: 8-10 min).
 CURVE_FEA_MM=${CURVE_FEA_MM:-1}
+if [ "$MODE" = large ]; then
+	out="$TMP/auto_a"
+	/usr/bin/time -f '%e %M' -o "$out.time" "$BIN" run "$SHARED/meshes/$CURVE_MESH" -o "$out.sl1" \
+		--engine rhombic --set height_mm=50 --set wall_mm=0.5 --set skin_mm=0.5 --threads 2 \
+		--quiet --set volume_fraction="$CURVE_VF" --metrics "$out.json" || status=1
+	python3 - "$out" "$CURVE_MESH" <<'PY'
+import json, sys
+out, mesh = sys.argv[1:]
+r = json.load(open(out + ".json"))["rhombic"]; t = open(out + ".time").read().split()
+its = [int(x) for x in r["fea_iterations"]]
+print(f"{mesh} 50 mm to {r['volume_fraction']:.3f} at the automatic elements "
+      f"({r['fea_voxel_mm']:.3f} mm, {r['fea_elements']}): {r['iterations']} iterations, "
+      f"{r['fea_solves']} solves, {sum(its)} CG iterations (fea_tol {r.get('fea_tol', '?')}), "
+      f"{r['fea_solve_s']:.0f} s of solves, C/C_solid {r['compliance_normalized']:.4f}; "
+      f"{t[0]} s, {int(t[1]) // 1024} MB")
+PY
+fi
 CURVE=(--engine rhombic --set height_mm=50 --set wall_mm=0.5 --set skin_mm=0.5 --threads 2 --quiet
 	--set fea_voxel_mm="$CURVE_FEA_MM")
 out="$TMP/curve_a"

@@ -480,6 +480,52 @@ static void test_set_rho(void)
 	fea_grid_fini(&g);
 }
 
+/* set_tol: a loose solve stops early, tightening continues from it to the
+ * fresh tight answer; tolerances outside (0, 1) are refused. */
+static void test_set_tol(void)
+{
+	struct fea_grid g;
+	struct fea_opts o;
+	struct fea_loads l;
+	struct fea_solver *s = NULL, *s2 = NULL;
+	struct fea_result loose, tight, fresh;
+	struct err e;
+	const int n = 24;
+
+	err_clear(&e);
+	grid_box(&g, n, n / 2, n / 3, 1);
+	for (size_t i = 0; i < (size_t)n * (n / 2) * (n / 3); i++)
+		g.rho[i] = (i % 5 == 0) ? 0.2f : 1.0f;
+	fea_opts_default(&o);
+	o.tol = 1e-2;
+	REQUIRE_OK(fea_loads_parse("", MAT, &l, &e), &e);
+	REQUIRE_OK(fea_solver_new(&g, &l, &o, &s, &e), &e);
+	REQUIRE_OK(fea_solve(s, &loose, &e), &e);
+	CHECK_NUM(loose.residual, <=, 1e-2);
+	REQUIRE_OK(fea_solver_set_tol(s, 1e-8, &e), &e);
+	REQUIRE_OK(fea_solve(s, &tight, &e), &e);
+	CHECK_NUM(tight.residual, <=, 1e-8);
+	o.tol = 1e-8;
+	REQUIRE_OK(fea_solver_new(&g, &l, &o, &s2, &e), &e);
+	REQUIRE_OK(fea_solve(s2, &fresh, &e), &e);
+	CHECK_REL(tight.compliance_nmm, fresh.compliance_nmm, 1e-8);
+	/* the loose solve stopped before the tight one's iterations */
+	CHECK_INT(loose.iterations, <, fresh.iterations);
+	/* and its compliance is not the tight one's to 1e-8 (it stopped early) */
+	CHECK_NUM(fabs(loose.compliance_nmm / fresh.compliance_nmm - 1), >, 1e-8);
+	if (getenv("HARNESS_VERBOSE"))
+		fprintf(stderr, "set_tol: loose %d iterations (C %.9g), then %d more, fresh %d (C %.9g)\n",
+			loose.iterations, loose.compliance_nmm, tight.iterations, fresh.iterations,
+			fresh.compliance_nmm);
+	CHECK_EQ_INT(fea_solver_set_tol(s, 0, &e), ERR_PARAM);
+	CHECK_STR(e.field, "tol");
+	CHECK_EQ_INT(fea_solver_set_tol(s, 1, &e), ERR_PARAM);
+	fea_loads_fini(&l);
+	fea_solver_free(s);
+	fea_solver_free(s2);
+	fea_grid_fini(&g);
+}
+
 /* Threads give the same answer (deterministic sums). */
 static void test_threads(void)
 {
@@ -577,6 +623,7 @@ int main(void)
 	RUN(test_cantilever);
 	RUN(test_lattice);
 	RUN(test_set_rho);
+	RUN(test_set_tol);
 	RUN(test_threads);
 	RUN(test_long_bar);
 	return harness_report();
