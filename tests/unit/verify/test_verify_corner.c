@@ -27,54 +27,12 @@
 #include "engine/verify/corner.h"
 #include "engine/verify/subpx.h"
 #include "engine/verify/verify.h"
+#include "clipsq.h"
 
 #define PX 0.047
 #define LAYER 0.05
 #define SLOPE_PX (LAYER / PX) /* tan 45 */
 
-struct hp {
-	double a, b, c; /* a x + b y <= c (pixels, raster frame: pixel (i, j)
-			 * is [i, i+1] x [j, j+1]) */
-};
-
-/* Area of pixel (i, j)'s square inside every half-plane. */
-static double clip_area(int i, int j, const struct hp *h, int nh)
-{
-	double x[16], y[16], ox[16], oy[16], a = 0;
-	int n = 4;
-
-	x[0] = x[3] = i;
-	x[1] = x[2] = i + 1;
-	y[0] = y[1] = j;
-	y[2] = y[3] = j + 1;
-	for (int k = 0; k < nh && n > 0; k++) {
-		int m = 0;
-		for (int p = 0; p < n; p++) {
-			int q = (p + 1) % n;
-			double fp = h[k].a * x[p] + h[k].b * y[p] - h[k].c;
-			double fq = h[k].a * x[q] + h[k].b * y[q] - h[k].c;
-			if (fp <= 0) {
-				ox[m] = x[p];
-				oy[m++] = y[p];
-			}
-			if ((fp < 0 && fq > 0) || (fp > 0 && fq < 0)) {
-				double t = fp / (fp - fq);
-				ox[m] = x[p] + t * (x[q] - x[p]);
-				oy[m++] = y[p] + t * (y[q] - y[p]);
-			}
-		}
-		n = m;
-		for (int p = 0; p < n; p++) {
-			x[p] = ox[p];
-			y[p] = oy[p];
-		}
-	}
-	for (int p = 0; p < n; p++) {
-		int q = (p + 1) % n;
-		a += x[p] * y[q] - x[q] * y[p];
-	}
-	return fabs(a) / 2;
-}
 
 /* gray of a pixel whose void is the convex set h (void_convex) or whose
  * solid is (!void_convex) */

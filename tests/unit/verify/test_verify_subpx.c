@@ -24,59 +24,13 @@
 #include "engine/core/err.h"
 #include "engine/geom/raster.h"
 #include "engine/verify/verify.h"
+#include "clipsq.h"
 
 #define PX 0.047
 #define LAYER 0.05
 #define N 200
-#define DISC_EDGES 2048
+#define DISC_EDGES CLIPSQ_MAX_EDGES
 
-struct hp {
-	double a, b, c; /* a x + b y <= c: inside the cavity (pixels) */
-};
-
-/* Area of pixel (i, j)'s square [i, i+1] x [j, j+1] inside every half-plane. */
-static double clip_area(int i, int j, const struct hp *h, int nh)
-{
-	/* a disc smaller than the pixel leaves every one of its edges in it */
-	static double x[DISC_EDGES + 8], y[DISC_EDGES + 8], ox[DISC_EDGES + 8], oy[DISC_EDGES + 8];
-	double a = 0;
-	int n = 4;
-
-	x[0] = x[3] = i;
-	x[1] = x[2] = i + 1;
-	y[0] = y[1] = j;
-	y[2] = y[3] = j + 1;
-
-	for (int k = 0; k < nh && n > 0; k++) {
-		int m = 0;
-		for (int p = 0; p < n; p++) {
-			int q = (p + 1) % n;
-			double fp = h[k].a * x[p] + h[k].b * y[p] - h[k].c;
-			double fq = h[k].a * x[q] + h[k].b * y[q] - h[k].c;
-			if (m > DISC_EDGES + 6)
-				break; /* cannot happen: at most 4 + one per half-plane */
-			if (fp <= 0) {
-				ox[m] = x[p];
-				oy[m++] = y[p];
-			}
-			if ((fp < 0 && fq > 0) || (fp > 0 && fq < 0)) {
-				double t = fp / (fp - fq);
-				ox[m] = x[p] + t * (x[q] - x[p]);
-				oy[m++] = y[p] + t * (y[q] - y[p]);
-			}
-		}
-		n = m;
-		for (int p = 0; p < n; p++) {
-			x[p] = ox[p];
-			y[p] = oy[p];
-		}
-	}
-	for (int p = 0; p < n; p++) {
-		int q = (p + 1) % n;
-		a += x[p] * y[q] - x[q] * y[p];
-	}
-	return fabs(a) / 2;
-}
 
 /* One layer: solid block [10, 190]^2 px minus the cavity (half-planes h,
  * or nothing when nh == 0); pixels far from every cavity edge skip the
