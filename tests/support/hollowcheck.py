@@ -5,7 +5,7 @@
 # zigzags a pixel wide.  Their polygons meet the exact rule there
 # (hollow.polygon_slopes, engine/hollow/slopes.c: 0 mm2 of excess on the
 # 8 mm cube at alpha 45 and 30, where the images read 2 and 13 px, excess
-# 0.33 and 0.39 px; the camel's 17 px on 15 layers, 0.43 px, against 2
+# 0.33 and 0.39 px; the camel's 23 px on 20 layers, 0.43 px, against 2
 # layers and 0.0011 mm2 on its polygons), so what the images read is the
 # pixel model's error where a loop turns within a pixel: more edges in a
 # 5 x 5 window than the verifier's two-edge corner model fits, so one edge
