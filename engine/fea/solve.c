@@ -130,9 +130,19 @@ void fea_solver_free(struct fea_solver *s)
 	mem_free(s);
 }
 
+/* fea_opts.tol and fea_solver_set_tol: a relative residual in (0, 1). */
+static int check_tol(double tol, struct err *e)
+{
+	if (!(tol > 0 && tol < 1))
+		return ERR_FIELD(e, "tol", "tolerance must be in (0, 1), not %g", tol);
+	return 0;
+}
+
 static int check_inputs(const struct fea_grid *g, const struct fea_loads *l,
 			const struct fea_opts *o, struct err *e)
 {
+	int rc;
+
 	if (!g || !g->rho || g->nx < 1 || g->ny < 1 || g->nz < 1)
 		return ERR_SET(e, ERR_PARAM, "fea grid is empty");
 	if (!(g->h_mm > 0) || !isfinite(g->h_mm))
@@ -143,8 +153,8 @@ static int check_inputs(const struct fea_grid *g, const struct fea_loads *l,
 	if (!(l->material.nu > -1 && l->material.nu < 0.5))
 		return ERR_FIELD(e, "loads", "loads: nu must be in (-1, 0.5) (got %g)",
 				 l->material.nu);
-	if (!(o->tol > 0 && o->tol < 1))
-		return ERR_FIELD(e, "tol", "tolerance must be in (0, 1), not %g", o->tol);
+	if ((rc = check_tol(o->tol, e)) != 0)
+		return rc;
 	if (o->max_iter < 1)
 		return ERR_FIELD(e, "max_iter", "max_iter must be >= 1, not %d", o->max_iter);
 	if (o->levels < 0)
@@ -466,10 +476,11 @@ static void sub_block(void *vctx, size_t blk, int tid)
 
 int fea_solver_set_tol(struct fea_solver *s, double tol, struct err *e)
 {
-	if (!(tol > 0 && tol < 1))
-		return ERR_FIELD(e, "tol", "tolerance must be in (0, 1), not %g", tol);
-	s->opt.tol = tol;
-	return 0;
+	int rc = check_tol(tol, e);
+
+	if (rc == 0)
+		s->opt.tol = tol;
+	return rc;
 }
 
 int fea_solve(struct fea_solver *s, struct fea_result *res, struct err *e)
