@@ -73,20 +73,20 @@ def design(tag, engine, params):
             "metrics": json.load(open(out + ".json")), "params": dict(params)}
 
 
-def tune(name, engine, fixed, par, x0, lo, hi, target, runs_log):
+def tune(name, engine, fixed, par, x0, lo, hi, target, first=1):
     """Secant on log C against par within [lo, hi]; C falls as par grows.
-    Returns the list of runs (each with its x)."""
+    Runs are numbered from `first`, their files too.  Returns the list of
+    runs (each with its x)."""
     runs = []
     x = x0
-    for i in range(MAX_RUNS):
+    for i in range(first, first + MAX_RUNS):
         d = design(f"{name}_{i}", engine, {**fixed, par: f"{x:.4f}"})
         d["x"] = x
         runs.append(d)
         off = (d["C"] / target - 1) * 100
-        runs_log.append(f"  {name} run {i + 1}: {par}={x:.4f} -> C {d['C']:.1f} N mm "
-                        f"({off:+.2f} % of the hybrid's), volume {d['vol']:.0f} mm3, "
-                        f"{d['s']:.0f} s")
-        print(runs_log[-1], flush=True)
+        print(f"  {name} run {i}: {par}={x:.4f} -> C {d['C']:.1f} N mm "
+              f"({off:+.2f} % of the hybrid's), volume {d['vol']:.0f} mm3, {d['s']:.0f} s",
+              flush=True)
         if abs(off) <= TOL_PCT:
             break
         if d["C"] > target:
@@ -122,7 +122,6 @@ def weight_at(runs, target):
 
 
 def main():
-    log = []
     solid = design("solid", "solid", {})
     hyb = design("hybrid", "hybrid", {"compliance": "false"})
     cs, vs, ch = solid["C"], solid["vol"], hyb["C"]
@@ -130,25 +129,23 @@ def main():
           f"{hyb['vol']:.0f} mm3 (W {hyb['vol'] / vs:.4f}), {hyb['s']:.0f} s", flush=True)
     rows = [("hybrid", "defaults", hyb, hyb["vol"])]
     # hollow: the outer wall; 0.8 mm (the hybrid's skin) is the lightest
-    runs = tune("hollow", "hollow", {}, "wall_mm", 0.8, 0.8, 6.0, ch, log)
+    runs = tune("hollow", "hollow", {}, "wall_mm", 0.8, 0.8, 6.0, ch)
     rows.append(("hollow", "wall_mm", runs, weight_at(runs, ch)))
     # lattice: the density, skin as the hybrid's
-    runs = tune("lattice", "lattice", {"skin_mm": 0.8}, "density", 0.2, 0.02, 0.9, ch, log)
+    runs = tune("lattice", "lattice", {"skin_mm": 0.8}, "density", 0.2, 0.02, 0.9, ch)
     rows.append(("lattice", "density", runs, weight_at(runs, ch)))
     # rhombic: the first run at a fraction below any initial structure is
     # the initial (lightest) structure; refinement raises it from there
     rfix = {"wall_mm": 0.5, "skin_mm": 0.8, "fea_voxel_mm": 1, "objective": "stiffness"}
     first = design("rhombic_0", "rhombic", {**rfix, "volume_fraction": 0.05})
     first["x"] = first["metrics"]["rhombic"]["volume_fraction"]
-    log.append(f"  rhombic run 1: initial structure, volume_fraction "
-               f"{first['x']:.4f} -> C {first['C']:.1f} N mm "
-               f"({(first['C'] / ch - 1) * 100:+.2f} % of the hybrid's), volume "
-               f"{first['vol']:.0f} mm3, {first['s']:.0f} s")
-    print(log[-1], flush=True)
+    print(f"  rhombic run 0: initial structure, volume_fraction {first['x']:.4f} -> C "
+          f"{first['C']:.1f} N mm ({(first['C'] / ch - 1) * 100:+.2f} % of the hybrid's), "
+          f"volume {first['vol']:.0f} mm3, {first['s']:.0f} s", flush=True)
     runs = [first]
     if first["C"] > ch * (1 + TOL_PCT / 100):
         runs += tune("rhombic", "rhombic", rfix, "volume_fraction", min(first["x"] + 0.05, 0.95),
-                     first["x"], 1.0, ch, log)
+                     first["x"], 1.0, ch)
     rows.append(("rhombic", "volume_fraction", runs, weight_at(runs, ch)))
 
     print("  weights at the hybrid's stiffness (C_h = %.1f N mm); W = volume / solid; "
