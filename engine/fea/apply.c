@@ -28,6 +28,14 @@ struct apply_ctx {
 
 #define LD(p) (*(const vf8u *)(p))
 
+static inline __attribute__((always_inline)) int all_zero8(vf8 v)
+{
+	for (int i = 0; i < 8; i++)
+		if (v[i] != 0)
+			return 0;
+	return 1;
+}
+
 /* One plane: y = op(A x), 8 nodes per step.  Forward blocks are read at
  * the node, backward ones (transposed) at the neighbour; halo entries
  * of st and x are 0, and so are the rows of zero-diagonal unknowns, so
@@ -48,7 +56,14 @@ static inline __attribute__((always_inline)) void applyc_body(const struct apply
 		for (ptrdiff_t c0 = 0; c0 < l->sx; c0 += 8) {
 			const ptrdiff_t n = row + c0;
 			vf8 a0 = {0}, a1 = {0}, a2 = {0}, b0 = {0}, b1 = {0}, b2 = {0};
+			const float *iv = l->invd + n;
+			vf8 act = LD(iv) + LD(iv + cs) + LD(iv + 2 * cs);
 
+			/* 8 nodes with zero diagonals (invd >= 0, 0 exactly
+			 * there): zero rows, A x = 0 (outside the part most
+			 * of a level is like this) */
+			if (all_zero8(act))
+				goto out;
 			for (int f = 0; f < 14; f++) {
 				const ptrdiff_t m = n + off[f];
 				const float *sf = st + 9 * f * cs + n;
@@ -77,6 +92,7 @@ static inline __attribute__((always_inline)) void applyc_body(const struct apply
 				b1 += LD(sf + 7 * cs) * x2;
 				b2 += LD(sf + 8 * cs) * x2;
 			}
+		out:
 			for (int q = 0; q < 3; q++) {
 				vf8 acc = q == 0 ? a0 + b0 : q == 1 ? a1 + b1 : a2 + b2, v;
 				const ptrdiff_t at = q * cs + n;
@@ -134,7 +150,14 @@ static void restrict_plane(void *vctx, size_t kk, int tid)
 	for (int J = 0; J <= c->ny; J++)
 		for (int I = 0; I <= c->nx; I++) {
 			float acc[3] = {0, 0, 0};
-			ptrdiff_t n = fea_nl(f, 2 * I, 2 * J, 2 * K);
+			ptrdiff_t n = fea_nl(f, 2 * I, 2 * J, 2 * K), o = fea_nl(c, I, J, K);
+			if (c->invd[o] == 0 && c->invd[c->cs + o] == 0 && c->invd[2 * c->cs + o] == 0) {
+				/* no free fine unknown under it: the fine residual is 0
+				 * around it */
+				for (int q = 0; q < 3; q++)
+					g->out[q * c->cs + o] = 0;
+				continue;
+			}
 			for (int oz = 0; oz < 3; oz++)
 				for (int oy = 0; oy < 3; oy++) {
 					float wyz = wt[oy] * wt[oz];
@@ -144,7 +167,6 @@ static void restrict_plane(void *vctx, size_t kk, int tid)
 						acc[q] += wyz * (0.5f * r[-1] + r[0] + 0.5f * r[1]);
 					}
 				}
-			ptrdiff_t o = fea_nl(c, I, J, K);
 			for (int q = 0; q < 3; q++)
 				g->out[q * c->cs + o] = acc[q];
 		}
@@ -175,6 +197,9 @@ static void prolong_plane(void *vctx, size_t kk, int tid)
 	for (int j = 0; j <= f->ny; j++) {
 		const int Jv[2] = {j >> 1, (j + 1) >> 1}, nj = (j & 1) ? 2 : 1;
 		const float wyz = (nj == 2 ? 0.5f : 1) * (nk == 2 ? 0.5f : 1);
+		/* level 0: a row without a free unknown is left alone */
+		if (g->masked && g->s->row_span[2 * ((ptrdiff_t)k * (f->ny + 1) + j) + 1] < 0)
+			continue;
 		for (int I0 = 0; I0 < c->nx; I0 += PROLONG_CHUNK) {
 			int I1 = I0 + PROLONG_CHUNK < c->nx ? I0 + PROLONG_CHUNK : c->nx;
 			for (int q = 0; q < 3; q++) {

@@ -135,6 +135,16 @@ struct fea_solver {
 	float *b0, *x0, *t0; /* 3 cs: V-cycle rhs, solution, scratch (float) */
 	double *u, *r, *p, *q; /* 3 cs: CG vectors */
 	double *dot_part;   /* partial sums of fea_dot, one per FEA_DOT_BLOCK */
+	double *plane_part; /* nz + 1 level-0 plane sums of fea_apply0d_dot */
+	/* vec.c: one span per level-0 row with active nodes, chunks of spans
+	 * (span_chunk[c] .. span_chunk[c + 1]), two partial sums per chunk */
+	struct fea_span {
+		ptrdiff_t n; /* first active node of the row (level-0 index) */
+		int len;     /* nodes to the row's last active one */
+	} *span;
+	size_t nspan, nchunk, *span_chunk;
+	double *span_part;
+	int *row_span; /* per row (j, k), k-major: first and last active i, 0 and -1 if none */
 
 	double *f_user;   /* load, caller's numbering (fea_solver_force) */
 	double *u_user;   /* displacement, caller's numbering */
@@ -176,10 +186,24 @@ int fea_have_avx2(void);
 void fea_k0_init(struct fea_solver *s);
 void fea_apply0f(struct fea_solver *s, enum fea_op op, const float *x, const float *b, float *y);
 void fea_apply0d(struct fea_solver *s, const double *x, double *y); /* y = A x */
+/* y = A x, returns x . y (per-plane sums added in plane order) */
+double fea_apply0d_dot(struct fea_solver *s, const double *x, double *y);
 /* invd0 from w0 and mask0 (weights capped at bound / Gershgorin ratio) */
 void fea_jacobi0(struct fea_solver *s, double bound);
+
+
+/* vec.c: level-0 vector operations over the active rows (nodes with a
+ * free axis; every other entry of the solver's vectors stays 0).
+ * fea_spans_build after mask0 is set. */
+int fea_spans_build(struct fea_solver *s, struct err *e);
+void fea_spans_fini(struct fea_solver *s);
 /* b0 = (float) r, x0 = invd0 b0: the first Jacobi sweep from 0 */
 void fea_first_sweep0(struct fea_solver *s, const double *r);
+double fea_vec_rz(struct fea_solver *s); /* r . x0 */
+/* u += alpha p, r -= alpha q; *rr = |r|^2, *rz = r . x0 (new r) */
+void fea_vec_update(struct fea_solver *s, double alpha, double *rr, double *rz);
+void fea_vec_p(struct fea_solver *s, double beta); /* p = x0 + beta p */
+void fea_vec_p_copy(struct fea_solver *s);         /* p = x0 */
 
 /* apply.c: the stencil operator of levels >= 1 (float vectors), and
  * b_{l+1} = P^T r_l, x_l += P x_{l+1} between any two levels (level 0:

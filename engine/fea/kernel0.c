@@ -65,6 +65,7 @@ struct k0_ctx {
 	enum fea_op op;
 	const void *x, *b, *invd;
 	void *y;
+	double *part; /* FEA_OP_AX: x . y of plane k at part[k], or NULL */
 };
 
 #define INLINE static inline __attribute__((always_inline))
@@ -126,10 +127,13 @@ struct k0_ctx {
 	const ptrdiff_t cs = s->cs;                                                  \
 	const T *x = c->x, *b = c->b, *iv = c->invd;                                 \
 	T *y = c->y;                                                                 \
+	V xy = {0};                                                                  \
                                                                                      \
 	for (int j = 0; j <= s->lv[0].ny; j++) {                                     \
 		const ptrdiff_t row = fea_n0(s, -1, j, k);                           \
-		for (ptrdiff_t c0 = 0; c0 < s->sx; c0 += L) {                        \
+		const int *rs = s->row_span + 2 * ((ptrdiff_t)k * (s->lv[0].ny + 1) + j); \
+		/* nodes i = c0 - 1 .. c0 + L - 2; the rest of the row is 0 */       \
+		for (ptrdiff_t c0 = (rs[0] + 1) / L * L; c0 < rs[1] + 2; c0 += L) {  \
 			const ptrdiff_t n = row + c0;                                \
 			const T *xn = x + n;                                         \
 			V w[8], a0 = {0}, a1 = {0}, a2 = {0}, sum = {0};             \
@@ -200,8 +204,16 @@ struct k0_ctx {
 						    (*(const VU *)(b + at) - acc);   \
 				v = (V)((VI)v & fr);                                 \
 				*(VU *)(y + at) = v;                                 \
+				if (c->part)                                         \
+					xy += *(const VU *)(x + at) * v;             \
 			}                                                            \
 		}                                                                    \
+	}                                                                            \
+	if (c->part) {                                                               \
+		double sum_ = 0;                                                     \
+		for (int l = 0; l < L; l++)                                          \
+			sum_ += xy[l];                                               \
+		c->part[k] = sum_;                                                   \
 	}
 
 #define LOADW_F(p) (*(const vf8u *)(p))
@@ -251,40 +263,27 @@ int fea_have_avx2(void)
 
 void fea_apply0f(struct fea_solver *s, enum fea_op op, const float *x, const float *b, float *y)
 {
-	struct k0_ctx c = {s, op, x, b, s->invd0, y};
+	struct k0_ctx c = {s, op, x, b, s->invd0, y, NULL};
 
 	fea_par(s, (size_t)s->lv[0].nz + 1, 1, fea_have_avx2() ? plane_f_avx2 : plane_f_base, &c);
 }
 
 void fea_apply0d(struct fea_solver *s, const double *x, double *y)
 {
-	struct k0_ctx c = {s, FEA_OP_AX, x, NULL, NULL, y};
+	struct k0_ctx c = {s, FEA_OP_AX, x, NULL, NULL, y, NULL};
 
 	fea_par(s, (size_t)s->lv[0].nz + 1, 1, fea_have_avx2() ? plane_d_avx2 : plane_d_base, &c);
 }
 
-/* b0 = (float) r, x0 = invd0 b0, over one plane of all three axes. */
-static void first_plane(void *vctx, size_t k, int tid)
+double fea_apply0d_dot(struct fea_solver *s, const double *x, double *y)
 {
-	const struct k0_ctx *c = vctx;
-	const struct fea_solver *s = c->s;
-	const double *r = c->x;
-	ptrdiff_t lo = fea_n0(s, -1, -1, (int)k), hi = lo + s->sx * s->sy;
+	struct k0_ctx c = {s, FEA_OP_AX, x, NULL, NULL, y, s->plane_part};
+	double sum = 0;
 
-	(void)tid;
-	for (int q = 0; q < 3; q++)
-		for (ptrdiff_t n = lo + q * s->cs; n < hi + q * s->cs; n++) {
-			float bf = (float)r[n];
-			s->b0[n] = bf;
-			s->x0[n] = s->invd0[n] * bf;
-		}
-}
-
-void fea_first_sweep0(struct fea_solver *s, const double *r)
-{
-	struct k0_ctx c = {s, FEA_OP_AX, r, NULL, NULL, NULL};
-
-	fea_par(s, (size_t)s->lv[0].nz + 1, 1, first_plane, &c);
+	fea_par(s, (size_t)s->lv[0].nz + 1, 1, fea_have_avx2() ? plane_d_avx2 : plane_d_base, &c);
+	for (int k = 0; k <= s->lv[0].nz; k++)
+		sum += s->plane_part[k];
+	return sum;
 }
 
 /* Jacobi weights of level 0, one plane, 8 nodes per step: the 27 blocks
@@ -365,7 +364,7 @@ static void jacobi0_base(void *ctx, size_t k, int tid)
 
 void fea_jacobi0(struct fea_solver *s, double bound)
 {
-	struct k0_ctx c = {s, FEA_OP_AX, NULL, &bound, NULL, NULL};
+	struct k0_ctx c = {s, FEA_OP_AX, NULL, &bound, NULL, NULL, NULL};
 
 	fea_par(s, (size_t)s->lv[0].nz + 1, 1, fea_have_avx2() ? jacobi0_avx2 : jacobi0_base, &c);
 }

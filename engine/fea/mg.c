@@ -128,6 +128,22 @@ struct gal_ctx {
 	const struct fea_level *f, *c;
 };
 
+/* Whether any fine node 2 I + o (o in {-1, 0, 1}^3) under coarse node
+ * (I, J, K) has a nonzero diagonal: otherwise their rows are zero and so
+ * is the coarse node's Galerkin row (the fine halo's invd is 0). */
+static int fine_active(const struct fea_level *f, int I, int J, int K)
+{
+	for (int oz = -1; oz <= 1; oz++)
+		for (int oy = -1; oy <= 1; oy++) {
+			ptrdiff_t n = fea_nl(f, 2 * I - 1, 2 * J + oy, 2 * K + oz);
+			for (int ox = 0; ox < 3; ox++)
+				for (int a = 0; a < 3; a++)
+					if (f->invd[a * f->cs + n + ox] != 0)
+						return 1;
+		}
+	return 0;
+}
+
 /* Coarse node layer K of P^T A P (fine level f with stencils), forward
  * blocks only. */
 static void galerkin_layer(void *vctx, size_t kk, int tid)
@@ -141,6 +157,8 @@ static void galerkin_layer(void *vctx, size_t kk, int tid)
 	for (int J = 0; J <= c->ny; J++)
 		for (int I = 0; I <= c->nx; I++) {
 			memset(acc, 0, sizeof acc);
+			if (!fine_active(f, I, J, K))
+				goto store;
 			for (int oz = -1; oz <= 1; oz++)
 				for (int oy = -1; oy <= 1; oy++)
 					for (int ox = -1; ox <= 1; ox++) {
@@ -190,6 +208,7 @@ static void galerkin_layer(void *vctx, size_t kk, int tid)
 									}
 						}
 					}
+		store:;
 			ptrdiff_t cn = fea_nl(c, I, J, K);
 			for (int fb = 0; fb < FEA_ST; fb++)
 				for (int x = 0; x < 9; x++)
@@ -224,6 +243,13 @@ static void diag_layer(void *vctx, size_t kk, int tid)
 		for (int i = 0; i <= l->nx; i++) {
 			const ptrdiff_t n0 = fea_nl(l, i, j, k);
 
+			if (!(*fea_st(l, n0, 0, 0) > 0) && !(*fea_st(l, n0, 0, 4) > 0) &&
+			    !(*fea_st(l, n0, 0, 8) > 0)) {
+				/* no free fine unknown under the node */
+				for (int a = 0; a < 3; a++)
+					l->invd[a * l->cs + n0] = 0;
+				continue;
+			}
 			memset(blk, 0, sizeof blk);
 			for (int d = 0; d < 27; d++) {
 				int ii = i + d % 3 - 1, jj = j + (d / 3) % 3 - 1, kq = k + d / 9 - 1;

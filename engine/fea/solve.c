@@ -124,6 +124,8 @@ void fea_solver_free(struct fea_solver *s)
 	free0(s->p);
 	free0(s->q);
 	mem_free(s->dot_part);
+	mem_free(s->plane_part);
+	fea_spans_fini(s);
 	mem_free(s->f_user);
 	mem_free(s->u_user);
 	fea_coarse_fini(&s->co);
@@ -325,10 +327,12 @@ int fea_solver_new(const struct fea_grid *g, const struct fea_loads *l, const st
 		s->p = alloc0(s, v, sizeof(double));
 		s->q = alloc0(s, v, sizeof(double));
 		s->dot_part = alloc_count(s, v / FEA_DOT_BLOCK + 1, sizeof(double));
+		s->plane_part = alloc_count(s, (size_t)s->lv[0].nz + 1, sizeof(double));
 		s->f_user = alloc_count(s, 3 * s->un_nodes, sizeof(double));
 		s->u_user = alloc_count(s, 3 * s->un_nodes, sizeof(double));
 		if (!s->w0 || !s->mask0 || !s->invd0 || !s->b0 || !s->x0 || !s->t0 || !s->u ||
-		    !s->r || !s->p || !s->q || !s->dot_part || !s->f_user || !s->u_user)
+		    !s->r || !s->p || !s->q || !s->dot_part || !s->plane_part || !s->f_user ||
+		    !s->u_user)
 			goto nomem;
 	}
 
@@ -359,7 +363,7 @@ int fea_solver_new(const struct fea_grid *g, const struct fea_loads *l, const st
 	if ((rc = fea_select(s, g, l, e)))
 		goto fail;
 	count_dofs(s);
-	if ((rc = fea_mg_build(s, e)))
+	if ((rc = fea_spans_build(s, e)) || (rc = fea_mg_build(s, e)))
 		goto fail;
 	s->mem_bytes += (size_t)(s->co.kd + 1) * (size_t)s->co.n * sizeof(double) +
 			(size_t)s->co.n * sizeof(double);
@@ -425,43 +429,12 @@ static void padded_to_user(const struct fea_solver *s, const double *pad, double
 }
 
 struct axpy_ctx {
-	double alpha;
 	const double *x;
-	double *y, *z;
-	const double *w;
+	double *y;
 	size_t n;
-	double *part;
-	const float *xf;
 };
 
 #define VBLOCK FEA_DOT_BLOCK
-
-/* u += alpha p; r -= alpha q; part = |r|^2 per block */
-static void update_block(void *vctx, size_t blk, int tid)
-{
-	const struct axpy_ctx *c = vctx;
-	size_t lo = blk * VBLOCK, hi = lo + VBLOCK < c->n ? lo + VBLOCK : c->n;
-	double s2 = 0;
-
-	(void)tid;
-	for (size_t i = lo; i < hi; i++) {
-		c->y[i] += c->alpha * c->x[i];
-		c->z[i] -= c->alpha * c->w[i];
-		s2 += c->z[i] * c->z[i];
-	}
-	c->part[blk] = s2;
-}
-
-/* p = z + beta p (z float) */
-static void pupdate_block(void *vctx, size_t blk, int tid)
-{
-	const struct axpy_ctx *c = vctx;
-	size_t lo = blk * VBLOCK, hi = lo + VBLOCK < c->n ? lo + VBLOCK : c->n;
-
-	(void)tid;
-	for (size_t i = lo; i < hi; i++)
-		c->y[i] = (double)c->xf[i] + c->alpha * c->y[i];
-}
 
 /* r = f - q */
 static void sub_block(void *vctx, size_t blk, int tid)
@@ -500,7 +473,7 @@ int fea_solve(struct fea_solver *s, struct fea_result *res, struct err *e)
 	}
 	for (int restart = 0, stalls = 0; !converged && stalls < 3; restart++) {
 		/* (re)start from the true residual r = f - A u */
-		struct axpy_ctx sc = {0, s->q, s->r, NULL, NULL, nv, s->dot_part, NULL};
+		struct axpy_ctx sc = {s->q, s->r, nv};
 		int it0 = it;
 
 		user_to_padded(s, s->f_user, s->r);
@@ -520,36 +493,27 @@ int fea_solve(struct fea_solver *s, struct fea_result *res, struct err *e)
 		if (it >= s->opt.max_iter)
 			break;
 		fea_vcycle(s, s->r);
-		for (size_t i = 0; i < nv; i++)
-			s->p[i] = s->x0[i];
-		rz = fea_dot_df(s, s->r, s->x0, nv);
+		fea_vec_p_copy(s);
+		rz = fea_vec_rz(s);
 		while (it < s->opt.max_iter && rz > 0) {
 			double pq, alpha, beta, rz_new, rz_old;
-			struct axpy_ctx uc;
 
-			fea_apply0d(s, s->p, s->q);
-			pq = fea_dot(s, s->p, s->q, nv);
+			pq = fea_apply0d_dot(s, s->p, s->q);
 			if (!(pq > 0))
 				break; /* breakdown: restart from the true residual */
 			alpha = rz / pq;
-			uc = (struct axpy_ctx){alpha, s->p, s->u, s->r, s->q, nv, s->dot_part, NULL};
-			fea_par(s, nb, 1, update_block, &uc);
-			rr = 0;
-			for (size_t b = 0; b < nb; b++)
-				rr += s->dot_part[b];
+			fea_vec_update(s, alpha, &rr, &rz_old);
 			it++;
 			rel = sqrt(rr) / fnorm;
 			if (rel <= s->opt.tol)
 				break; /* confirmed on the true residual at the restart */
 			/* flexible (Polak-Ribiere) beta: the float V-cycle is not
 			 * exactly linear, so keep r_new . z_old out of beta */
-			rz_old = fea_dot_df(s, s->r, s->x0, nv);
 			fea_vcycle(s, s->r);
-			rz_new = fea_dot_df(s, s->r, s->x0, nv);
+			rz_new = fea_vec_rz(s);
 			beta = (rz_new - rz_old) / rz;
 			rz = rz_new;
-			uc = (struct axpy_ctx){beta, NULL, s->p, NULL, NULL, nv, NULL, s->x0};
-			fea_par(s, nb, 1, pupdate_block, &uc);
+			fea_vec_p(s, beta);
 		}
 		if (it == it0)
 			break; /* no progress (breakdown at once) */
