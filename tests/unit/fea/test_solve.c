@@ -580,6 +580,65 @@ static void test_long_bar(void)
 	fea_grid_fini(&g);
 }
 
+/* A part that fills a small share of its box (a tilted ring of
+ * varying thickness with soft elements: rows with no element, rows with
+ * gaps, spans that change from row to row): the multigrid solve, which
+ * skips what is outside the part, against the one-level direct solve,
+ * and 1 against 2 threads (bit for bit). */
+static void test_sparse_box(void)
+{
+	struct fea_grid g;
+	struct fea_opts o;
+	struct fea_solver *s = NULL;
+	struct fea_result r[3];
+	struct err e;
+	const int nx = 34, ny = 30, nz = 16;
+	double *u[3];
+	size_t present = 0, nn = (size_t)(nx + 1) * (ny + 1) * (nz + 1);
+
+	err_clear(&e);
+	grid_box(&g, nx, ny, nz, 0.5);
+	for (int k = 0; k < nz; k++)
+		for (int j = 0; j < ny; j++)
+			for (int i = 0; i < nx; i++) {
+				double x = i - 15.5, y = j - 13.5 - 0.4 * k, rr = sqrt(x * x + y * y);
+				float *rho = &g.rho[((size_t)k * ny + j) * nx + i];
+				*rho = rr > 7 && rr < 10 + 0.2 * k && k < 14 ? 1 : 0;
+				if (*rho > 0 && (i + 2 * j + 3 * k) % 11 == 0)
+					*rho = 0.05f;
+				present += *rho > 0;
+			}
+	CHECK_NUM((double)present, <, 0.3 * nx * ny * nz);
+	fea_opts_default(&o);
+	o.tol = 1e-10;
+	for (int run = 0; run < 3; run++) {
+		o.levels = run == 0 ? 1 : 0;
+		o.threads = run == 2 ? 2 : 1;
+		REQUIRE_OK(solve_text(&g, "fixed plate; force box=0,0,6.5,17,15,7 n=0.3,0,-5", &o, &s,
+				      &r[run], &e),
+			   &e);
+		u[run] = mem_alloc(3 * nn * sizeof *u[run]);
+		memcpy(u[run], fea_displacement(s), 3 * nn * sizeof *u[run]);
+		fea_solver_free(s);
+	}
+	CHECK_EQ_INT(r[0].levels, 1);
+	CHECK_NUM(r[1].levels, >=, 3);
+	CHECK_REL(r[1].compliance_nmm, r[0].compliance_nmm, 1e-8);
+	double worst = 0, umax = 0;
+	for (size_t x = 0; x < 3 * nn; x++) {
+		worst = fmax(worst, fabs(u[1][x] - u[0][x]));
+		umax = fmax(umax, fabs(u[0][x]));
+	}
+	CHECK_NUM(umax, >, 0);
+	CHECK_NUM(worst, <=, 1e-7 * umax);
+	CHECK_EQ_INT(r[2].iterations, r[1].iterations);
+	CHECK_NUM(r[2].compliance_nmm, ==, r[1].compliance_nmm);
+	CHECK_EQ_INT(memcmp(u[1], u[2], 3 * nn * sizeof *u[1]), 0);
+	for (int run = 0; run < 3; run++)
+		mem_free(u[run]);
+	fea_grid_fini(&g);
+}
+
 /* A force is spread by the stiffness around each node: on a full 4 x 4
  * face the 25 nodes carry 1 : 2 : 4 (corners, edges, inside; weights sum
  * to 64), and a node that touches only a 1 % voxel carries 1 % of a full
@@ -626,5 +685,6 @@ int main(void)
 	RUN(test_set_tol);
 	RUN(test_threads);
 	RUN(test_long_bar);
+	RUN(test_sparse_box);
 	return harness_report();
 }
