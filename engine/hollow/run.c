@@ -286,6 +286,16 @@ static void empty_note(const struct hl_config *c, struct hl_outcome *o)
 			return;
 		}
 	}
+	if (o->opt.loops > 0 && !c->fill) {
+		/* the interior is there: the optimiser's voids were dropped */
+		snprintf(o->note, sizeof o->note,
+			 "the optimiser kept no void: %zu loops inside the wall, no support-free "
+			 "void >= min_void_mm3 %g between them (%zu smaller, %zu failed, %zu too "
+			 "close); fill=true hollows the interior; the part is returned unchanged",
+			 o->opt.loops, c->opt.min_void_mm3, o->opt.groups_small,
+			 o->opt.groups_failed, o->opt.voids_too_close);
+		return;
+	}
 	snprintf(o->note, sizeof o->note,
 		 "too thin to hollow: no support-free void of at least %g mm3 fits inside a "
 		 "%g mm wall; the part is returned unchanged",

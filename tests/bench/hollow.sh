@@ -7,8 +7,9 @@
 # sliver_mm3: those of them standing free, not attached to thicker solid) and
 # shelves (shelf_mm3: 1-2 layers thick between voids), time,
 # peak RSS.  Paper's Table 1: 53-77 % reduction, 17-60 min.
-# normal: the top-down fill alone (rounds=0 fill=true) and the default
-# pipeline (optimiser rounds<=8, then the fill); each run capped at CAP_S (300)
+# normal: the top-down fill alone (rounds=0 fill=true), the default
+# pipeline (optimiser rounds<=8, then the fill) and the optimiser alone
+# (rounds<=8, fill=false); each run capped at CAP_S (300)
 # seconds, reported.  HOLLOW_MODELS="camel:y femur:z" picks models.
 # large: also alpha 30 and the standing objective on the letter P (50 and
 # 100 mm tall).
@@ -28,6 +29,7 @@ run_one() { # name[.ext] up alpha objective rounds fill [height_mm] (.off when n
 	local name=${1%.*} rc
 	[ "$name" != "$file" ] || file=$name.off
 	local out="$TMP/${name}_a$3_$4_r$5_h$height"
+	[ "$fill" = true ] || out="${out}_nofill"
 	/usr/bin/time -f '%e %M' -o "$out.time" timeout -k 30 "$CAP_S" "$BIN" run \
 		"$SHARED/meshes/$file" -o "$out.sl1" --engine hollow --set height_mm="$height" \
 		--set up="$up" --set alpha_deg="$alpha" --set objective="$obj" \
@@ -55,15 +57,16 @@ if h.get("voids_dropped_for_fill"):
     extra += "  (optimiser's %d voids + fill: %.1f %%, fill alone kept)" % (
         h["voids_dropped_for_fill"], 100 * h["optimised_and_fill_volume_mm3"] / h["part_volume_mm3"])
 between = h["verify"]["min_wall_between_mm"]
-extra += "  slope excess %.3f px (tolerance %.1f)" % (h["verify"]["slope_excess_px"],
-                                                   h["verify"]["tolerance_px"])
+num = lambda v, f: "-" if v is None else f % v
+extra += "  slope excess %s px (tolerance %.1f)" % (num(h["verify"]["slope_excess_px"], "%.3f"),
+                                                  h["verify"]["tolerance_px"])
 if h["polygon_slopes"]["layers_checked"]:
     extra += "  polygons: excess %.4f mm2 on %d layers" % (h["polygon_slopes"]["excess_mm2"],
                                                         h["polygon_slopes"]["layers_over"])
-print("%-10s a=%-2s %-11s rounds<=%-2s %5.1f %%  %9.4f  %3d (%3d+%3d)  %6d  %5.2f %5s  %6.2f %6.3f %6.3f  %7.1f (opt %6.1f fill %6.1f)  %5d%s%s"
+print("%-10s a=%-2s %-11s rounds<=%-2s %5.1f %%  %9.4f  %3d (%3d+%3d)  %6d  %5s %5s  %6.2f %6.3f %6.3f  %7.1f (opt %6.1f fill %6.1f)  %5d%s%s"
       % (sys.argv[3], sys.argv[4], sys.argv[5], sys.argv[6], 100 * h["volume_reduction"],
          h["interior_overhang_mm2"], h["voids"], h["voids_optimised"], h["voids_fill"],
-         h["rounds"], h["min_wall_mm"], "-" if between is None else "%.2f" % between,
+         h["rounds"], num(h["min_wall_mm"], "%.2f"), num(between, "%.2f"),
          h["verify"]["fin_mm3"], h["verify"]["sliver_mm3"], h["verify"]["shelf_mm3"], float(wall), h["seconds"]["optimise"],
          h["seconds"]["fill"], int(rss) // 1024,
          extra, ("  note: " + h["note"]) if "note" in h else ""))
@@ -111,6 +114,14 @@ if [ -z "${HOLLOW_MODELS:-}" ]; then
 	run_one ChineseDragon-10kv.off z 45 lightweight 8 true 55.5 || status=1
 	run_one bunny.stl y 45 lightweight 8 true 50 || status=1
 fi
+# the paper's optimiser alone (fill=false, rounds <= 8): what its voids
+# hollow without the top-down fill (docs/hollow.md, "Known limits" 1)
+echo "optimiser alone (fill=false):"
+for m in "${MODELS[@]}"; do
+	set -- $m
+	run_one "$1" "$2" 45 lightweight 8 false || status=1
+done
+[ -n "${HOLLOW_MODELS:-}" ] || run_one ChineseDragon-10kv.off z 45 lightweight 8 false 55.5 || status=1
 # the mesh output (-o part.stl): the default pipeline's camel as a closed mesh,
 # its volume against the SL1's material, size, time; sliced again with
 # --engine solid and checked by infilld verify --strict against the plain part

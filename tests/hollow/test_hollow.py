@@ -182,6 +182,21 @@ class HollowTest(unittest.TestCase):
         self.assertAlmostEqual(h["volume_reduction"], 0.0)
         self.assertAlmostEqual(m["material_volume_mm3"], m["part_volume_mm3"], delta=1e-6)
 
+    def test_optimiser_alone_says_why_it_kept_nothing(self):
+        # a bulky part the optimiser alone cannot hollow (its chains end
+        # at their top pairs: docs/hollow.md, known limits) is not called
+        # too thin: the note says the optimiser kept no void, how many
+        # loops it had, and that the fill hollows it, as it does
+        m = hollow(self.tmp.name, "cow.off", fmt="stl", height_mm=20, up="y", fill="false")
+        h = m["hollow"]
+        self.assertEqual(h["voids"], 0)
+        self.assertNotIn("too thin", h["note"])
+        self.assertRegex(h["note"], r"^the optimiser kept no void: [1-9][0-9]* loops inside the wall")
+        self.assertIn("fill=true hollows the interior", h["note"])
+        m = hollow(self.tmp.name, "cow.off", fmt="stl", height_mm=20, up="y", rounds=0)
+        self.assertGreater(m["hollow"]["volume_reduction"], 0.25)
+        self.assertNotIn("note", m["hollow"])
+
     def test_mesh_output_is_what_its_metrics_say(self):
         # an STL carries every void the layers carve (the optimised ones
         # and the fill, as pixels: tests/hollow/test_hollow_mesh.py): the

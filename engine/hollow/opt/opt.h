@@ -47,6 +47,8 @@ struct hl_opt_stats {
 	int budget_spent;         /* optimise_s cut the rounds short */
 	size_t voids;             /* kept (optimised, or at their support-free start) */
 	size_t voids_fallback;    /* of them: kept at their support-free start */
+	size_t loops;             /* optimisation loops, all rounds (0: nothing inside
+				   * the offset wide enough to sample) */
 	size_t groups_failed;     /* optimised groups dropped (check failed) */
 	size_t groups_small;      /* dropped: below min_void_mm3 */
 	size_t voids_too_close;   /* dropped: within wall_next_mm of a larger void */

@@ -310,6 +310,7 @@ static int round_voids(const struct round_in *in, struct hl_opt_stats *o, struct
 						     &sl[k], e);
 			if (rc)
 				goto out;
+			o->loops += sl[k].n;
 		}
 	}
 	o->s_offset += progress_now_s() - t0;
