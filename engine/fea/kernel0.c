@@ -133,6 +133,8 @@ struct k0_ctx {
 		const ptrdiff_t row = fea_n0(s, -1, j, k);                           \
 		const int *rs = s->row_span + 2 * ((ptrdiff_t)k * (s->lv[0].ny + 1) + j); \
 		/* nodes i = c0 - 1 .. c0 + L - 2; the rest of the row is 0 */       \
+		if (rs[1] < 0)                                                       \
+			continue;                                                    \
 		for (ptrdiff_t c0 = (rs[0] + 1) / L * L; c0 < rs[1] + 2; c0 += L) {  \
 			const ptrdiff_t n = row + c0;                                \
 			const T *xn = x + n;                                         \

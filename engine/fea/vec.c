@@ -15,7 +15,7 @@
 #include "engine/core/err.h"
 #include "engine/core/mem.h"
 
-#define FEA_SPAN_CHUNK 8192
+#define FEA_SPAN_CHUNK 1024
 
 void fea_spans_fini(struct fea_solver *s)
 {

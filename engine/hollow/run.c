@@ -286,6 +286,13 @@ static void empty_note(const struct hl_config *c, struct hl_outcome *o)
 			return;
 		}
 	}
+	if (o->opt.budget_spent && !c->fill) {
+		snprintf(o->note, sizeof o->note,
+			 "the optimiser's time (optimise_s %g s) ran out before it kept a void; a "
+			 "larger optimise_s or fill=true can hollow it; the part is returned unchanged",
+			 c->opt.optimise_s);
+		return;
+	}
 	if (o->opt.loops > 0 && !c->fill) {
 		/* the interior is there: the optimiser's voids were dropped */
 		snprintf(o->note, sizeof o->note,

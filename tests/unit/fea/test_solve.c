@@ -618,6 +618,7 @@ static void test_sparse_box(void)
 				      &r[run], &e),
 			   &e);
 		u[run] = mem_alloc(3 * nn * sizeof *u[run]);
+		REQUIRE(u[run] != NULL);
 		memcpy(u[run], fea_displacement(s), 3 * nn * sizeof *u[run]);
 		fea_solver_free(s);
 	}
