@@ -103,8 +103,9 @@ PY
 # one run per refinement step (each run's target just above the last
 # step's fraction).  The adaptive run is also the timing case: a 50 mm
 # shared mesh to 0.7.  The bunny: bulky, so its initial structure is
-# sparse (0.53; the femur's is 0.90).  Drawn by plot_xy.py into
-# $TMP/curve.png (docs/rhombic.md shows it).
+# sparse (0.53; the femur's is 0.90), but its top 1 mm is its ears; the cow
+# standing (its back on top) is the second curve.  Drawn by plot_xy.py into
+# $TMP/curve.png and $TMP/cow.png (docs/rhombic.md shows them).
 CURVE_MESH=${CURVE_MESH:-bunny.stl}
 CURVE_VF=${CURVE_VF:-0.7}
 # 1 mm elements (25k on the bunny); large mode also times the adaptive run
@@ -127,24 +128,32 @@ print(f"{mesh} 50 mm to {r['volume_fraction']:.3f} at the automatic elements "
       f"{t[0]} s, {int(t[1]) // 1024} MB")
 PY
 fi
-CURVE=(--engine rhombic --set height_mm=50 --set wall_mm=0.5 --set skin_mm=0.5 --threads 2 --quiet
-	--set fea_voxel_mm="$CURVE_FEA_MM")
-out="$TMP/curve_a"
-/usr/bin/time -f '%e %M' -o "$out.time" "$BIN" run "$SHARED/meshes/$CURVE_MESH" -o "$out.sl1" \
-	"${CURVE[@]}" --set volume_fraction="$CURVE_VF" --metrics "$out.json" || status=1
-vf=0
-for step in 1 2 3 4 5 6; do
-	out="$TMP/curve_u$step"
-	target=$(python3 -c "import sys; print(min(1.0, float(sys.argv[1]) + 1e-3))" "$vf")
-	"$BIN" run "$SHARED/meshes/$CURVE_MESH" -o "$out.sl1" "${CURVE[@]}" --set refine=uniform \
-		--set volume_fraction="$target" --metrics "$out.json" || { status=1; break; }
-	vf=$(python3 -c "import json,sys; print(json.load(open(sys.argv[1]))['rhombic']['volume_fraction'])" "$out.json")
-	python3 -c "import sys; sys.exit(0 if float(sys.argv[1]) < 0.999 else 1)" "$vf" || break
-done
-python3 - "$TMP" "$CURVE_MESH" <<'PY'
+# curve NAME MESH [--set ...]: the adaptive run to CURVE_VF and the uniform
+# steps from the same initial structure, files $TMP/NAME_*, plot $TMP/NAME.png.
+# Extra arguments (placement, printer, output extension via CURVE_EXT) go to
+# every run.
+curve() {
+	local name=$1 mesh=$2 ext=${CURVE_EXT:-sl1} out vf target step
+	shift 2
+	local CURVE=(--engine rhombic --set height_mm=50 --set wall_mm=0.5 --set skin_mm=0.5
+		--threads 2 --quiet --set fea_voxel_mm="$CURVE_FEA_MM" "$@")
+	out="$TMP/${name}_a"
+	/usr/bin/time -f '%e %M' -o "$out.time" "$BIN" run "$SHARED/meshes/$mesh" -o "$out.$ext" \
+		"${CURVE[@]}" --set volume_fraction="$CURVE_VF" --metrics "$out.json" || return 1
+	rm -f "$TMP/${name}"_u*.json
+	vf=0
+	for step in 1 2 3 4 5 6; do
+		out="$TMP/${name}_u$step"
+		target=$(python3 -c "import sys; print(min(1.0, float(sys.argv[1]) + 1e-3))" "$vf")
+		"$BIN" run "$SHARED/meshes/$mesh" -o "$out.$ext" "${CURVE[@]}" --set refine=uniform \
+			--set volume_fraction="$target" --metrics "$out.json" || return 1
+		vf=$(python3 -c "import json,sys; print(json.load(open(sys.argv[1]))['rhombic']['volume_fraction'])" "$out.json")
+		python3 -c "import sys; sys.exit(0 if float(sys.argv[1]) < 0.999 else 1)" "$vf" || break
+	done
+	python3 - "$TMP" "$name" "$mesh" <<'PY'
 import glob, json, os, sys
-tmp, mesh = sys.argv[1:]
-A = json.load(open(os.path.join(tmp, "curve_a.json")))["rhombic"]
+tmp, name, mesh = sys.argv[1:]
+A = json.load(open(os.path.join(tmp, name + "_a.json")))["rhombic"]
 cs = A["compliance_solid_nmm"]
 ad = []
 for h in A["history"]:
@@ -152,17 +161,17 @@ for h in A["history"]:
     if vf < 0.999:
         ad.append((vf, c / cs))
 un = []
-for p in sorted(glob.glob(os.path.join(tmp, "curve_u*.json"))):
+for p in sorted(glob.glob(os.path.join(tmp, name + "_u*.json"))):
     r = json.load(open(p))["rhombic"]
     un.append((r["volume_fraction"], r["compliance_normalized"]))
 un = sorted(set(un))
 # the uniform curve starts where the adaptive one does (the same initial structure)
 if ad and (not un or un[0][0] > ad[0][0] + 1e-9):
     un.insert(0, ad[0])
-with open(os.path.join(tmp, "curve_adaptive.csv"), "w") as f:
+with open(os.path.join(tmp, name + "_adaptive.csv"), "w") as f:
     f.write("volume_fraction,compliance_normalized\n")
     f.writelines(f"{v:.4f},{c:.4f}\n" for v, c in ad)
-with open(os.path.join(tmp, "curve_uniform.csv"), "w") as f:
+with open(os.path.join(tmp, name + "_uniform.csv"), "w") as f:
     f.write("volume_fraction,compliance_normalized\n")
     f.writelines(f"{v:.4f},{c:.4f}\n" for v, c in un)
 def at(curve, v):  # linear interpolation, None outside
@@ -171,7 +180,7 @@ def at(curve, v):  # linear interpolation, None outside
             return c0 + (c1 - c0) * (v - v0) / (v1 - v0)
     return None
 worse = [(v, c, at(un, v)) for v, c in ad if at(un, v) is not None and c > at(un, v) + 1e-9]
-t = open(os.path.join(tmp, "curve_a.time")).read().split()
+t = open(os.path.join(tmp, name + "_a.time")).read().split()
 print(f"{mesh} 50 mm compliance vs volume: adaptive {len(ad)} points "
       f"{ad[0][0]:.3f}..{ad[-1][0]:.3f} (C/C_solid {ad[0][1]:.3f} -> {ad[-1][1]:.3f}, "
       f"{A['iterations']} iterations, {A['fea_solve_s']:.0f} s of solves, {t[0]} s, "
@@ -181,7 +190,13 @@ print(f"{mesh} 50 mm compliance vs volume: adaptive {len(ad)} points "
 print(f"{mesh} 50 mm adaptive to volume_fraction {A['volume_fraction']:.3f}: C/C_solid "
       f"{A['compliance_normalized']:.3f}, {t[0]} s, {int(t[1]) // 1024} MB peak")
 PY
-/usr/bin/python3 tests/bench/plot_xy.py "$TMP/curve.png" "$TMP/curve_adaptive.csv:adaptive" \
-	"$TMP/curve_uniform.csv:uniform" --title "rhombic, $CURVE_MESH 50 mm (default load: plate fixed, 1000 N on the top 1 mm): compliance vs volume" \
-	--xlabel "V / V_solid" --ylabel "C / C_solid" && echo "plot: $TMP/curve.png" || status=1
+	/usr/bin/python3 tests/bench/plot_xy.py "$TMP/$name.png" "$TMP/${name}_adaptive.csv:adaptive" \
+		"$TMP/${name}_uniform.csv:uniform" --title "rhombic, $mesh 50 mm (default load: plate fixed, 1000 N on the top 1 mm): compliance vs volume" \
+		--xlabel "V / V_solid" --ylabel "C / C_solid" && echo "plot: $TMP/$name.png"
+}
+curve curve "$CURVE_MESH" || status=1
+# the cow standing (up = y): the top 1 mm is its back, so the load runs
+# through the body and the interior carries it (the bunny's is its ears);
+# 50 mm tall it is wider than the SL1's display, so G-code
+CURVE_EXT=gcode curve cow cow.off --set up=y --printer generic-fdm || status=1
 exit $status
