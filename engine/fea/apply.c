@@ -1,6 +1,6 @@
 /* apply.c - the coarse levels' stencil operator (fused with the residual
  * and damped-Jacobi updates), restriction P^T and prolongation P
- * (trilinear) between any two levels, parallel dot products.  Every level
+ * (trilinear) between any two levels, fea_par.  Every level
  * uses level 0's structure-of-arrays layout with a zero halo (fea_int.h),
  * so the stencil kernel runs across 8 nodes of a row without bounds
  * checks, AVX2+FMA when the CPU has it.  The finest level's operator is
@@ -151,7 +151,7 @@ static void restrict_plane(void *vctx, size_t kk, int tid)
 		for (int I = 0; I <= c->nx; I++) {
 			float acc[3] = {0, 0, 0};
 			ptrdiff_t n = fea_nl(f, 2 * I, 2 * J, 2 * K), o = fea_nl(c, I, J, K);
-			if (c->invd[o] == 0 && c->invd[c->cs + o] == 0 && c->invd[2 * c->cs + o] == 0) {
+			if (!fea_node_free(c, o)) {
 				/* no free fine unknown under it: the fine residual is 0
 				 * around it */
 				for (int q = 0; q < 3; q++)
@@ -198,7 +198,7 @@ static void prolong_plane(void *vctx, size_t kk, int tid)
 		const int Jv[2] = {j >> 1, (j + 1) >> 1}, nj = (j & 1) ? 2 : 1;
 		const float wyz = (nj == 2 ? 0.5f : 1) * (nk == 2 ? 0.5f : 1);
 		/* level 0: a row without a free unknown is left alone */
-		if (g->masked && g->s->row_span[2 * ((ptrdiff_t)k * (f->ny + 1) + j) + 1] < 0)
+		if (g->masked && fea_row_span(g->s, j, k)[1] < 0)
 			continue;
 		for (int I0 = 0; I0 < c->nx; I0 += PROLONG_CHUNK) {
 			int I1 = I0 + PROLONG_CHUNK < c->nx ? I0 + PROLONG_CHUNK : c->nx;
@@ -236,63 +236,4 @@ void fea_prolong_add(struct fea_solver *s, int level, const float *xc, float *x)
 	struct grid_ctx g = {s, &s->lv[level], &s->lv[level + 1], level == 0, xc, x};
 
 	fea_par(s, (size_t)g.f->nz + 1, 1, prolong_plane, &g);
-}
-
-struct dot_ctx {
-	const double *a, *b;
-	const float *bf;
-	size_t n;
-	double *part;
-};
-
-static void dot_block(void *vctx, size_t blk, int tid)
-{
-	const struct dot_ctx *d = vctx;
-	size_t lo = blk * FEA_DOT_BLOCK, hi = lo + FEA_DOT_BLOCK < d->n ? lo + FEA_DOT_BLOCK : d->n;
-	double s0 = 0, s1 = 0, s2 = 0, s3 = 0;
-	size_t i = lo;
-
-	(void)tid;
-	if (d->bf) {
-		for (; i < hi; i++)
-			s0 += d->a[i] * (double)d->bf[i];
-		d->part[blk] = s0;
-		return;
-	}
-	for (; i + 4 <= hi; i += 4) {
-		s0 += d->a[i] * d->b[i];
-		s1 += d->a[i + 1] * d->b[i + 1];
-		s2 += d->a[i + 2] * d->b[i + 2];
-		s3 += d->a[i + 3] * d->b[i + 3];
-	}
-	for (; i < hi; i++)
-		s0 += d->a[i] * d->b[i];
-	d->part[blk] = (s0 + s1) + (s2 + s3);
-}
-
-/* Blocks in parallel, their partial sums added in block order (the same
- * result on any thread count). */
-static double dot_run(struct fea_solver *s, struct dot_ctx *d)
-{
-	size_t nb = (d->n + FEA_DOT_BLOCK - 1) / FEA_DOT_BLOCK;
-	double sum = 0;
-
-	fea_par(s, nb, 1, dot_block, d);
-	for (size_t i = 0; i < nb; i++)
-		sum += s->dot_part[i];
-	return sum;
-}
-
-double fea_dot(struct fea_solver *s, const double *a, const double *b, size_t n)
-{
-	struct dot_ctx d = {a, b, NULL, n, s->dot_part};
-
-	return dot_run(s, &d);
-}
-
-double fea_dot_df(struct fea_solver *s, const double *a, const float *b, size_t n)
-{
-	struct dot_ctx d = {a, NULL, b, n, s->dot_part};
-
-	return dot_run(s, &d);
 }

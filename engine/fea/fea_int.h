@@ -134,7 +134,6 @@ struct fea_solver {
 	float *invd0;       /* 3 cs: Jacobi weight / diagonal, 0 on masked */
 	float *b0, *x0, *t0; /* 3 cs: V-cycle rhs, solution, scratch (float) */
 	double *u, *r, *p, *q; /* 3 cs: CG vectors */
-	double *dot_part;   /* partial sums of fea_dot, one per FEA_DOT_BLOCK */
 	double *plane_part; /* nz + 1 level-0 plane sums of fea_apply0d_dot */
 	/* vec.c: one span per level-0 row with active nodes, chunks of spans
 	 * (span_chunk[c] .. span_chunk[c + 1]), two partial sums per chunk */
@@ -159,6 +158,19 @@ struct fea_solver {
 static inline ptrdiff_t fea_n0(const struct fea_solver *s, int i, int j, int k)
 {
 	return ((ptrdiff_t)(k + 1) * s->sy + (j + 1)) * s->sx + (i + 1);
+}
+
+/* Level-0 row (j, k)'s first and last active i ({0, -1}: none; vec.c). */
+static inline const int *fea_row_span(const struct fea_solver *s, int j, int k)
+{
+	return s->row_span + 2 * ((ptrdiff_t)k * (s->lv[0].ny + 1) + j);
+}
+
+/* Levels >= 1: whether node n has an unknown with a nonzero diagonal
+ * (invd > 0; the others' rows and columns are 0). */
+static inline int fea_node_free(const struct fea_level *l, ptrdiff_t n)
+{
+	return l->invd[n] != 0 || l->invd[l->cs + n] != 0 || l->invd[2 * l->cs + n] != 0;
 }
 
 /* element.c */
@@ -191,7 +203,6 @@ double fea_apply0d_dot(struct fea_solver *s, const double *x, double *y);
 /* invd0 from w0 and mask0 (weights capped at bound / Gershgorin ratio) */
 void fea_jacobi0(struct fea_solver *s, double bound);
 
-
 /* vec.c: level-0 vector operations over the active rows (nodes with a
  * free axis; every other entry of the solver's vectors stays 0).
  * fea_spans_build after mask0 is set. */
@@ -199,6 +210,8 @@ int fea_spans_build(struct fea_solver *s, struct err *e);
 void fea_spans_fini(struct fea_solver *s);
 /* b0 = (float) r, x0 = invd0 b0: the first Jacobi sweep from 0 */
 void fea_first_sweep0(struct fea_solver *s, const double *r);
+double fea_vec_rr(struct fea_solver *s); /* r . r */
+double fea_vec_sub_q(struct fea_solver *s); /* r -= q, returns r . r */
 double fea_vec_rz(struct fea_solver *s); /* r . x0 */
 /* u += alpha p, r -= alpha q; *rr = |r|^2, *rz = r . x0 (new r) */
 void fea_vec_update(struct fea_solver *s, double alpha, double *rr, double *rz);
@@ -212,11 +225,6 @@ void fea_apply(struct fea_solver *s, int level, enum fea_op op, const float *x, 
 	       float *y);
 void fea_restrict(struct fea_solver *s, int level, const float *r, float *bc);
 void fea_prolong_add(struct fea_solver *s, int level, const float *xc, float *x);
-/* Parallel dot products of 3 cs level-0 doubles (and floats), summed in
- * a fixed order (results do not depend on the thread count). */
-#define FEA_DOT_BLOCK 16384
-double fea_dot(struct fea_solver *s, const double *a, const double *b, size_t n);
-double fea_dot_df(struct fea_solver *s, const double *a, const float *b, size_t n);
 /* parfor_run with the solver's threads, serial for small n. */
 void fea_par(const struct fea_solver *s, size_t n, size_t chunk, parfor_fn fn, void *ctx);
 

@@ -131,7 +131,7 @@ struct k0_ctx {
                                                                                      \
 	for (int j = 0; j <= s->lv[0].ny; j++) {                                     \
 		const ptrdiff_t row = fea_n0(s, -1, j, k);                           \
-		const int *rs = s->row_span + 2 * ((ptrdiff_t)k * (s->lv[0].ny + 1) + j); \
+		const int *rs = fea_row_span(s, j, k);                               \
 		/* nodes i = c0 - 1 .. c0 + L - 2; the rest of the row is 0 */       \
 		if (rs[1] < 0)                                                       \
 			continue;                                                    \

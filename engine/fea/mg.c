@@ -137,9 +137,8 @@ static int fine_active(const struct fea_level *f, int I, int J, int K)
 		for (int oy = -1; oy <= 1; oy++) {
 			ptrdiff_t n = fea_nl(f, 2 * I - 1, 2 * J + oy, 2 * K + oz);
 			for (int ox = 0; ox < 3; ox++)
-				for (int a = 0; a < 3; a++)
-					if (f->invd[a * f->cs + n + ox] != 0)
-						return 1;
+				if (fea_node_free(f, n + ox))
+					return 1;
 		}
 	return 0;
 }

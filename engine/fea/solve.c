@@ -123,7 +123,6 @@ void fea_solver_free(struct fea_solver *s)
 	free0(s->r);
 	free0(s->p);
 	free0(s->q);
-	mem_free(s->dot_part);
 	mem_free(s->plane_part);
 	fea_spans_fini(s);
 	mem_free(s->f_user);
@@ -326,13 +325,11 @@ int fea_solver_new(const struct fea_grid *g, const struct fea_loads *l, const st
 		s->r = alloc0(s, v, sizeof(double));
 		s->p = alloc0(s, v, sizeof(double));
 		s->q = alloc0(s, v, sizeof(double));
-		s->dot_part = alloc_count(s, v / FEA_DOT_BLOCK + 1, sizeof(double));
 		s->plane_part = alloc_count(s, (size_t)s->lv[0].nz + 1, sizeof(double));
 		s->f_user = alloc_count(s, 3 * s->un_nodes, sizeof(double));
 		s->u_user = alloc_count(s, 3 * s->un_nodes, sizeof(double));
 		if (!s->w0 || !s->mask0 || !s->invd0 || !s->b0 || !s->x0 || !s->t0 || !s->u ||
-		    !s->r || !s->p || !s->q || !s->dot_part || !s->plane_part || !s->f_user ||
-		    !s->u_user)
+		    !s->r || !s->p || !s->q || !s->plane_part || !s->f_user || !s->u_user)
 			goto nomem;
 	}
 
@@ -428,25 +425,6 @@ static void padded_to_user(const struct fea_solver *s, const double *pad, double
 			}
 }
 
-struct axpy_ctx {
-	const double *x;
-	double *y;
-	size_t n;
-};
-
-#define VBLOCK FEA_DOT_BLOCK
-
-/* r = f - q */
-static void sub_block(void *vctx, size_t blk, int tid)
-{
-	const struct axpy_ctx *c = vctx;
-	size_t lo = blk * VBLOCK, hi = lo + VBLOCK < c->n ? lo + VBLOCK : c->n;
-
-	(void)tid;
-	for (size_t i = lo; i < hi; i++)
-		c->y[i] -= c->x[i];
-}
-
 int fea_solver_set_tol(struct fea_solver *s, double tol, struct err *e)
 {
 	int rc = check_tol(tol, e);
@@ -458,7 +436,7 @@ int fea_solver_set_tol(struct fea_solver *s, double tol, struct err *e)
 
 int fea_solve(struct fea_solver *s, struct fea_result *res, struct err *e)
 {
-	const size_t nv = 3 * (size_t)s->cs, nb = (nv + VBLOCK - 1) / VBLOCK;
+	const size_t nv = 3 * (size_t)s->cs;
 	double t0 = now_s(), fnorm, rr, rz, rel = 0, true_rel = 0;
 	int it = 0, converged = 0;
 	struct fea_result R;
@@ -466,20 +444,18 @@ int fea_solve(struct fea_solver *s, struct fea_result *res, struct err *e)
 	memset(&R, 0, sizeof R);
 	/* r = f - A u (u: previous solution, 0 at first) */
 	user_to_padded(s, s->f_user, s->r);
-	fnorm = sqrt(fea_dot(s, s->r, s->r, nv));
+	fnorm = sqrt(fea_vec_rr(s));
 	if (!(fnorm > 0)) {
 		memset(s->u, 0, nv * sizeof *s->u);
 		converged = 1;
 	}
 	for (int restart = 0, stalls = 0; !converged && stalls < 3; restart++) {
 		/* (re)start from the true residual r = f - A u */
-		struct axpy_ctx sc = {s->q, s->r, nv};
 		int it0 = it;
 
 		user_to_padded(s, s->f_user, s->r);
 		fea_apply0d(s, s->u, s->q);
-		fea_par(s, nb, 1, sub_block, &sc);
-		rr = fea_dot(s, s->r, s->r, nv);
+		rr = fea_vec_sub_q(s);
 		rel = sqrt(rr) / fnorm;
 		if (rel <= s->opt.tol) {
 			converged = 1;

@@ -54,8 +54,9 @@ int fea_spans_build(struct fea_solver *s, struct err *e)
 						lo = i;
 					hi = i;
 				}
-			s->row_span[2 * ((size_t)k * (size_t)(l->ny + 1) + (size_t)j)] = lo < 0 ? 0 : lo;
-			s->row_span[2 * ((size_t)k * (size_t)(l->ny + 1) + (size_t)j) + 1] = hi;
+			int *rs = s->row_span + 2 * ((size_t)k * (size_t)(l->ny + 1) + (size_t)j);
+			rs[0] = lo < 0 ? 0 : lo;
+			rs[1] = hi;
 			if (lo < 0)
 				continue;
 			if (acc == 0)
@@ -71,7 +72,7 @@ int fea_spans_build(struct fea_solver *s, struct err *e)
 	return 0;
 }
 
-enum vec_op { VEC_DOT_DF, VEC_UPDATE, VEC_PUPDATE, VEC_COPY_F, VEC_FIRST };
+enum vec_op { VEC_DOT_RR, VEC_SUB_Q, VEC_DOT_DF, VEC_UPDATE, VEC_PUPDATE, VEC_COPY_F, VEC_FIRST };
 
 struct vec_ctx {
 	struct fea_solver *s;
@@ -97,6 +98,16 @@ static void vec_chunk(void *vctx, size_t ch, int tid)
 			const double *qv = s->q;
 			const float *z = s->x0;
 			switch (c->op) {
+			case VEC_DOT_RR:
+				for (ptrdiff_t i = lo; i < hi; i++)
+					s0 += r[i] * r[i];
+				break;
+			case VEC_SUB_Q:
+				for (ptrdiff_t i = lo; i < hi; i++) {
+					r[i] -= qv[i];
+					s0 += r[i] * r[i];
+				}
+				break;
 			case VEC_DOT_DF:
 				for (ptrdiff_t i = lo; i < hi; i++)
 					s0 += r[i] * (double)z[i];
@@ -146,6 +157,22 @@ static void vec_run(struct fea_solver *s, enum vec_op op, double alpha, const do
 		*sum0 = a0;
 	if (sum1)
 		*sum1 = a1;
+}
+
+double fea_vec_rr(struct fea_solver *s)
+{
+	double d;
+
+	vec_run(s, VEC_DOT_RR, 0, NULL, &d, NULL);
+	return d;
+}
+
+double fea_vec_sub_q(struct fea_solver *s)
+{
+	double d;
+
+	vec_run(s, VEC_SUB_Q, 0, NULL, &d, NULL);
+	return d;
 }
 
 double fea_vec_rz(struct fea_solver *s)
