@@ -207,6 +207,39 @@ void fea_element_energy(const struct fea_solver *s, float *out);
 void fea_element_stress(const struct fea_solver *s, float *vm, const uint8_t *mask,
 			double mean6[6]);
 
+/* ---- compliance bound (bound.c; docs/fea.md "Compliance bound") ---- */
+
+struct fea_bound_opts {
+	int max_iter; /* most solves, >= 1 */
+	double gap;   /* stop when upper - lower <= gap * lower */
+};
+
+struct fea_bound {
+	double lower_nmm; /* no density field of the set is stiffer than this */
+	double upper_nmm; /* the relaxed problem's compliance at its best step: the
+			     bound is within upper / lower - 1 of that problem's optimum */
+	int iterations;   /* solves */
+	double solve_s;
+};
+
+/* A certified lower bound on the compliance f.u of every density field
+ * rho with g->rho <= rho <= ceil_rho element by element and sum rho <=
+ * vol (densities clamped to [o->rho_min, 1] as the solver does), under
+ * the SIMP weights rho^p, p = o->penal >= 1.  The relaxation replaces
+ * each element's rho^p by its chord between floor and ceiling (above it:
+ * rho^p is convex), which makes the problem convex; lower comes from its
+ * dual at each step's displacement, optimality-criteria steps drive it up
+ * until it meets upper within bo->gap or bo->max_iter solves.  g->rho is
+ * the floor: > 0 wherever ceil_rho > 0 (0 where no element).  l and o as
+ * fea_solver_new; force, when not NULL, replaces the assembled load
+ * vector (3 per node, fea_solver_force's layout), e.g. with the one
+ * another solver spread.  0, ERR_FIELD "rho" (floor above ceiling, or not
+ * > 0 where an element is), "volume" (vol below the floor's sum),
+ * "bound" (bo), the solver's errors, ERR_NOMEM. */
+int fea_relax_bound(const struct fea_grid *g, const float *ceil_rho, double vol,
+		    const struct fea_loads *l, const double *force, const struct fea_opts *o,
+		    const struct fea_bound_opts *bo, struct fea_bound *out, struct err *e);
+
 /* The 24 x 24 solid element stiffness K0 (row-major) of a hex8 of edge
  * h_mm, local node order (0,0,0) (1,0,0) (0,1,0) (1,1,0) (0,0,1) ...
  * (x fastest), unknowns 3 * node + axis.  For tests and the VTK writer. */

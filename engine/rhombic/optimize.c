@@ -15,6 +15,10 @@
 #include <stdlib.h>
 #include <string.h>
 
+/* fea_relax_bound's stopping rule for the bound (docs/rhombic.md 8) */
+#define RH_BOUND_MAX_ITER 300
+#define RH_BOUND_GAP 0.002
+
 int rh_uniform(struct rh_tree *t, double part_vol, double target, int *steps, struct err *e)
 {
 	int32_t *leaves = NULL;
@@ -203,6 +207,33 @@ static int tighten(struct stiff *st, struct rh_stiff_report *r, struct fea_resul
 	return 0;
 }
 
+/* The bound of rh_stiff_report.bound_nmm: fea_relax_bound from the initial
+ * densities (floor) to the solid part's (st->g.rho after
+ * set_densities(st, 1)), with the result's material and the stiffness
+ * solves' load vector (spread once by the initial densities). */
+static int bound(struct stiff *st, const struct fea_loads *loads, float *floor_rho, double vol,
+		 struct rh_stiff_report *r, struct err *e)
+{
+	struct fea_grid g = st->g;
+	struct fea_opts fo;
+	struct fea_bound_opts bo = {.max_iter = RH_BOUND_MAX_ITER, .gap = RH_BOUND_GAP};
+	struct fea_bound b;
+	int rc;
+
+	g.rho = floor_rho;
+	fea_opts_default(&fo);
+	fo.threads = st->o->threads;
+	fo.rho_min = st->o->rho_min;
+	rc = fea_relax_bound(&g, st->g.rho, vol, loads, fea_solver_force(st->sv), &fo, &bo, &b, e);
+	if (rc)
+		return rc;
+	r->bound_nmm = b.lower_nmm;
+	r->bound_upper_nmm = b.upper_nmm;
+	r->bound_iterations = b.iterations;
+	r->bound_s = b.solve_s;
+	return 0;
+}
+
 static int pool_grow(struct stiff *st)
 {
 	size_t cap = st->pcap ? 2 * st->pcap : 4096;
@@ -381,6 +412,8 @@ int rh_stiffness(struct rh_tree *t, const struct mesh *part, const struct fea_lo
 	size_t capk = 0, capd = 0;
 	double pv = o->part_vol_mm3, frac0 = (pv - t->cavity_volume_mm3) / pv;
 	int stop = 0, rc;
+	float *floor_rho = NULL; /* o->bound: the initial structure's densities */
+	double design_sum = 0;
 
 	memset(&st, 0, sizeof st);
 	memset(r, 0, sizeof *r);
@@ -402,6 +435,14 @@ int rh_stiffness(struct rh_tree *t, const struct mesh *part, const struct fea_lo
 	memcpy(st.part, st.g.rho, st.ne * sizeof *st.part);
 	parfor_run((size_t)st.g.nz, o->threads, 1, count_slice, &st);
 	set_densities(&st, 0);
+	if (o->bound && o->adaptive) {
+		floor_rho = mem_alloc(st.ne * sizeof *floor_rho);
+		if (!floor_rho) {
+			rc = ERR_SET(e, ERR_NOMEM, "rhombic: out of memory for the bound");
+			goto out;
+		}
+		memcpy(floor_rho, st.g.rho, st.ne * sizeof *floor_rho);
+	}
 	for (;;) {
 		double frac = (pv - t->cavity_volume_mm3) / pv;
 		size_t nk = 0, nsplit, nd = 0;
@@ -453,13 +494,18 @@ int rh_stiffness(struct rh_tree *t, const struct mesh *part, const struct fea_lo
 	}
 	if ((rc = tighten(&st, r, &res, e)) != 0)
 		goto out;
+	for (size_t q = 0; q < st.ne; q++)
+		design_sum += st.g.rho[q];
 	/* the solid part under the same load (normalisation, Fig. 11) */
 	set_densities(&st, 1);
 	if ((rc = solve(&st, loads, r, 1.0, &res, e)) != 0)
 		goto out;
 	r->compliance_solid_nmm = res.compliance_nmm;
 	r->max_displacement_solid_mm = res.max_displacement_mm;
+	if (floor_rho && (rc = bound(&st, loads, floor_rho, design_sum, r, e)) != 0)
+		goto out;
 out:
+	mem_free(floor_rho);
 	fea_solver_free(st.sv);
 	fea_grid_fini(&st.g);
 	mem_free(st.part);

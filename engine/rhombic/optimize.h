@@ -61,6 +61,9 @@ struct rh_stiff_opts {
 				 solves reach the FEA's default (1e-6).  0 = that default */
 	int binary;           /* eq. 10 at rho_min for every element of S_C (the paper's
 				 binary densities) instead of at each element's density */
+	int bound;            /* with adaptive: also the lower bound on the compliance of
+				 every refinement of the initial structure with the
+				 result's material (fea_relax_bound) */
 	size_t max_elements;
 	int threads;
 	struct progress *progress; /* may be NULL */
@@ -86,6 +89,13 @@ struct rh_stiff_report {
 	double solve_s;              /* all solves */
 	struct rh_stiff_step *hist;  /* owned (rh_stiff_report_fini), one per solve, the
 					solid's last */
+	/* o->bound: no refinement of the initial structure with the result's
+	 * material (sum of element densities) is more compliant than
+	 * bound_nmm (N mm) in this model; 0 when not computed */
+	double bound_nmm;
+	double bound_upper_nmm;      /* the relaxed design the bound's steps reached */
+	int bound_iterations;
+	double bound_s;
 	size_t nhist, caphist;
 };
 
@@ -97,7 +107,9 @@ void rh_stiff_report_fini(struct rh_stiff_report *r);
  * the leaves by G_C (eq. 10-13: the energy sensitivity per volume of the
  * material S_C their split adds), split the top split_pct % one by one,
  * stop as soon as the next split would pass o->target.  Ends with the
- * solid part's solve.  Errors of the FEA core (ERR_PARAM "loads" for a
+ * solid part's solve, then, with o->bound, the bound (its floor: the
+ * densities of the initial structure; ceiling: the solid part's; budget:
+ * the result's sum; the load vector of the stiffness solves).  Errors of the FEA core (ERR_PARAM "loads" for a
  * load box without material, ERR_LIMIT "fea_voxel_mm") pass through. */
 int rh_stiffness(struct rh_tree *t, const struct mesh *part, const struct fea_loads *loads,
 		 const struct rh_stiff_opts *o, struct rh_stiff_report *r, struct err *e);

@@ -54,6 +54,7 @@ struct rh_params {
 	double penal;
 	double rho_min;
 	int sensitivity;
+	int bound;
 	double fea_tol;
 	char loads[4096];
 };
@@ -116,6 +117,11 @@ static const struct param_desc rh_desc[] = {
 	 .help = "Eq. 10 over the material a split adds: density = at each element's own density "
 		 "(elements are partly filled walls); binary = at rho_min for all of them (the "
 		 "paper's all-or-nothing elements)."},
+	{.name = "bound", .type = PARAM_BOOL, .offset = P(bound), .def = 0, .unit = "",
+	 .help = "With objective=stiffness and refine=adaptive: also compute the lowest C/C_solid "
+		 "any refinement of the initial structure could reach with the result's material "
+		 "(a certified bound under stiffness linear in density; tens to hundreds of extra "
+		 "solves), reported as rhombic.compliance_bound_normalized."},
 	{.name = "fea_tol", .type = PARAM_NUM, .offset = P(fea_tol), .min = 1e-8, .max = 0.1,
 	 .def = RH_FEA_TOL, .unit = "",
 	 .help = "Relative residual of the FEA solves that rank the cells (each starts from the "
@@ -200,6 +206,7 @@ static int run_stiffness(struct rh_job *s, const struct engine_ctx *ctx, int ada
 	o.penal = s->p.penal;
 	o.rho_min = s->p.rho_min;
 	o.binary = s->p.sensitivity == 1;
+	o.bound = s->p.bound;
 	o.fea_tol = s->p.fea_tol;
 	o.max_elements = RH_FEA_MAX;
 	o.threads = ctx->threads;
@@ -462,6 +469,14 @@ static int rh_metrics(void *state, struct metrics *m, struct err *e)
 		rc |= metrics_num(m, "rhombic.fea_solve_s", r->solve_s);
 		rc |= metrics_num(m, "rhombic.fea_tol", s->p.fea_tol);
 		rc |= metrics_str(m, "rhombic.loads", s->loads_text);
+		if (r->bound_nmm > 0) {
+			rc |= metrics_num(m, "rhombic.compliance_bound_normalized",
+					  r->bound_nmm / r->compliance_solid_nmm);
+			rc |= metrics_num(m, "rhombic.bound_gap",
+					  r->bound_upper_nmm / r->bound_nmm - 1);
+			rc |= metrics_int(m, "rhombic.bound_iterations", r->bound_iterations);
+			rc |= metrics_num(m, "rhombic.bound_s", r->bound_s);
+		}
 		/* per solve: the compliance-vs-volume curve (the solid's last) */
 		for (size_t i = 0; i < r->nhist; i++) {
 			snprintf(buf, sizeof buf, "%d", r->hist[i].cg_iterations);

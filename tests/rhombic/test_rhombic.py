@@ -209,20 +209,32 @@ class RhombicCli(unittest.TestCase):
         self.assertGreaterEqual(vf, 0.6)
         self.assertLess(vf, 0.65)
         a = self.job(beam, self.path("beam_a.stl"), *BEAM, "--set", "split_pct=5",
-                     "--set", f"volume_fraction={vf!r}")["rhombic"]
+                     "--set", f"volume_fraction={vf!r}", "--set", "bound=true")["rhombic"]
         ratio = u["compliance_normalized"] / a["compliance_normalized"]
         print(f"beam: initial {u['volume_fraction_initial']:.3f}; uniform {vf:.4f} "
               f"C/C_solid {u['compliance_normalized']:.3f} max |u| "
               f"{u['max_displacement_mm']:.4f} mm; adaptive {a['volume_fraction']:.4f} "
               f"C/C_solid {a['compliance_normalized']:.3f} max |u| "
               f"{a['max_displacement_mm']:.4f} mm in {a['iterations']} iterations "
-              f"({a['fea_solve_s']:.1f} s of solves); ratio {ratio:.3f}")
+              f"({a['fea_solve_s']:.1f} s of solves); ratio {ratio:.3f}; no refinement "
+              f"of the initial structure with this material below "
+              f"{a['compliance_bound_normalized']:.3f} (ratio at most "
+              f"{u['compliance_normalized'] / a['compliance_bound_normalized']:.3f}; "
+              f"{a['bound_iterations']} solves, gap {a['bound_gap']:.4f})")
         self.assertLessEqual(a["volume_fraction"], vf + 1e-9)
         self.assertGreater(a["volume_fraction"], vf - 0.01)
         self.assertEqual(a["volume_fraction_initial"], u["volume_fraction_initial"])
         self.assertGreater(a["iterations"], 3)
         self.assertGreaterEqual(ratio, 1.2)
         self.assertLess(a["max_displacement_mm"], 0.8 * u["max_displacement_mm"])
+        # the bound (fea_relax_bound) holds for the design found and for the
+        # uniform one, which refines the same initial structure with the
+        # same material; converged to its 0.2 % gap
+        self.assertLessEqual(a["compliance_bound_normalized"], a["compliance_normalized"])
+        self.assertLessEqual(a["compliance_bound_normalized"], u["compliance_normalized"])
+        self.assertGreater(a["compliance_bound_normalized"], 1.0)
+        self.assertLessEqual(a["bound_gap"], 0.002)
+        self.assertNotIn("compliance_bound_normalized", u)
         # the compliance falls with every refinement (the history's last
         # entry is the solid part's solve)
         hist = [tuple(map(float, h.split())) for h in a["history"]]
