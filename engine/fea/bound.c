@@ -3,9 +3,10 @@
  * fea_relax_bound; docs/fea.md "Compliance bound").
  *
  * Design variable x_e in [0, 1]: rho_e = f_e + x_e (c_e - f_e) (f floor,
- * c ceiling, after the solver's clamp to [rho_min, 1]).  The element's
- * SIMP weight rho^p is convex in rho, so it lies under its chord
- *   w_e(x) = f_e^p + x_e (c_e^p - f_e^p)
+ * c ceiling; the budget counts rho_e as it is).  The element's SIMP
+ * weight W(rho) = max(rho, rho_min)^p (the solver's clamp) is convex in
+ * rho, so it lies under its chord
+ *   w_e(x) = W(f_e) + x_e (W(c_e) - W(f_e))
  * and, since compliance only falls as any weight rises, the compliance
  * under the chord weights bounds that under rho^p from below.  The chord
  * weights are affine in x, so that compliance is convex in x, and for any
@@ -14,7 +15,7 @@
  * E_e(v) = v_e^T K0 v_e.  Hence, for every x with sum rho <= vol,
  *   C(x) >= (f.v)^2 / M(v),  M(v) = max over those x of sum_e w_e(x) E_e(v),
  * a fractional knapsack: every element at its floor, then the budget left
- * to the elements of largest (c^p - f^p) E_e / (c - f) first.
+ * to the elements of largest (W(c) - W(f)) E_e / (c - f) first.
  * Optimality-criteria steps on the chord problem move v towards its
  * optimum, where the bound meets that problem's compliance.
  */
@@ -34,10 +35,10 @@ struct key {
 	size_t e;
 };
 
-/* Per element: the clamped floor and ceiling densities and weights. */
+/* Per element: floor and ceiling densities, and their weights. */
 struct elem {
 	double f, c;   /* densities, f <= c; c = 0: no element */
-	double wf, wc; /* f^p, c^p */
+	double wf, wc; /* W(f), W(c): the clamped weights */
 };
 
 static int cmp_ratio_desc(const void *pa, const void *pb)
@@ -129,10 +130,10 @@ int fea_relax_bound(const struct fea_grid *g, const float *ceil_rho, double vol,
 	struct key *keys = NULL;
 	struct elem *el = NULL;
 	double *x = NULL, vfloor = 0, vceil = 0, wmin = 1, t;
+	double lower = 0, upper = INFINITY, solve_s = 0;
 	float *w = NULL, *en = NULL;
-	int rc = 0;
+	int rc = 0, it;
 
-	memset(out, 0, sizeof *out);
 	if (bo->max_iter < 1 || !(bo->gap >= 0))
 		return ERR_FIELD(e, "bound", "bound: max_iter must be >= 1 and gap >= 0");
 	el = mem_calloc(n, sizeof *el);
@@ -146,16 +147,18 @@ int fea_relax_bound(const struct fea_grid *g, const float *ceil_rho, double vol,
 	}
 	for (size_t q = 0; q < n; q++) {
 		double f = g->rho[q], c = ceil_rho[q];
-		if (!(c > 0))
-			continue;
-		if (!(f > 0) || f > c || c > 1) {
+		if (f == 0 && c == 0)
+			continue; /* no element */
+		if (!(f > 0) || !(f <= c) || !(c <= 1)) {
 			rc = ERR_FIELD(e, "rho", "bound: element %zu needs 0 < floor (%g) <= ceiling "
-				       "(%g) <= 1", q, f, c);
+				       "(%g) <= 1, or both 0", q, f, c);
 			goto out;
 		}
-		f = f < o->rho_min ? o->rho_min : f;
-		c = c < o->rho_min ? o->rho_min : c;
-		el[q] = (struct elem){f, c, pow(f, o->penal), pow(c, o->penal)};
+		/* volumes count the densities as they are; weights as the
+		 * solver clamps them (w(rho) = max(rho, rho_min)^p is convex in
+		 * rho too, so the chord between f and c still lies above it) */
+		el[q] = (struct elem){f, c, pow(fmax(f, o->rho_min), o->penal),
+				      pow(fmax(c, o->rho_min), o->penal)};
 		wmin = el[q].wf < wmin ? el[q].wf : wmin;
 		vfloor += f;
 		vceil += c;
@@ -178,10 +181,9 @@ int fea_relax_bound(const struct fea_grid *g, const float *ceil_rho, double vol,
 		goto out;
 	if (force)
 		memcpy(fea_solver_force(s), force, 3 * nn * sizeof *force);
-	out->upper_nmm = INFINITY;
-	for (int it = 0; it < bo->max_iter; it++) {
+	for (it = 0; it < bo->max_iter; it++) {
 		const double *u, *f = fea_solver_force(s);
-		double fu = 0, m, lb;
+		double fu = 0, m, lb, used;
 		if (it > 0) {
 			oc_step(el, en, x, n, vol);
 			weights(el, x, w, n);
@@ -190,19 +192,29 @@ int fea_relax_bound(const struct fea_grid *g, const float *ceil_rho, double vol,
 		}
 		if ((rc = fea_solve(s, &res, e)) != 0)
 			goto out;
-		out->solve_s += res.solve_s;
-		out->iterations = it + 1;
+		used = 0;
+		for (size_t q = 0; q < n; q++)
+			if (el[q].c > 0)
+				used += el[q].f + x[q] * (el[q].c - el[q].f);
+		solve_s += res.solve_s;
 		u = fea_displacement(s);
 		for (size_t q = 0; q < 3 * nn; q++)
 			fu += f[q] * u[q];
 		fea_element_energy(s, en);
 		m = knapsack(el, en, keys, n, vol - vfloor);
 		lb = m > 0 ? fu * fu / m : 0;
-		out->lower_nmm = lb > out->lower_nmm ? lb : out->lower_nmm;
-		out->upper_nmm = fmin(out->upper_nmm, res.compliance_nmm);
-		if (out->upper_nmm - out->lower_nmm <= bo->gap * out->lower_nmm)
+		lower = lb > lower ? lb : lower;
+		/* upper only from designs of the set (the move limits and XMIN
+		 * can hold a step above the budget when it is nearly spent) */
+		if (used <= vol * (1 + 1e-9))
+			upper = fmin(upper, res.compliance_nmm);
+		if (upper - lower <= bo->gap * lower)
 			break;
 	}
+	out->lower_nmm = lower;
+	out->upper_nmm = upper;
+	out->iterations = it < bo->max_iter ? it + 1 : bo->max_iter;
+	out->solve_s = solve_s;
 out:
 	fea_solver_free(s);
 	mem_free(el);

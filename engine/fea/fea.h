@@ -224,18 +224,21 @@ struct fea_bound {
 
 /* A certified lower bound on the compliance f.u of every density field
  * rho with g->rho <= rho <= ceil_rho element by element and sum rho <=
- * vol (densities clamped to [o->rho_min, 1] as the solver does), under
- * the SIMP weights rho^p, p = o->penal >= 1.  The relaxation replaces
+ * vol, under the solver's weights max(rho, o->rho_min)^p, p = o->penal
+ * >= 1.  The relaxation replaces
  * each element's rho^p by its chord between floor and ceiling (above it:
  * rho^p is convex), which makes the problem convex; lower comes from its
  * dual at each step's displacement, optimality-criteria steps drive it up
  * until it meets upper within bo->gap or bo->max_iter solves.  g->rho is
- * the floor: > 0 wherever ceil_rho > 0 (0 where no element).  l and o as
+ * the floor: 0 < floor <= ceiling <= 1 per element, both 0 where there
+ * is no element.  l and o as
  * fea_solver_new; force, when not NULL, replaces the assembled load
  * vector (3 per node, fea_solver_force's layout), e.g. with the one
- * another solver spread.  0, ERR_FIELD "rho" (floor above ceiling, or not
- * > 0 where an element is), "volume" (vol below the floor's sum),
- * "bound" (bo), the solver's errors, ERR_NOMEM. */
+ * another solver spread.  Each step's lower bound holds whatever its
+ * displacement's accuracy (up to the element energies' float rounding,
+ * ~1e-7 relative).  *out is set on success only.  0, ERR_FIELD "rho"
+ * (a floor and ceiling not as above), "volume" (vol below the floor's
+ * sum), "bound" (bo), the solver's errors, ERR_NOMEM. */
 int fea_relax_bound(const struct fea_grid *g, const float *ceil_rho, double vol,
 		    const struct fea_loads *l, const double *force, const struct fea_opts *o,
 		    const struct fea_bound_opts *bo, struct fea_bound *out, struct err *e);

@@ -223,6 +223,7 @@ static int bound(struct stiff *st, const struct fea_loads *loads, float *floor_r
 	g.rho = floor_rho;
 	fea_opts_default(&fo);
 	fo.threads = st->o->threads;
+	fo.penal = st->o->penal;
 	fo.rho_min = st->o->rho_min;
 	rc = fea_relax_bound(&g, st->g.rho, vol, loads, fea_solver_force(st->sv), &fo, &bo, &b, e);
 	if (rc)

@@ -120,7 +120,7 @@ static const struct param_desc rh_desc[] = {
 	{.name = "bound", .type = PARAM_BOOL, .offset = P(bound), .def = 0, .unit = "",
 	 .help = "With objective=stiffness and refine=adaptive: also compute the lowest C/C_solid "
 		 "any refinement of the initial structure could reach with the result's material "
-		 "(a certified bound under stiffness linear in density; tens to hundreds of extra "
+		 "(certified by duality on a convex relaxation of rho^p; tens to hundreds of extra "
 		 "solves), reported as rhombic.compliance_bound_normalized."},
 	{.name = "fea_tol", .type = PARAM_NUM, .offset = P(fea_tol), .min = 1e-8, .max = 0.1,
 	 .def = RH_FEA_TOL, .unit = "",
@@ -244,6 +244,10 @@ static int rh_validate(const void *params, const struct common_params *common,
 			return rc;
 		fea_loads_fini(&l);
 	}
+	if (p->bound && (p->objective != RH_OBJ_STIFFNESS || p->refine != RH_REFINE_ADAPTIVE))
+		return ERR_FIELD(e, "bound",
+				 "bound=true bounds what adaptive refinement could reach: it needs "
+				 "objective=stiffness and refine=adaptive");
 	if (p->orient_deg != -1 && p->orient_deg < 0)
 		return ERR_FIELD(e, "orient_deg", "orient_deg is -1 (automatic) or in [0, 180), not %g",
 				 p->orient_deg);

@@ -1,9 +1,11 @@
 /* test_bound.c - fea_relax_bound (engine/fea/bound.c) against the
  * compliances of designs solved here: with floor = ceiling the bound is
- * that one design's compliance; otherwise no design of the set, random or
- * graded, at p = 1 or 3, is stiffer than it; at p = 1 the relaxation is
- * exact, so the bound also meets the best design the steps found; bad
- * arguments get errors naming them.
+ * that one design's compliance (also under a load vector given by the
+ * caller); otherwise no design of the set, random or graded, at p = 1 or
+ * 3, with floors under rho_min and an absent element, is stiffer than it;
+ * at p = 1 the relaxation is exact: on a bar in series the bound meets the
+ * analytic optimum (the uniform design) within its gap; bad arguments get
+ * errors naming them.
  */
 #include "harness.h"
 
@@ -119,8 +121,12 @@ static void test_no_design_below(void)
 	unsigned st = 11;
 
 	for (int q = 0; q < NE; q++) {
-		fl[q] = q % 7 == 3 ? 0.4f : 0.1f;
+		/* some floors under rho_min (0.01: the solver clamps their
+		 * weight, the budget counts them as they are), one element absent */
+		fl[q] = q % 7 == 3 ? 0.4f : q % 5 == 1 ? 0.004f : 0.1f;
 		cl[q] = 1;
+		if (q == (2 * NY + 1) * NX + 6)
+			fl[q] = cl[q] = 0;
 		vfloor += fl[q];
 	}
 	for (int p = 1; p <= 3; p += 2) {
@@ -141,7 +147,7 @@ static void test_no_design_below(void)
 				int i = q % NX, k = q / (NX * NY);
 				double bias = trial % 2 ? (1.0 - i / (double)NX) * (k == 0 || k == NZ - 1)
 							: 0;
-				w[q] = trial == 0 ? 1 : unit_rand(&st) + 3 * bias;
+				w[q] = cl[q] == 0 ? 0 : trial == 0 ? 1 : unit_rand(&st) + 3 * bias;
 				ws += w[q];
 			}
 			double left = vol - vfloor, over = 0;
@@ -158,6 +164,8 @@ static void test_no_design_below(void)
 			 * using less than the budget is in the set too) */
 			for (int q = 0; q < NE && over > 0; q++) {
 				double room = cl[q] - d[q], add = fmin(room, over);
+				if (cl[q] == 0)
+					continue;
 				d[q] = (float)(d[q] + add);
 				over -= add;
 			}
@@ -175,6 +183,98 @@ static void test_no_design_below(void)
 		printf("  p=%d: bound %.6g, best of 40 designs %.6g, %d solves\n", p, b.lower_nmm, best,
 		       b.iterations);
 	}
+}
+
+/* A bar of 20 elements in series under an axial load, nu = 0: each
+ * element's compliance is h F^2 / (E A rho), so at p = 1 the best design
+ * with a given total is the uniform one (the sum of 1 / rho_i at a fixed
+ * sum of rho_i is least when they are equal).  The bound must meet the
+ * uniform design's compliance, solved apart, within its gap. */
+static void test_bar_exact(void)
+{
+	enum { N = 20 };
+	const char *loads = "material E_mpa=1000 nu=0; fixed box=0,0,0,0,1,1 axes=xyz; "
+			    "force box=20,0,0,20,1,1 n=1,0,0";
+	struct fea_grid g;
+	struct fea_loads l;
+	struct fea_opts o;
+	struct fea_solver *s = NULL;
+	struct fea_result r;
+	struct fea_bound b;
+	struct fea_bound_opts bo = {.max_iter = 400, .gap = 1e-4};
+	float fl[N], cl[N], u[N];
+	struct err e;
+
+	err_clear(&e);
+	for (int q = 0; q < N; q++) {
+		fl[q] = 0.05f;
+		cl[q] = 1;
+		u[q] = 0.5f;
+	}
+	memset(&g, 0, sizeof g);
+	g.nx = N;
+	g.ny = g.nz = 1;
+	g.h_mm = 1;
+	g.part_hi_mm = (struct vec3){N, 1, 1};
+	fea_opts_default(&o);
+	o.penal = 1;
+	o.tol = 1e-10;
+	REQUIRE_OK(fea_loads_parse(loads, MAT, &l, &e), &e);
+	g.rho = u;
+	REQUIRE_OK(fea_solver_new(&g, &l, &o, &s, &e), &e);
+	REQUIRE_OK(fea_solve(s, &r, &e), &e);
+	fea_solver_free(s);
+	CHECK_REL(r.compliance_nmm, N * 1.0 / (1000 * 0.5), 1e-6);
+	g.rho = fl;
+	REQUIRE_OK(fea_relax_bound(&g, cl, 0.5 * N, &l, NULL, &o, &bo, &b, &e), &e);
+	CHECK_NUM(b.lower_nmm, <=, r.compliance_nmm * (1 + 1e-6));
+	CHECK_NUM(b.lower_nmm, >=, r.compliance_nmm / (1 + 1e-4 + 1e-6));
+	CHECK_NUM(b.iterations, <, 400);
+	fea_loads_fini(&l);
+}
+
+/* force != NULL: the bound of one fixed design under a load vector spread
+ * by another solver is that solver's compliance. */
+static void test_given_force(void)
+{
+	float f[NE], copy[NE];
+	unsigned st = 5;
+	struct fea_grid g;
+	struct fea_loads l;
+	struct fea_opts o;
+	struct fea_solver *s = NULL;
+	struct fea_result r;
+	struct fea_bound b;
+	struct fea_bound_opts bo = {.max_iter = 10, .gap = 1e-6};
+	double *force;
+	size_t nn = (size_t)(NX + 1) * (NY + 1) * (NZ + 1);
+	double sum = 0;
+	struct err e;
+
+	err_clear(&e);
+	for (int q = 0; q < NE; q++) {
+		f[q] = (float)(0.05 + 0.95 * unit_rand(&st));
+		sum += f[q];
+	}
+	memcpy(copy, f, sizeof copy);
+	grid_init(&g, copy);
+	fea_opts_default(&o);
+	o.rho_min = 0.01;
+	o.tol = 1e-10;
+	REQUIRE_OK(fea_loads_parse(LOADS, MAT, &l, &e), &e);
+	REQUIRE_OK(fea_solver_new(&g, &l, &o, &s, &e), &e);
+	/* a load of its own: along y on every top node */
+	force = fea_solver_force(s);
+	for (size_t q = 0; q < 3 * nn; q++)
+		force[q] = 0;
+	for (int i = 1; i <= NX; i++)
+		for (int j = 0; j <= NY; j++)
+			force[3 * (((size_t)NZ * (NY + 1) + j) * (NX + 1) + i) + 1] = 0.1 * i;
+	REQUIRE_OK(fea_solve(s, &r, &e), &e);
+	REQUIRE_OK(fea_relax_bound(&g, f, sum, &l, force, &o, &bo, &b, &e), &e);
+	CHECK_REL(b.lower_nmm, r.compliance_nmm, 1e-6);
+	fea_solver_free(s);
+	fea_loads_fini(&l);
 }
 
 static void test_errors(void)
@@ -200,12 +300,19 @@ static void test_errors(void)
 	err_clear(&e);
 	CHECK_NUM(bound(fl, cl, 0.5 * NE, 3, &b, &e), !=, 0);
 	CHECK_STR(e.field, "rho");
+	fl[5] = 0.3f;
+	cl[5] = 0;
+	err_clear(&e);
+	CHECK_NUM(bound(fl, cl, 0.5 * NE, 3, &b, &e), !=, 0);
+	CHECK_STR(e.field, "rho");
 }
 
 int main(void)
 {
 	RUN(test_exact_when_fixed);
 	RUN(test_no_design_below);
+	RUN(test_bar_exact);
+	RUN(test_given_force);
 	RUN(test_errors);
 	return harness_report();
 }
