@@ -25,6 +25,7 @@
 
 #include "engine/core/err.h"
 #include "engine/core/mem.h"
+#include "engine/core/progress.h"
 #include "engine/fea/fea.h"
 
 #define BOUND_MOVE 0.2  /* most change of a design variable per step */
@@ -210,6 +211,10 @@ int fea_relax_bound(const struct fea_grid *g, const float *ceil_rho, double vol,
 			upper = fmin(upper, res.compliance_nmm);
 		if (upper - lower <= bo->gap * lower)
 			break;
+		if (bo->progress &&
+		    (rc = progress_update(bo->progress,
+					  bo->f0 + (bo->f1 - bo->f0) * (it + 1) / bo->max_iter, e)) != 0)
+			goto out;
 	}
 	out->lower_nmm = lower;
 	out->upper_nmm = upper;

@@ -209,9 +209,14 @@ void fea_element_stress(const struct fea_solver *s, float *vm, const uint8_t *ma
 
 /* ---- compliance bound (bound.c; docs/fea.md "Compliance bound") ---- */
 
+struct progress;
+
 struct fea_bound_opts {
 	int max_iter; /* most solves, >= 1 */
 	double gap;   /* stop when upper - lower <= gap * lower */
+	struct progress *progress; /* may be NULL: updated from f0 to f1 of its stage
+				      after each solve, which may cancel */
+	double f0, f1;
 };
 
 struct fea_bound {
@@ -238,7 +243,8 @@ struct fea_bound {
  * displacement's accuracy (up to the element energies' float rounding,
  * ~1e-7 relative).  *out is set on success only.  0, ERR_FIELD "rho"
  * (a floor and ceiling not as above), "volume" (vol below the floor's
- * sum), "bound" (bo), the solver's errors, ERR_NOMEM. */
+ * sum), "bound" (bo), the solver's errors, ERR_CANCELLED (bo->progress),
+ * ERR_NOMEM. */
 int fea_relax_bound(const struct fea_grid *g, const float *ceil_rho, double vol,
 		    const struct fea_loads *l, const double *force, const struct fea_opts *o,
 		    const struct fea_bound_opts *bo, struct fea_bound *out, struct err *e);

@@ -216,7 +216,8 @@ static int bound(struct stiff *st, const struct fea_loads *loads, float *floor_r
 {
 	struct fea_grid g = st->g;
 	struct fea_opts fo;
-	struct fea_bound_opts bo = {.max_iter = RH_BOUND_MAX_ITER, .gap = RH_BOUND_GAP};
+	struct fea_bound_opts bo = {.max_iter = RH_BOUND_MAX_ITER, .gap = RH_BOUND_GAP,
+				    .progress = st->o->progress, .f0 = 0.95, .f1 = 1.0};
 	struct fea_bound b;
 	int rc;
 
