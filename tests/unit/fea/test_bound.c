@@ -279,32 +279,33 @@ static void test_given_force(void)
 
 static void test_errors(void)
 {
+	/* {floor, ceiling} of element 5 (the rest 0.3 and 1), budget per
+	 * element, the field the error names */
+	static const struct {
+		float f, c;
+		double vol;
+		const char *field;
+	} cases[] = {
+		{0.3f, 1, 0.1, "volume"}, /* under the floors' sum */
+		{1, 0.5f, 0.5, "rho"},    /* floor above ceiling */
+		{0, 1, 0.5, "rho"},       /* an element without a floor */
+		{0.3f, 0, 0.5, "rho"},    /* a floor without an element */
+	};
 	float fl[NE], cl[NE];
 	struct fea_bound b;
 	struct err e;
 
-	for (int q = 0; q < NE; q++) {
-		fl[q] = 0.3f;
-		cl[q] = 1;
+	for (size_t k = 0; k < sizeof cases / sizeof cases[0]; k++) {
+		for (int q = 0; q < NE; q++) {
+			fl[q] = 0.3f;
+			cl[q] = 1;
+		}
+		fl[5] = cases[k].f;
+		cl[5] = cases[k].c;
+		err_clear(&e);
+		CHECK_NUM(bound(fl, cl, cases[k].vol * NE, 3, &b, &e), !=, 0);
+		CHECK_STR(e.field, cases[k].field);
 	}
-	err_clear(&e);
-	CHECK_NUM(bound(fl, cl, 0.1 * NE, 3, &b, &e), !=, 0);
-	CHECK_STR(e.field, "volume");
-	fl[5] = 1;
-	cl[5] = 0.5f;
-	err_clear(&e);
-	CHECK_NUM(bound(fl, cl, 0.5 * NE, 3, &b, &e), !=, 0);
-	CHECK_STR(e.field, "rho");
-	fl[5] = 0;
-	cl[5] = 1;
-	err_clear(&e);
-	CHECK_NUM(bound(fl, cl, 0.5 * NE, 3, &b, &e), !=, 0);
-	CHECK_STR(e.field, "rho");
-	fl[5] = 0.3f;
-	cl[5] = 0;
-	err_clear(&e);
-	CHECK_NUM(bound(fl, cl, 0.5 * NE, 3, &b, &e), !=, 0);
-	CHECK_STR(e.field, "rho");
 }
 
 int main(void)
