@@ -256,14 +256,17 @@ class HollowTest(unittest.TestCase):
     # contact hull and fills only behind it, so the letter stands.  It does
     # not reach the offset hull H_r (r = 2.5 mm): no hollowing with 1 mm
     # walls can, as docs/hollow.md shows from the uniform 1 mm hollowing.
+    # No time budget (optimise_s=0): with one, how far the solve gets depends
+    # on the machine's load, and a solve cut short left a corner reading
+    # 0.2001 px against the 0.2 px tolerance on a loaded CI run.
     def test_P_stands_after_stability(self):
         m = hollow(self.tmp.name, "P.off", height_mm=50, up="y", objective="stability",
-                   rounds=1, opt_layer_mm=1.0, optimise_s=20)
+                   rounds=1, opt_layer_mm=1.0, optimise_s=0)
         h = m["hollow"]
         self.assertFalse(h["stands_before"])
         self.assertLess(h["com_before_mm"], 0)
         # stands: the projected centre of mass is inside the contact hull
-        # (0.45 mm in with the exact slope rule)
+        # (0.47 mm in with the exact slope rule)
         self.assertGreater(h["com_after_mm"], 0.25, h)
         # short of the offset hull H_r (see above), and reported so
         self.assertFalse(h["com_inside_hull"], h)
