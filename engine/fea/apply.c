@@ -1,7 +1,8 @@
 /* apply.c - the coarse levels' stencil operator (fused with the residual
  * and damped-Jacobi updates), restriction P^T and prolongation P
- * (trilinear) between any two levels, fea_par.  Every level
- * uses level 0's structure-of-arrays layout with a zero halo (fea_int.h),
+ * (trilinear) between any two levels, and the solver's parallel loop
+ * (fea_par).  Every level uses level 0's structure-of-arrays layout with a
+ * zero halo (fea_int.h),
  * so the stencil kernel runs across 8 nodes of a row without bounds
  * checks, AVX2+FMA when the CPU has it.  The finest level's operator is
  * in kernel0.c.  docs/fea.md, "Solver".

@@ -42,6 +42,18 @@ struct elem {
 	double wf, wc; /* W(f), W(c): the clamped weights */
 };
 
+/* rho_e at design variable x */
+static double elem_rho(const struct elem *p, double x)
+{
+	return p->f + x * (p->c - p->f);
+}
+
+/* weight gained per unit of material at element energy en (c > f) */
+static double elem_ratio(const struct elem *p, double en)
+{
+	return (p->wc - p->wf) * en / (p->c - p->f);
+}
+
 static int cmp_ratio_desc(const void *pa, const void *pb)
 {
 	const struct key *a = pa, *b = pb;
@@ -63,7 +75,7 @@ static double knapsack(const struct elem *el, const float *en, struct key *keys,
 			continue;
 		m += el[e].wf * en[e];
 		if (el[e].c > el[e].f)
-			keys[nk++] = (struct key){(el[e].wc - el[e].wf) * en[e] / (el[e].c - el[e].f), e};
+			keys[nk++] = (struct key){elem_ratio(&el[e], en[e]), e};
 	}
 	qsort(keys, nk, sizeof *keys, cmp_ratio_desc);
 	for (size_t q = 0; q < nk && budget > 0; q++) {
@@ -84,10 +96,9 @@ static void weights(const struct elem *el, const double *x, float *w, size_t n)
 
 static double step_value(const struct elem *p, double x, double en, double lambda)
 {
-	double a = fmax(BOUND_XMIN, x - BOUND_MOVE), b = fmin(1, x + BOUND_MOVE);
-	double gain = (p->wc - p->wf) * fmax(en, 0), cost = p->c - p->f, t;
+	double a = fmax(BOUND_XMIN, x - BOUND_MOVE), b = fmin(1, x + BOUND_MOVE), t;
 
-	t = cost > 0 ? x * sqrt(gain / (lambda * cost)) : 1;
+	t = p->c > p->f ? x * sqrt(elem_ratio(p, fmax(en, 0)) / lambda) : 1;
 	return t < a ? a : t > b ? b : t;
 }
 
@@ -98,16 +109,14 @@ static void oc_step(const struct elem *el, const float *en, double *x, size_t n,
 	double lo = 0, hi = 0;
 
 	for (size_t e = 0; e < n; e++)
-		if (el[e].c > el[e].f) {
-			double r = (el[e].wc - el[e].wf) * en[e] / (el[e].c - el[e].f);
-			hi = r > hi ? r : hi;
-		}
+		if (el[e].c > el[e].f)
+			hi = fmax(hi, elem_ratio(&el[e], en[e]));
 	hi = hi > 0 ? hi * 1e6 : 1;
 	for (int it = 0; it < 200 && hi - lo > 1e-12 * hi; it++) {
 		double mid = 0.5 * (lo + hi), v = 0;
 		for (size_t e = 0; e < n; e++)
 			if (el[e].c > 0)
-				v += el[e].f + step_value(&el[e], x[e], en[e], mid) * (el[e].c - el[e].f);
+				v += elem_rho(&el[e], step_value(&el[e], x[e], en[e], mid));
 		if (v > vol)
 			lo = mid;
 		else
@@ -196,7 +205,7 @@ int fea_relax_bound(const struct fea_grid *g, const float *ceil_rho, double vol,
 		used = 0;
 		for (size_t q = 0; q < n; q++)
 			if (el[q].c > 0)
-				used += el[q].f + x[q] * (el[q].c - el[q].f);
+				used += elem_rho(&el[q], x[q]);
 		solve_s += res.solve_s;
 		u = fea_displacement(s);
 		for (size_t q = 0; q < 3 * nn; q++)

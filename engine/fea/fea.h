@@ -230,14 +230,14 @@ struct fea_bound {
 /* A certified lower bound on the compliance f.u of every density field
  * rho with g->rho <= rho <= ceil_rho element by element and sum rho <=
  * vol, under the solver's weights max(rho, o->rho_min)^p, p = o->penal
- * >= 1.  The relaxation replaces
- * each element's rho^p by its chord between floor and ceiling (above it:
- * rho^p is convex), which makes the problem convex; lower comes from its
- * dual at each step's displacement, optimality-criteria steps drive it up
- * until it meets upper within bo->gap or bo->max_iter solves.  g->rho is
- * the floor: 0 < floor <= ceiling <= 1 per element, both 0 where there
- * is no element.  l and o as
- * fea_solver_new; force, when not NULL, replaces the assembled load
+ * >= 1.  The relaxation replaces each element's weight by its chord
+ * between floor and ceiling (above it: the weight is convex in rho),
+ * which makes the problem convex; lower comes from its dual at each
+ * step's displacement, optimality-criteria steps drive it up until it
+ * meets upper within bo->gap or bo->max_iter solves.  g->rho is the
+ * floor: 0 < floor <= ceiling <= 1 per element, both 0 where there is no
+ * element.  l and o as fea_solver_new; force, when not NULL, replaces the
+ * assembled load
  * vector (3 per node, fea_solver_force's layout), e.g. with the one
  * another solver spread.  Each step's lower bound holds whatever its
  * displacement's accuracy (up to the element energies' float rounding,

@@ -496,8 +496,8 @@ int rh_stiffness(struct rh_tree *t, const struct mesh *part, const struct fea_lo
 	}
 	if ((rc = tighten(&st, r, &res, e)) != 0)
 		goto out;
-	for (size_t q = 0; q < st.ne; q++)
-		design_sum += st.g.rho[q];
+	for (size_t q = 0; floor_rho && q < st.ne; q++)
+		design_sum += st.g.rho[q]; /* the bound's budget */
 	/* the solid part under the same load (normalisation, Fig. 11) */
 	set_densities(&st, 1);
 	if ((rc = solve(&st, loads, r, 1.0, &res, e)) != 0)

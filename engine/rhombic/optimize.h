@@ -109,8 +109,9 @@ void rh_stiff_report_fini(struct rh_stiff_report *r);
  * stop as soon as the next split would pass o->target.  Ends with the
  * solid part's solve, then, with o->bound, the bound (its floor: the
  * densities of the initial structure; ceiling: the solid part's; budget:
- * the result's sum; the load vector of the stiffness solves).  Errors of the FEA core (ERR_PARAM "loads" for a
- * load box without material, ERR_LIMIT "fea_voxel_mm") pass through. */
+ * the result's sum; the load vector of the stiffness solves).  Errors of
+ * the FEA core (ERR_PARAM "loads" for a load box without material,
+ * ERR_LIMIT "fea_voxel_mm") pass through. */
 int rh_stiffness(struct rh_tree *t, const struct mesh *part, const struct fea_loads *loads,
 		 const struct rh_stiff_opts *o, struct rh_stiff_report *r, struct err *e);
 
