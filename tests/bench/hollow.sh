@@ -10,9 +10,10 @@
 # normal: the top-down fill alone (rounds=0 fill=true), the default
 # pipeline (optimiser rounds<=8, then the fill) and the optimiser alone
 # (rounds<=8, fill=false); each run capped at CAP_S (300)
-# seconds, reported.  HOLLOW_MODELS="camel:y femur:z" picks models.
-# large: also alpha 30 and the standing objective on the letter P (50 and
-# 100 mm tall).
+# seconds, reported; then what round growth would give on a 50 mm ball
+# (hollow_axisym.py, a model).  HOLLOW_MODELS="camel:y femur:z" picks models.
+# large: also alpha 30, the standing objective on the letter P (50 and
+# 100 mm tall) and the fill alone on that ball.
 set -uo pipefail
 BUILD=${1:?usage: hollow.sh BUILD [normal|large]}
 MODE=${2:-normal}
@@ -24,14 +25,17 @@ mkdir -p "$TMP"
 
 CAP_S=${CAP_S:-300}
 
-run_one() { # name[.ext] up alpha objective rounds fill [height_mm] (.off when no ext)
+run_one() { # name[.ext] up alpha objective rounds fill [height_mm] (.off when no ext;
+	# a name with a slash is a path, not a shared mesh)
 	local file=$1 up=$2 alpha=$3 obj=$4 rounds=$5 fill=${6:-true} height=${7:-50}
-	local name=${1%.*} rc
+	local name=${1%.*} rc src
 	[ "$name" != "$file" ] || file=$name.off
+	src="$SHARED/meshes/$file"
+	case $file in */*) src=$file; name=$(basename "$name") ;; esac
 	local out="$TMP/${name}_a$3_$4_r$5_h$height"
 	[ "$fill" = true ] || out="${out}_nofill"
 	/usr/bin/time -f '%e %M' -o "$out.time" timeout -k 30 "$CAP_S" "$BIN" run \
-		"$SHARED/meshes/$file" -o "$out.sl1" --engine hollow --set height_mm="$height" \
+		"$src" -o "$out.sl1" --engine hollow --set height_mm="$height" \
 		--set up="$up" --set alpha_deg="$alpha" --set objective="$obj" \
 		--set rounds="$rounds" --set fill="$fill" --set wall_mm=1.0 --set wall_next_mm=0.8 --threads 2 \
 		--quiet --metrics "$out.json"
@@ -153,7 +157,16 @@ if [ -z "${HOLLOW_MODELS:-}" ] || [[ " $HOLLOW_MODELS " == *" camel:"* ]]; then
 	echo "mesh output (-o part.stl), resliced with --engine solid:"
 	mesh_one camel y || status=1
 fi
+# a bulky part: what the fill's growth costs against round growth, on a ball
+# (tests/bench/hollow_axisym.py: the same top-down greedy with round fronts,
+# axisymmetric; docs/hollow.md section 10, "A bulky part")
+if [ -z "${HOLLOW_MODELS:-}" ]; then
+	echo "bulky part, 50 mm ball: round growth (model) against the fill (large: the run):"
+	python3 "$(dirname "$0")/hollow_axisym.py" 25 || status=1
+fi
 if [ "$MODE" = large ]; then
+	python3 "$(dirname "$0")/hollow_axisym.py" --write-ball "$TMP/ball.stl" 25 &&
+		run_one "$TMP/ball.stl" z 45 lightweight 0 true || status=1
 	for m in "camel y" "armadillo y"; do
 		set -- $m
 		run_one "$1" "$2" 30 lightweight 0 true || status=1
