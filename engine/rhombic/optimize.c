@@ -148,6 +148,16 @@ static void set_densities(struct stiff *st, int solid)
 	}
 }
 
+/* The FEA options of every solve here: the defaults with the caller's
+ * threads and SIMP law (penal, rho_min). */
+static void stiff_fea_opts(const struct stiff *st, struct fea_opts *fo)
+{
+	fea_opts_default(fo);
+	fo->threads = st->o->threads;
+	fo->penal = st->o->penal;
+	fo->rho_min = st->o->rho_min;
+}
+
 static int solve(struct stiff *st, const struct fea_loads *loads, struct rh_stiff_report *r,
 		 double fraction, struct fea_result *res, struct err *e)
 {
@@ -155,10 +165,7 @@ static int solve(struct stiff *st, const struct fea_loads *loads, struct rh_stif
 	int rc;
 
 	if (!st->sv) {
-		fea_opts_default(&fo);
-		fo.threads = st->o->threads;
-		fo.penal = st->o->penal;
-		fo.rho_min = st->o->rho_min;
+		stiff_fea_opts(st, &fo);
 		if (st->o->fea_tol > 0)
 			fo.tol = st->o->fea_tol;
 		rc = fea_solver_new(&st->g, loads, &fo, &st->sv, e);
@@ -222,10 +229,7 @@ static int bound(struct stiff *st, const struct fea_loads *loads, float *floor_r
 	int rc;
 
 	g.rho = floor_rho;
-	fea_opts_default(&fo);
-	fo.threads = st->o->threads;
-	fo.penal = st->o->penal;
-	fo.rho_min = st->o->rho_min;
+	stiff_fea_opts(st, &fo); /* default tolerance: the bound holds at any accuracy */
 	rc = fea_relax_bound(&g, st->g.rho, vol, loads, fea_solver_force(st->sv), &fo, &bo, &b, e);
 	if (rc)
 		return rc;
