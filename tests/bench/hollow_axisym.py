@@ -25,39 +25,15 @@ the equator plus the lower half ball, pi r^3 (checked within 0.1 %).
 
 Prints one line per birth distance: reduction (void / ball volume), voids.
 `hollow_axisym.py --write-ball PATH [R]` writes instead the ball the bench
-hollows for comparison: a binary STL, 96 x 48 quads (9,216 triangles), radius
-R mm (25), outward-facing.
+hollows for comparison (tests/support/meshgen.py write_ball_stl: closed,
+9,024 triangles, radius R mm, 25 by default).
 """
 import math
-import struct
+import os
 import sys
 
-
-def write_ball(path, R, nu=96):
-    nv = nu // 2
-
-    def p(i, j):  # the seam and the poles shared exactly, so the mesh is closed
-        if j == 0 or j == nv:
-            return (0.0, 0.0, R if j == 0 else -R)
-        th, ph = math.pi * j / nv, 2 * math.pi * (i % nu) / nu
-        return (R * math.sin(th) * math.cos(ph), R * math.sin(th) * math.sin(ph), R * math.cos(th))
-
-    tris = []
-    for j in range(nv):
-        for i in range(nu):
-            a, b, c, d = p(i, j), p(i + 1, j), p(i + 1, j + 1), p(i, j + 1)
-            if j > 0:  # a != b: off the top pole
-                tris.append((a, c, b))
-            if j < nv - 1:  # c != d: off the bottom pole
-                tris.append((a, d, c))
-    with open(path, "wb") as f:
-        f.write(b"infilld bench ball".ljust(80, b" "))
-        f.write(struct.pack("<I", len(tris)))
-        for t in tris:
-            f.write(struct.pack("<3f", 0, 0, 0))
-            for v in t:
-                f.write(struct.pack("<3f", *v))
-            f.write(b"\0\0")
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "support"))
+from meshgen import write_ball_stl  # noqa: E402
 
 
 def layout(R, t, w, alpha_deg, lone, dz=0.01, births=True):
@@ -105,7 +81,7 @@ def layout(R, t, w, alpha_deg, lone, dz=0.01, births=True):
 
 def main():
     if len(sys.argv) > 2 and sys.argv[1] == "--write-ball":
-        write_ball(sys.argv[2], float(sys.argv[3]) if len(sys.argv) > 3 else 25.0)
+        write_ball_stl(sys.argv[2], float(sys.argv[3]) if len(sys.argv) > 3 else 25.0)
         return 0
     R = float(sys.argv[1]) if len(sys.argv) > 1 else 25.0
     t, w, alpha = 1.0, 0.8, 45.0
