@@ -26,6 +26,8 @@ struct hollow_params {
 	double wall_mm;
 	double wall_next_mm;
 	double opt_layer_mm;
+	double opt_layer_min_mm;
+	int smooth_passes;
 	int objective;
 	int rounds;
 	double min_void_mm3;
@@ -53,6 +55,18 @@ static const struct param_desc hollow_desc[] = {
 	 .unit = "mm",
 	 .help = "Slice spacing h of the optimisation (constraints eq. 3-6); rounded to a multiple "
 		 "of the offset stack's layer. Independent of the print layer_mm."},
+	{.name = "opt_layer_min_mm", .type = PARAM_NUM,
+	 .offset = offsetof(struct hollow_params, opt_layer_min_mm), .min = 0, .max = 5, .def = 0,
+	 .unit = "mm",
+	 .help = "Adaptive optimisation slices (paper step 2, ref. [30]): > 0, each slab between "
+		 "this and opt_layer_mm, thick where the offset surface is straight in z and thin "
+		 "where it bends (docs/hollow.md); 0 = every slice opt_layer_mm apart."},
+	{.name = "smooth_passes", .type = PARAM_INT,
+	 .offset = offsetof(struct hollow_params, smooth_passes), .min = 0, .max = 1000, .def = 0,
+	 .unit = "",
+	 .help = "Section 6's contour smoothing P -> P~: truncated Laplacian passes over every "
+		 "optimisation contour before its bounds (corners cut inward only; walls only "
+		 "thicken). 0 = none."},
 	{.name = "objective", .type = PARAM_ENUM,
 	 .offset = offsetof(struct hollow_params, objective), .def = 0, .choices = objective_names,
 	 .unit = "",
@@ -149,6 +163,10 @@ static int hollow_validate(const void *params, const struct common_params *commo
 		return ERR_FIELD(e, "opt_layer_mm",
 				 "opt_layer_mm (%g) must be at least stack_layer_mm (%g)",
 				 p->opt_layer_mm, p->stack_layer_mm);
+	if (p->opt_layer_min_mm > p->opt_layer_mm)
+		return ERR_FIELD(e, "opt_layer_min_mm",
+				 "opt_layer_min_mm (%g) must not exceed opt_layer_mm (%g)",
+				 p->opt_layer_min_mm, p->opt_layer_mm);
 	return 0;
 }
 
@@ -274,7 +292,14 @@ static int hollow_prepare(const struct engine_ctx *ctx, const void *params, void
 	c->opt.margin_rad = p->margin_deg * M_PI / 180;
 	if (c->opt.margin_rad >= 0.5 * c->opt.alpha_rad)
 		c->opt.margin_rad = 0.5 * c->opt.alpha_rad;
-	h = lround(c->opt.opt_layer_mm / c->opt.stack_layer_mm) * c->opt.stack_layer_mm;
+	c->opt.opt_layer_min_mm = p->opt_layer_min_mm > 0
+					  ? fmax(p->opt_layer_min_mm, c->opt.stack_layer_mm)
+					  : 0;
+	c->opt.smooth_passes = p->smooth_passes;
+	/* zigzag edges must meet eq. 5 on the thinnest slab */
+	h = lround((c->opt.opt_layer_min_mm > 0 ? c->opt.opt_layer_min_mm : c->opt.opt_layer_mm) /
+		   c->opt.stack_layer_mm) *
+	    c->opt.stack_layer_mm;
 	c->opt.sample_mm =
 		p->sample_mm > 0
 			? p->sample_mm
@@ -542,6 +567,10 @@ static int hollow_metrics(void *state, struct metrics *m, struct err *e)
 	rc |= metrics_num(m, "hollow.alpha_deg", s->alpha_deg);
 	rc |= metrics_num(m, "hollow.opt_layer_mm", o->opt.opt_layer_mm);
 	rc |= metrics_num(m, "hollow.sample_mm", o->opt.sample_mm);
+	rc |= metrics_num(m, "hollow.opt_layer_min_mm", s->cfg.opt.opt_layer_min_mm);
+	rc |= metrics_num(m, "hollow.opt_layer_min_used_mm", o->opt.opt_layer_min_used_mm);
+	rc |= metrics_int(m, "hollow.slices", (long long)o->opt.slices);
+	rc |= metrics_int(m, "hollow.smooth_passes", s->cfg.opt.smooth_passes);
 	rc |= metrics_str(m, "hollow.objective", objective_names[s->objective]);
 	rc |= metrics_int(m, "hollow.solver_iterations", o->opt.iterations);
 	rc |= metrics_int(m, "hollow.voids_optimised", (long long)o->voids_optimised);

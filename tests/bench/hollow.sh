@@ -9,7 +9,8 @@
 # peak RSS.  Paper's Table 1: 53-77 % reduction, 17-60 min.
 # normal: the top-down fill alone (rounds=0 fill=true), the default
 # pipeline (optimiser rounds<=8, then the fill) and the optimiser alone
-# (rounds<=8, fill=false); each run capped at CAP_S (300)
+# (rounds<=8, fill=false; also with section 6's smoothing and with adaptive
+# slices); each run capped at CAP_S (300)
 # seconds, reported; then what round growth would give on a 50 mm ball
 # (hollow_axisym.py, a model).  HOLLOW_MODELS="camel:y femur:z" picks models.
 # large: also alpha 30, the standing objective on the letter P (50 and
@@ -25,20 +26,24 @@ mkdir -p "$TMP"
 
 CAP_S=${CAP_S:-300}
 
-run_one() { # name[.ext] up alpha objective rounds fill [height_mm] (.off when no ext;
-	# a name with a slash is a path, not a shared mesh)
+run_one() { # name[.ext] up alpha objective rounds fill [height_mm [tag k=v...]]
+	# (.off when no ext; a name with a slash is a path, not a shared mesh;
+	# tag names the extra --set k=v settings in the output's row)
 	local file=$1 up=$2 alpha=$3 obj=$4 rounds=$5 fill=${6:-true} height=${7:-50}
+	local tag=${8:-} extra=() kv
+	for kv in "${@:9}"; do extra+=(--set "$kv"); done
 	local name=${1%.*} rc src
 	[ "$name" != "$file" ] || file=$name.off
 	src="$SHARED/meshes/$file"
 	case $file in */*) src=$file; name=$(basename "$name") ;; esac
 	local out="$TMP/${name}_a$3_$4_r$5_h$height"
 	[ "$fill" = true ] || out="${out}_nofill"
+	[ -z "$tag" ] || out="${out}_$tag"
 	/usr/bin/time -f '%e %M' -o "$out.time" timeout -k 30 "$CAP_S" "$BIN" run \
 		"$src" -o "$out.sl1" --engine hollow --set height_mm="$height" \
 		--set up="$up" --set alpha_deg="$alpha" --set objective="$obj" \
 		--set rounds="$rounds" --set fill="$fill" --set wall_mm=1.0 --set wall_next_mm=0.8 --threads 2 \
-		--quiet --metrics "$out.json"
+		"${extra[@]}" --quiet --metrics "$out.json"
 	rc=$?
 	if [ $rc -eq 124 ] || [ $rc -eq 137 ]; then
 		printf '%-10s a=%-2s %-11s rounds<=%-2s fill=%-5s capped: over %s s, no figures\n' \
@@ -47,6 +52,7 @@ run_one() { # name[.ext] up alpha objective rounds fill [height_mm] (.off when n
 	fi
 	[ $rc -eq 0 ] || { echo "$name: run failed ($rc)"; return 1; }
 	local label=$name; [ "$height" = 50 ] || label="$name@${height}mm"
+	[ -z "$tag" ] || label="$label $tag"
 	python3 - "$out.json" "$out.time" "$label" "$alpha" "$obj" "$rounds" <<'PY'
 import json, sys
 m = json.load(open(sys.argv[1])); h = m["hollow"]
@@ -64,6 +70,9 @@ between = h["verify"]["min_wall_between_mm"]
 num = lambda v, f: "-" if v is None else f % v
 extra += "  slope excess %s px (tolerance %.1f)" % (num(h["verify"]["slope_excess_px"], "%.3f"),
                                                   h["verify"]["tolerance_px"])
+if h.get("smooth_passes") or h.get("opt_layer_min_mm"):
+    extra += "  slices %d (thinnest %.2f mm) interior islands %d" % (
+        h["slices"], h["opt_layer_min_used_mm"], h["verify"]["islands_interior"])
 if h["polygon_slopes"]["layers_checked"]:
     extra += "  polygons: excess %.4f mm2 on %d layers" % (h["polygon_slopes"]["excess_mm2"],
                                                         h["polygon_slopes"]["layers_over"])
@@ -126,6 +135,22 @@ for m in "${MODELS[@]}"; do
 	run_one "$1" "$2" 45 lightweight 8 false || status=1
 done
 [ -n "${HOLLOW_MODELS:-}" ] || run_one ChineseDragon-10kv.off z 45 lightweight 8 false 55.5 || status=1
+# the paper's two remedies for detailed contours, optimiser alone: section
+# 6's smoothing P -> P~ (20 passes) and adaptive slices [30] between 0.25
+# and 1.0 mm (docs/hollow.md "Smoothing and adaptive slices")
+echo "optimiser alone, smoothed (smooth_passes=20) and adaptive slices (0.25-1.0 mm):"
+for m in "${MODELS[@]}"; do
+	set -- $m
+	run_one "$1" "$2" 45 lightweight 8 false 50 smooth20 smooth_passes=20 || status=1
+	run_one "$1" "$2" 45 lightweight 8 false 50 adaptive opt_layer_min_mm=0.25 opt_layer_mm=1.0 ||
+		status=1
+done
+if [ -z "${HOLLOW_MODELS:-}" ]; then
+	run_one ChineseDragon-10kv.off z 45 lightweight 8 false 55.5 smooth20 smooth_passes=20 ||
+		status=1
+	run_one ChineseDragon-10kv.off z 45 lightweight 8 false 55.5 adaptive opt_layer_min_mm=0.25 \
+		opt_layer_mm=1.0 || status=1
+fi
 # the mesh output (-o part.stl): the default pipeline's camel as a closed mesh,
 # its volume against the SL1's material, size, time; sliced again with
 # --engine solid and checked by infilld verify --strict against the plain part

@@ -47,10 +47,23 @@ double hl_void_volume(const struct hl_void *v, const double *l)
 	return -s / 6 - a0 * v->z[0] / 3 + a1 * v->z[v->nloops - 1] / 3;
 }
 
-void hl_void_check(const struct hl_void *v, const double *l, double alpha_rad, double h_mm,
-		   double gate_tau, struct hl_check *c)
+double hl_void_loop_h(const struct hl_void *v, size_t k)
 {
-	double sa = sin(alpha_rad), lim = h_mm * tan(alpha_rad);
+	size_t n = v->nloops;
+
+	if (n < 2)
+		return 0;
+	if (k == 0)
+		return v->z[1] - v->z[0];
+	if (k + 1 >= n)
+		return v->z[n - 1] - v->z[n - 2];
+	return 0.5 * (v->z[k + 1] - v->z[k - 1]);
+}
+
+void hl_void_check(const struct hl_void *v, const double *l, double alpha_rad, double gate_tau,
+		   struct hl_check *c)
+{
+	double sa = sin(alpha_rad), ta = tan(alpha_rad);
 
 	memset(c, 0, sizeof *c);
 	c->worst_face = -INFINITY;
@@ -81,7 +94,9 @@ void hl_void_check(const struct hl_void *v, const double *l, double alpha_rad, d
 		if (!(nz < -gate_tau))
 			continue;
 		struct vec3 p = hl_void_pos(v, x->lo, l[x->lo]), q = hl_void_pos(v, x->hi, l[x->hi]);
-		c->worst_edge_mm = fmax(c->worst_edge_mm, hypot(q.x - p.x, q.y - p.y) - lim);
+		/* eq. 5 with this edge's own rise (slices may differ in thickness) */
+		c->worst_edge_mm = fmax(c->worst_edge_mm,
+					hypot(q.x - p.x, q.y - p.y) - (q.z - p.z) * ta);
 	}
 	for (size_t j = 0; j < v->nv; j++) {
 		c->min_shift_mm = fmin(c->min_shift_mm, l[j]);

@@ -264,3 +264,37 @@ out:
 	paths_fini(&slits);
 	return rc;
 }
+
+/* The moved vertex, 0.5 v + 0.25 (p + q), lies in the triangle p v q,
+ * which lies inside the loop at a convex v unless another stretch of the
+ * boundary enters it; the opening of step 1 keeps every other stretch
+ * >= 2 s away (the slits are wall_next_mm >= 2 s wide) and the triangle's
+ * sides are <= s, so none does, and a pass only cuts corners. */
+int hl_loop_smooth(struct hl_loop *l, int passes, struct err *e)
+{
+	size_t n = l->n;
+	double *old;
+
+	if (passes <= 0 || n < 4)
+		return 0;
+	old = mem_alloc(2 * n * sizeof *old);
+	if (!old)
+		return ERR_SET(e, ERR_NOMEM, "hollow: out of memory smoothing a loop");
+	for (int it = 0; it < passes; it++) {
+		memcpy(old, l->xy, 2 * n * sizeof *old);
+		for (size_t i = 0; i < n; i++) {
+			const double *p = old + 2 * ((i + n - 1) % n), *v = old + 2 * i,
+				     *q = old + 2 * ((i + 1) % n);
+			/* counter-clockwise loop: a left turn at v is convex */
+			double turn = (v[0] - p[0]) * (q[1] - v[1]) - (v[1] - p[1]) * (q[0] - v[0]);
+			double x = 0.5 * v[0] + 0.25 * (p[0] + q[0]), y = 0.5 * v[1] + 0.25 * (p[1] + q[1]);
+			if (!(turn > 0))
+				continue;
+			l->xy[2 * i] = x;
+			l->xy[2 * i + 1] = y;
+		}
+	}
+	mem_free(old);
+	l->area_mm2 = xy_area(l->xy, n);
+	return 0;
+}

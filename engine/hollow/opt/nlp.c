@@ -44,6 +44,8 @@ struct nlp {
 	size_t nf;
 	uint32_t *fv;              /* 3 per face */
 	double *fsig, *fdel;       /* scale 1/|N0| and smoothing delta */
+	double *lh;                /* per loop: slab thickness it stands for (mm, eq. 11) */
+	double *ekap;              /* per cross edge: 1 / (dz tan alpha)^2 (eq. 5) */
 	size_t ne;
 	uint32_t *ev;              /* lo, hi per edge */
 	uint32_t *ef;              /* two faces per edge */
@@ -59,7 +61,7 @@ struct nlp {
 	uint64_t *hkey;
 	uint32_t *fslot, *eslot, *vdiag, *vnext, aux_slot[6];
 	double vref;    /* lightweight normalisation: sum h A0 */
-	double sin_a, kappa;
+	double sin_a;
 	int stab;
 	double lenscale;
 	int iterations;
@@ -80,6 +82,8 @@ static void nlp_fini(struct nlp *P)
 	mem_free(P->fv);
 	mem_free(P->fsig);
 	mem_free(P->fdel);
+	mem_free(P->lh);
+	mem_free(P->ekap);
 	mem_free(P->ev);
 	mem_free(P->ef);
 	mem_free(P->active);
@@ -268,7 +272,7 @@ static double edge_eval(const struct nlp *P, size_t q, const double *x, double *
 {
 	uint32_t a = P->ev[2 * q], b = P->ev[2 * q + 1];
 	struct vec3 pa = pos(P, x, a), pb = pos(P, x, b);
-	double dx = pb.x - pa.x, dy = pb.y - pa.y, k = P->kappa;
+	double dx = pb.x - pa.x, dy = pb.y - pa.y, k = P->ekap[q];
 
 	if (gr) {
 		gr[0] = -2 * k * (dx * P->rx[a] + dy * P->ry[a]);
@@ -397,8 +401,8 @@ static Bool cb_f(Index n, Number *x, Bool new_x, Number *obj, UserDataPtr ud)
 	}
 	double s = 0;
 	for (size_t L = 0; L < P->nloops; L++)
-		s += loop_eval(P, L, x, NULL, 0, NULL, NULL, 0, NULL, NULL);
-	*obj = -P->o->h_mm * s / P->vref;
+		s += P->lh[L] * loop_eval(P, L, x, NULL, 0, NULL, NULL, 0, NULL, NULL);
+	*obj = -s / P->vref;
 	return TRUE;
 }
 
@@ -412,7 +416,7 @@ static Bool cb_grad_f(Index n, Number *x, Bool new_x, Number *g, UserDataPtr ud)
 		return TRUE;
 	}
 	for (size_t L = 0; L < P->nloops; L++)
-		loop_eval(P, L, x, NULL, -P->o->h_mm / P->vref, NULL, g, 0, NULL, NULL);
+		loop_eval(P, L, x, NULL, -P->lh[L] / P->vref, NULL, g, 0, NULL, NULL);
 	return TRUE;
 }
 
@@ -432,7 +436,8 @@ static Bool cb_g(Index n, Number *x, Bool new_x, Index m, Number *g, UserDataPtr
 			 P->ceil_a0[c];
 	if (P->stab) {
 		/* per loop: A_k = area, M_k = first moments; then the sums (eq. 12) */
-		double A = 0, Mx = 0, My = 0, M[2], f = P->o->h_mm / P->o->vol_mm3;
+		/* the sums carry each loop's thickness: w = sum h_k A_k / V */
+		double A = 0, Mx = 0, My = 0, M[2], f = 1 / P->o->vol_mm3;
 		size_t G = gaux(P);
 		for (size_t L = 0; L < P->nloops; L++) {
 			double a = loop_eval(P, L, x, M, 0, NULL, NULL, 0, NULL, NULL);
@@ -440,9 +445,9 @@ static Bool cb_g(Index n, Number *x, Bool new_x, Index m, Number *g, UserDataPtr
 			g[r++] = x[q] - a;
 			g[r++] = x[q + 1] - M[0];
 			g[r++] = x[q + 2] - M[1];
-			A += x[q];
-			Mx += x[q + 1];
-			My += x[q + 2];
+			A += P->lh[L] * x[q];
+			Mx += P->lh[L] * x[q + 1];
+			My += P->lh[L] * x[q + 2];
 		}
 		g[r++] = x[G] - f * A;
 		g[r++] = x[G + 1] - f * Mx;
@@ -520,7 +525,7 @@ static Bool cb_jac(Index n, Number *x, Bool new_x, Index m, Index nele, Index *i
 				val[k++] = gsc[i];
 		}
 		if (P->stab) {
-			double f = P->o->h_mm / P->o->vol_mm3, M[2];
+			double f = 1 / P->o->vol_mm3, M[2];
 			static const double ex[2] = {-1, 0}, ey[2] = {0, -1};
 			for (size_t L = 0; L < P->nloops; L++)
 				for (int q = 0; q < 3; q++) {
@@ -534,7 +539,7 @@ static Bool cb_jac(Index n, Number *x, Bool new_x, Index m, Index nele, Index *i
 				}
 			for (int q = 0; q < 3; q++) {
 				for (size_t L = 0; L < P->nloops; L++)
-					val[k++] = -f;
+					val[k++] = -f * P->lh[L];
 				val[k++] = 1;
 			}
 		}
@@ -570,7 +575,7 @@ static Bool cb_h(Index n, Number *x, Bool new_x, Number of, Index m, Number *lam
 			val[P->aux_slot[s]] += of * h6[s];
 	} else {
 		for (size_t L = 0; L < P->nloops; L++)
-			loop_eval(P, L, x, NULL, 0, NULL, NULL, -of * P->o->h_mm / P->vref, NULL, val);
+			loop_eval(P, L, x, NULL, 0, NULL, NULL, -of * P->lh[L] / P->vref, NULL, val);
 	}
 	for (size_t f = 0; f < P->nf; f++, r++) {
 		double he[6];
@@ -692,6 +697,8 @@ static int nlp_setup(struct nlp *P, struct hl_void *v, size_t nvoid,
 	P->fv = mem_alloc((3 * nf + 1) * sizeof *P->fv);
 	P->fsig = mem_alloc((nf + 1) * sizeof *P->fsig);
 	P->fdel = mem_alloc((nf + 1) * sizeof *P->fdel);
+	P->lh = mem_alloc((nloops + 1) * sizeof *P->lh);
+	P->ekap = mem_alloc((ne + 1) * sizeof *P->ekap);
 	P->ev = mem_alloc((2 * ne + 1) * sizeof *P->ev);
 	P->ef = mem_alloc((2 * ne + 1) * sizeof *P->ef);
 	P->active = mem_calloc(ne + 1, 1);
@@ -700,11 +707,10 @@ static int nlp_setup(struct nlp *P, struct hl_void *v, size_t nvoid,
 	P->ceil_a0 = mem_alloc((nvoid + 1) * sizeof *P->ceil_a0);
 	P->ceil_eps = mem_alloc((nvoid + 1) * sizeof *P->ceil_eps);
 	if (!P->ceil_eps || !P->px || !P->py || !P->rx || !P->ry || !P->pz || !P->lo || !P->hi || !P->lstart ||
-	    !P->llen || !P->fv || !P->fsig || !P->fdel || !P->ev || !P->ef || !P->active ||
+	    !P->llen || !P->fv || !P->fsig || !P->fdel || !P->lh || !P->ekap || !P->ev || !P->ef || !P->active ||
 	    !P->act || !P->ceil_loop || !P->ceil_a0)
 		return ERR_NOMEM;
 	P->sin_a = sin(o->alpha_rad);
-	P->kappa = 1 / pow(o->h_mm * tan(o->alpha_rad), 2);
 	for (size_t i = 0; i < nvoid; i++) {
 		const struct hl_void *V = &v[i];
 		for (size_t j = 0; j < V->nv; j++) {
@@ -719,6 +725,7 @@ static int nlp_setup(struct nlp *P, struct hl_void *v, size_t nvoid,
 		for (size_t k = 0; k < V->nloops; k++, L++) {
 			P->lstart[L] = a + V->off[k];
 			P->llen[L] = V->off[k + 1] - V->off[k];
+			P->lh[L] = hl_void_loop_h(V, k);
 		}
 		P->ceil_loop[i] = (uint32_t)(L - 1);
 		if (!o->ceiling_literal) /* eq. 6 in its limit form: top loop on its poles */
@@ -733,6 +740,9 @@ static int nlp_setup(struct nlp *P, struct hl_void *v, size_t nvoid,
 			P->ev[2 * q + 1] = (uint32_t)(a + V->xe[k].hi);
 			P->ef[2 * q] = (uint32_t)(f + V->xe[k].f[0]);
 			P->ef[2 * q + 1] = (uint32_t)(f + V->xe[k].f[1]);
+			/* eq. 5's h is this edge's rise (slices may differ in thickness) */
+			P->ekap[q] = 1 / pow((V->vz[V->xe[k].hi] - V->vz[V->xe[k].lo]) *
+						     tan(o->alpha_rad), 2);
 		}
 		f += V->nt;
 		a += V->nv;
@@ -754,7 +764,7 @@ static int nlp_setup(struct nlp *P, struct hl_void *v, size_t nvoid,
 		P->vref = 0;
 		for (size_t k = 0; k < nloops; k++) {
 			double A = loop_eval(P, k, x0, NULL, 0, NULL, NULL, 0, NULL, NULL);
-			P->vref += o->h_mm * A;
+			P->vref += P->lh[k] * A;
 		}
 		if (P->vref <= 0)
 			P->vref = 1;
@@ -794,7 +804,7 @@ static int nlp_setup(struct nlp *P, struct hl_void *v, size_t nvoid,
 /* Fill the auxiliaries from the offsets (consistent start point). */
 static void aux_from(struct nlp *P, double *x)
 {
-	double A = 0, Mx = 0, My = 0, M[2], f = P->o->h_mm / P->o->vol_mm3;
+	double A = 0, Mx = 0, My = 0, M[2], f = 1 / P->o->vol_mm3;
 	size_t G = gaux(P);
 
 	for (size_t L = 0; L < P->nloops; L++) {
@@ -802,9 +812,9 @@ static void aux_from(struct nlp *P, double *x)
 		x[q] = loop_eval(P, L, x, M, 0, NULL, NULL, 0, NULL, NULL);
 		x[q + 1] = M[0];
 		x[q + 2] = M[1];
-		A += x[q];
-		Mx += M[0];
-		My += M[1];
+		A += P->lh[L] * x[q];
+		Mx += P->lh[L] * M[0];
+		My += P->lh[L] * M[1];
 	}
 	x[G] = f * A;
 	x[G + 1] = f * Mx;
@@ -907,7 +917,7 @@ int hl_nlp_solve(struct hl_void *v, size_t n, const struct hl_nlp_opts *o, struc
 		/* support-free start (start.c), also the fallback of each void */
 		size_t a = 0;
 		for (size_t i = 0; i < n; i++) {
-			rc = hl_void_support_start(&v[i], 0.95 * o->h_mm * tan(o->alpha_rad), x + a, e);
+			rc = hl_void_support_start(&v[i], 0.95 * tan(o->alpha_rad), x + a, e);
 			if (rc)
 				goto out;
 			a += v[i].nv;
@@ -947,7 +957,7 @@ int hl_nlp_solve(struct hl_void *v, size_t n, const struct hl_nlp_opts *o, struc
 			v[i].iterations = P.iterations;
 			v[i].outer = outer > o->max_outer ? o->max_outer : outer;
 			v[i].seconds = progress_now_s() - t0;
-			hl_void_check(&v[i], l, o->alpha_rad, o->h_mm, o->gate_tau, &c);
+			hl_void_check(&v[i], l, o->alpha_rad, o->gate_tau, &c);
 			/* tolerances: 1e-4 rad on faces, 1 um on edges, 1e-3 mm^2 on top */
 			v[i].status = (c.worst_face <= 1e-4 && c.worst_edge_mm <= 1e-3 &&
 				       c.top_area_mm2 <= v[i].ceil_eps_mm2 + 1e-3)

@@ -21,7 +21,13 @@ enum hl_objective { HL_OBJ_LIGHTWEIGHT = 0, HL_OBJ_STABILITY = 1 };
 struct hl_opt_params {
 	double wall_mm;        /* offset t of round 1 (shell to the outside) */
 	double wall_next_mm;   /* offset of later rounds (walls between voids) */
-	double opt_layer_mm;   /* h of the optimisation (snapped to the stack) */
+	double opt_layer_mm;   /* h of the optimisation (snapped to the stack); with
+				* opt_layer_min_mm > 0 the thickest slice */
+	double opt_layer_min_mm; /* > 0: adaptive slices between this (snapped to
+				  * the stack) and opt_layer_mm (slices.c); 0:
+				  * every slice opt_layer_mm thick */
+	int smooth_passes;     /* section 6's P -> P~: truncated Laplacian passes
+				* over every loop before its bounds (0: none) */
 	double stack_layer_mm; /* layer height of the eroded stack */
 	double pixel_mm;       /* erosion grid pitch */
 	double sample_mm;      /* loop sampling step s */
@@ -55,7 +61,10 @@ struct hl_opt_stats {
 	size_t voids_against_com; /* stability: dropped because they moved the centre
 				   * of mass away from the target */
 	double volume_mm3;        /* of the kept voids */
-	double opt_layer_mm;      /* h actually used (a whole number of stack layers) */
+	double opt_layer_mm;      /* h actually used (a whole number of stack layers);
+				   * adaptive: the thickest allowed */
+	size_t slices;            /* optimisation slices (round 1's plan) */
+	double opt_layer_min_used_mm; /* thinnest slab between two slices */
 	double sample_mm;
 	int iterations;           /* Ipopt iterations, all voids and rounds */
 	double s_offset, s_groups, s_solve, s_mesh; /* seconds */

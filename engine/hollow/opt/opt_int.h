@@ -69,6 +69,30 @@ int hl_loop_overlap_mm2(const struct hl_loop *a, const struct hl_loop *b, double
 /* Loop <-> integer path conversions (nm). */
 int hl_loop_to_path(const struct hl_loop *l, struct path *p);
 
+/* Section 6's P -> P~ (contour.c): `passes` truncated Laplacian passes
+ * over loop l's vertices, each convex vertex moved half way to its
+ * neighbours' midpoint (reflex vertices stay): corners are cut, the loop
+ * only shrinks, so walls only thicken (loops from hl_contours_from_region,
+ * whose opening keeps other stretches of boundary away; see contour.c).
+ * area_mm2 updated.  0 or ERR_NOMEM. */
+int hl_loop_smooth(struct hl_loop *l, int passes, struct err *e);
+
+/* ---- adaptive optimisation slices (slices.c, step 2 and ref. [30]) ---- */
+
+/* Mean distance (mm) by which region mid leaves the band between lo and hi
+ * (lo n hi <= mid <= lo u hi on a ruled surface): the area outside it over
+ * mid's perimeter.  All normalised, nm.  0 or a clip error. */
+int hl_slab_deviation_mm(const struct paths *lo, const struct paths *mid, const struct paths *hi,
+			 double *dev_mm, struct err *e);
+
+/* Choose optimisation slices among nc candidate layers (regions reg,
+ * bottom to top): from each chosen one the next is the farthest at most
+ * tmax candidates up whose layers in between all keep dev <= dev_mm.
+ * pick (nc entries) receives the chosen indices, increasing, the first and
+ * last always among them; *npick their count.  0 or a clip error. */
+int hl_slices_adaptive(const struct paths *reg, size_t nc, size_t tmax, double dev_mm,
+		       size_t *pick, size_t *npick, struct err *e);
+
 /* ---- grouping (group.c, paper section 7.1) ---- */
 
 /* Link loop (k, a) to (k + 1, b) by the paper's three rules: never two
@@ -155,8 +179,10 @@ int hl_strip(const double *pa, double za, size_t na, uint32_t ida, const double 
 /* ---- optimisation problem (nlp.c, check.c; sections 4-6, 8.2-8.3) ---- */
 
 struct hl_nlp_opts {
-	double alpha_rad;    /* overhang limit of the constraints (from the vertical) */
-	double h_mm;         /* optimisation layer thickness */
+	double alpha_rad;    /* overhang limit of the constraints (from the vertical);
+				eq. 5's h is each cross edge's rise, eq. 11's each
+				loop's slab (hl_void_loop_h): slices may differ in
+				thickness */
 	double ceil_eps_mm2; /* eq. 6 */
 	int ceiling_literal; /* 1: eq. 6 as a constraint A(top) <= eps; 0 (default):
 				its limit form, the top loop fixed on its poles
@@ -197,8 +223,13 @@ struct hl_check {
 
 /* Measure how well offsets l satisfy the paper's constraints at alpha_rad
  * (independent re-evaluation, used after every solve and by tests). */
-void hl_void_check(const struct hl_void *v, const double *l, double alpha_rad, double h_mm,
-		   double gate_tau, struct hl_check *c);
+void hl_void_check(const struct hl_void *v, const double *l, double alpha_rad, double gate_tau,
+		   struct hl_check *c);
+
+/* Thickness (mm) of the slab loop k of v stands for in eq. 11-12's sums:
+ * half the rise to each neighbouring loop, the whole rise at the ends
+ * (h for every loop of uniform slices); 0 for a void of one loop. */
+double hl_void_loop_h(const struct hl_void *v, size_t k);
 
 /* Volume (mm^3) enclosed by void v with offsets l (divergence theorem over
  * the strip faces and both caps' polygons). */
@@ -232,17 +263,17 @@ int hl_solve_round(struct hl_void *v, size_t n, const struct hl_nlp_opts *o, int
 
 /* Fill l (v->nv offsets): v->start when restrip.c made one, else a sweep
  * top-down: top loop on its poles, every other vertex the smallest offset
- * within reach_mm of its upper cross-edge neighbours (see start.c).  0 or
- * ERR_NOMEM. */
-int hl_void_support_start(const struct hl_void *v, double reach_mm, double *l, struct err *e);
+ * within reach_slope dz of its upper cross-edge neighbours, dz the rise
+ * between the two loops (see start.c).  0 or ERR_NOMEM. */
+int hl_void_support_start(const struct hl_void *v, double reach_slope, double *l, struct err *e);
 
 /* Rebuild v's strips top-down where its start puts the vertices, and set
- * v->start (restrip.c; reach_mm as above, block: clearance at offset 0).
+ * v->start (restrip.c; reach_slope as above, block: clearance at offset 0).
  * A pair of loops with no strip whose cross edges stay within reach ends
  * the void: it keeps the loops above and *first is the index (in v's
  * loops before the call) of the lowest kept, else 0.  Returns 0, 1 when
  * fewer than two loops are left (v unusable), or a negative err_code. */
-int hl_void_restrip(struct hl_void *v, double reach_mm, const struct hl_block *block,
+int hl_void_restrip(struct hl_void *v, double reach_slope, const struct hl_block *block,
 		    size_t *first, struct err *e);
 
 /* ---- building a void (void.c) ---- */

@@ -16,7 +16,7 @@
  *   cross edge;
  * - any other vertex i may join upper vertex j only at offsets in
  *   I_ij = {t in [0, ub_i] : |v_i + t r_i - q_j| <= reach}, reach = 0.95 h
- *   tan alpha (an interval: a ray meets a disc once);
+ *   tan alpha, h the pair's rise (an interval: a ray meets a disc once);
  * - a strip is a monotone path on the toroidal grid (strip.c); vertex i's
  *   cross edges are the cells of its run (i, j0..j1), so it needs the
  *   intersection of I_ij over its run non-empty.  The dynamic programme
@@ -362,7 +362,7 @@ static void keep_from(struct hl_void *v, size_t first, double *l)
 	v->nv = nv;
 }
 
-int hl_void_restrip(struct hl_void *v, double reach_mm, const struct hl_block *block,
+int hl_void_restrip(struct hl_void *v, double reach_slope, const struct hl_block *block,
 		    size_t *first, struct err *e)
 {
 	size_t nv = v->nv, top = v->nloops - 1, k, tcap = 0, xcap = 0, nt = 0, nxe = 0;
@@ -386,7 +386,9 @@ int hl_void_restrip(struct hl_void *v, double reach_mm, const struct hl_block *b
 		}
 		if (k == 0)
 			break;
-		rc = restrip_pair(v, k - 1, pos + 2 * v->off[k], reach_mm, block, l, flr, &tri,
+		/* reach over this pair's rise (slices may differ in thickness) */
+		rc = restrip_pair(v, k - 1, pos + 2 * v->off[k],
+				  reach_slope * (v->z[k] - v->z[k - 1]), block, l, flr, &tri,
 				  &nt, &tcap, &xe, &nxe, &xcap);
 		if (rc == ERR_NOMEM) {
 			rc = ERR_SET(e, ERR_NOMEM, "hollow: out of memory rebuilding a void's strips");

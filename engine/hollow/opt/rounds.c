@@ -158,8 +158,11 @@ struct round_in {
 	const struct hl_opt_params *c;
 	const struct mesh *solid; /* S_r */
 	double wall;              /* t_r */
-	int m;                    /* stack layers per optimisation slice */
-	int nslices;              /* optimisation slices */
+	int *sj;                  /* stack layer of each optimisation slice; round 1
+				   * with plan_tmax > 0 chooses them (slices.c) */
+	int *nslices;             /* optimisation slices (set by round 1's plan) */
+	int m;                    /* stack layers per candidate slice */
+	size_t plan_tmax;         /* > 0: adaptive, at most this many candidates a slab */
 	int stack_count;
 	struct paths *base;       /* round 1 offset per slice (rounds >= 2), or NULL */
 	struct paths *keep;       /* round 1: receives the offset per slice */
@@ -193,8 +196,8 @@ static void voids_fini(struct hl_void *v, size_t n)
  * least wall_next_mm), are a chain of their own. */
 struct chain_ctx {
 	const struct hl_block *blk;
-	double reach_mm;
-	size_t gap;
+	double reach_slope;       /* reach over a slab's rise (0.95 tan alpha) */
+	double gap_mm;            /* wall_next_mm: floor of a void to the next below */
 	struct hl_void *vv;
 	size_t nvv, vcap;
 };
@@ -212,7 +215,7 @@ static int chain_voids(struct chain_ctx *x, const struct hl_loop **chain, size_t
 		if (rc < 0)
 			return rc;
 		if (rc == 0)
-			rc = hl_void_restrip(&V, x->reach_mm, x->blk, &first, e);
+			rc = hl_void_restrip(&V, x->reach_slope, x->blk, &first, e);
 		if (rc < 0) {
 			hl_void_fini(&V);
 			return rc;
@@ -228,14 +231,70 @@ static int chain_voids(struct chain_ctx *x, const struct hl_loop **chain, size_t
 		} else {
 			hl_void_fini(&V);
 		}
-		if (first >= x->gap + 2) {
-			rc = chain_voids(x, chain, a, a + first - x->gap, e);
-			if (rc)
-				return rc;
+		if (first > 0) {
+			/* the chain below ends at the highest loop at least
+			 * gap_mm under the floor, chain[a + first] */
+			size_t end = a + first;
+			while (end > a && chain[a + first]->z_mm - chain[end - 1]->z_mm <
+						  x->gap_mm - 1e-9)
+				end--;
+			if (end >= a + 2) {
+				rc = chain_voids(x, chain, a, end, e);
+				if (rc)
+					return rc;
+			}
 		}
 		a += used > 0 ? used : 1;
 	}
 	return 0;
+}
+
+/* Round 1, adaptive: erode every candidate layer j = m i + m / 2 (the
+ * uniform plan's layers at the thinnest slab), choose the slices among
+ * them (slices.c) and hand their regions back in *pre (*in->nslices
+ * entries, caller frees); in->sj receives their stack layers. */
+static int plan_slices(const struct round_in *in, struct slice_eroder *er, struct paths **pre,
+		       struct err *e)
+{
+	int m = in->m, nc = (in->stack_count - 1 - m / 2) / m + 1;
+	struct paths *cand = mem_calloc((size_t)nc + 1, sizeof *cand);
+	size_t *pick = mem_alloc(((size_t)nc + 1) * sizeof *pick), np = 0;
+	int rc = 0;
+
+	if (!cand || !pick) {
+		rc = ERR_SET(e, ERR_NOMEM, "hollow: out of memory planning slices");
+		goto out;
+	}
+	for (int i = 0; i < nc; i++) {
+		paths_init(&cand[i]);
+		rc = slice_erode_layer(er, m * i + m / 2, &cand[i], e);
+		if (rc)
+			goto out;
+	}
+	/* a slab may deviate by one pixel of the erosion grid: finer than
+	 * that the offset itself is not known */
+	rc = hl_slices_adaptive(cand, (size_t)nc, in->plan_tmax, in->c->pixel_mm, pick, &np, e);
+	if (rc)
+		goto out;
+	for (size_t k = 0; k < np; k++) {
+		in->sj[k] = m * (int)pick[k] + m / 2;
+		if (pick[k] != k) { /* pick[k] > k: candidate k is not needed */
+			paths_fini(&cand[k]);
+			cand[k] = cand[pick[k]];
+			paths_init(&cand[pick[k]]);
+		}
+	}
+	for (size_t k = np; k < (size_t)nc; k++)
+		paths_fini(&cand[k]);
+	*in->nslices = (int)np;
+	*pre = cand;
+	cand = NULL;
+out:
+	for (int i = 0; cand && i < nc; i++)
+		paths_fini(&cand[i]);
+	mem_free(cand);
+	mem_free(pick);
+	return rc;
 }
 
 static int round_voids(const struct round_in *in, struct hl_opt_stats *o, struct hl_void **vout,
@@ -252,7 +311,8 @@ static int round_voids(const struct round_in *in, struct hl_opt_stats *o, struct
 	struct paths reg, tmp;
 	struct box3 bb = box3_empty();
 	double t0 = progress_now_s();
-	int rc;
+	struct paths *pre = NULL; /* adaptive: the chosen slices' regions */
+	int rc, nslices = 0;
 
 	paths_init(&reg);
 	paths_init(&tmp);
@@ -278,16 +338,28 @@ static int round_voids(const struct round_in *in, struct hl_opt_stats *o, struct
 		rc = slice_erode_new(&ep, &src, &er, e);
 		if (rc)
 			goto out;
-		sl = mem_calloc((size_t)in->nslices + 1, sizeof *sl);
-		if (!sl)
-			goto nomem;
-		for (int k = 0; k < in->nslices; k++) {
-			int j = in->m * k + in->m / 2;
-			struct hl_contour_params cp = {c->sample_mm, c->wall_next_mm,
-						       4 * c->sample_mm * c->sample_mm};
-			rc = slice_erode_layer(er, j, &reg, e);
+		if (in->plan_tmax > 0) {
+			rc = plan_slices(in, er, &pre, e);
 			if (rc)
 				goto out;
+		}
+		nslices = *in->nslices;
+		sl = mem_calloc((size_t)nslices + 1, sizeof *sl);
+		if (!sl)
+			goto nomem;
+		for (int k = 0; k < nslices; k++) {
+			int j = in->sj[k];
+			struct hl_contour_params cp = {c->sample_mm, c->wall_next_mm,
+						       4 * c->sample_mm * c->sample_mm};
+			if (pre) {
+				paths_fini(&reg);
+				reg = pre[k];
+				paths_init(&pre[k]);
+			} else {
+				rc = slice_erode_layer(er, j, &reg, e);
+				if (rc)
+					goto out;
+			}
 			if (in->keep) {
 				rc = paths_copy(&in->keep[k], &reg);
 				if (rc) {
@@ -310,26 +382,31 @@ static int round_voids(const struct round_in *in, struct hl_opt_stats *o, struct
 						     &sl[k], e);
 			if (rc)
 				goto out;
+			for (size_t i = 0; i < sl[k].n; i++) {
+				rc = hl_loop_smooth(&sl[k].loop[i], c->smooth_passes, e);
+				if (rc)
+					goto out;
+			}
 			o->loops += sl[k].n;
 		}
 	}
 	o->s_offset += progress_now_s() - t0;
 	t0 = progress_now_s();
 	/* groups: chains of mutually best links */
-	rc = hl_group_links(sl, (size_t)in->nslices, 0.5, &up, e);
+	rc = hl_group_links(sl, (size_t)nslices, 0.5, &up, e);
 	if (rc)
 		goto out;
-	down = mem_calloc((size_t)in->nslices + 1, sizeof *down);
+	down = mem_calloc((size_t)nslices + 1, sizeof *down);
 	if (!down)
 		goto nomem;
-	for (int k = 0; k < in->nslices; k++) {
+	for (int k = 0; k < nslices; k++) {
 		down[k] = mem_alloc((sl[k].n + 1) * sizeof **down);
 		if (!down[k])
 			goto nomem;
 		for (size_t a = 0; a < sl[k].n; a++)
 			down[k][a] = -1;
 	}
-	for (int k = 0; k + 1 < in->nslices; k++)
+	for (int k = 0; k + 1 < nslices; k++)
 		for (size_t a = 0; a < sl[k].n; a++)
 			if (up[k][a] >= 0)
 				down[k + 1][up[k][a]] = (int)a;
@@ -339,20 +416,18 @@ static int round_voids(const struct round_in *in, struct hl_opt_stats *o, struct
 	{
 		struct block_ctx bx = {bvh, in->wall, c->pixel_mm, 0.5 * in->wall};
 		struct hl_block blk = {blocked, &bx};
-		const struct hl_loop **chain = mem_alloc(((size_t)in->nslices + 1) * sizeof *chain);
-		struct chain_ctx cx = {&blk, 0.95 * in->nlp->h_mm * tan(in->nlp->alpha_rad), 0, vv,
+		const struct hl_loop **chain = mem_alloc(((size_t)nslices + 1) * sizeof *chain);
+		struct chain_ctx cx = {&blk, 0.95 * tan(in->nlp->alpha_rad), c->wall_next_mm, vv,
 				       nvv, vcap};
-		double g = ceil(c->wall_next_mm / in->nlp->h_mm - 1e-9) - 1;
-		cx.gap = g > 0 ? (size_t)g : 0;
 		if (!chain)
 			goto nomem;
-		for (int k = 0; k < in->nslices; k++)
+		for (int k = 0; k < nslices; k++)
 			for (size_t a = 0; a < sl[k].n; a++) {
 				size_t len = 0;
 				if (down[k][a] >= 0)
 					continue; /* not the bottom of a chain */
-				for (int kk = k, aa = (int)a; aa >= 0 && kk < in->nslices;
-				     aa = kk + 1 < in->nslices ? up[kk][aa] : -1, kk++)
+				for (int kk = k, aa = (int)a; aa >= 0 && kk < nslices;
+				     aa = kk + 1 < nslices ? up[kk][aa] : -1, kk++)
 					chain[len++] = &sl[kk].loop[aa];
 				rc = chain_voids(&cx, chain, 0, len, e);
 				if (rc)
@@ -378,9 +453,12 @@ nomem:
 	rc = ERR_SET(e, ERR_NOMEM, "hollow: out of memory");
 out:
 	voids_fini(vv, nvv);
-	hl_links_free(up, (size_t)in->nslices);
-	hl_links_free(down, (size_t)in->nslices);
-	slices_fini(sl, (size_t)in->nslices);
+	hl_links_free(up, (size_t)nslices);
+	hl_links_free(down, (size_t)nslices);
+	slices_fini(sl, (size_t)nslices);
+	for (int k = 0; pre && k < *in->nslices; k++)
+		paths_fini(&pre[k]);
+	mem_free(pre);
 	mesh_bvh_free(bvh);
 	slice_erode_free(er);
 	slice_free(ss);
@@ -576,29 +654,42 @@ int hl_opt_run(const struct mesh *part, const struct hl_opt_params *c, struct pr
 	struct mesh *res = NULL;
 	struct box3 bb = box3_empty();
 	int stab = c->objective == HL_OBJ_STABILITY && c->target && c->ntarget >= 3;
-	int rc = 0, m, stack_count, nslices;
+	int *sj = NULL;
+	int rc = 0, m, mmax, stack_count, nslices, ncand;
+	size_t tmax = 0;
 
 	*out = NULL;
 	memset(st, 0, sizeof *st);
 	for (size_t i = 0; i < part->nv; i++)
 		box3_add(&bb, part->v[i]);
-	m = (int)lround(c->opt_layer_mm / c->stack_layer_mm);
-	if (m < 1)
-		m = 1;
+	mmax = (int)lround(c->opt_layer_mm / c->stack_layer_mm);
+	if (mmax < 1)
+		mmax = 1;
+	m = mmax;
+	if (c->opt_layer_min_mm > 0) {
+		/* adaptive: candidates every thinnest slab, slabs of whole candidates */
+		m = (int)lround(c->opt_layer_min_mm / c->stack_layer_mm);
+		m = m < 1 ? 1 : m > mmax ? mmax : m;
+		tmax = (size_t)(mmax / m);
+	}
 	stack_count = layer_count_for(bb.hi.z, c->stack_layer_mm);
 	if (stack_count < 1)
 		return ERR_SET(e, ERR_LIMIT, "hollow: %.2f mm at %g mm stack layers is too many layers",
 			       bb.hi.z, c->stack_layer_mm);
-	nslices = (stack_count - 1 - m / 2) / m + 1;
-	st->opt_layer_mm = m * c->stack_layer_mm;
+	ncand = nslices = (stack_count - 1 - m / 2) / m + 1;
+	st->opt_layer_mm = (tmax ? (int)tmax * m : m) * c->stack_layer_mm;
 	st->sample_mm = c->sample_mm;
-	res = mesh_clone(part);
-	if (!res)
+	sj = mem_alloc(((size_t)ncand + 1) * sizeof *sj);
+	res = sj ? mesh_clone(part) : NULL;
+	if (!res) {
+		mem_free(sj);
 		return ERR_SET(e, ERR_NOMEM, "hollow: out of memory copying the part");
+	}
+	for (int k = 0; k < nslices; k++)
+		sj[k] = m * k + m / 2;
 
 	memset(&nlp, 0, sizeof nlp);
 	nlp.alpha_rad = c->alpha_rad - c->margin_rad;
-	nlp.h_mm = st->opt_layer_mm;
 	nlp.ceil_eps_mm2 = 1e-5;
 	nlp.gate_tau = 1e-3;
 	nlp.max_iter = 400;
@@ -610,16 +701,17 @@ int hl_opt_run(const struct mesh *part, const struct hl_opt_params *c, struct pr
 		nlp.target = c->target;
 		nlp.ntarget = c->ntarget;
 	}
-	base = mem_calloc((size_t)nslices + 1, sizeof *base);
+	base = mem_calloc((size_t)ncand + 1, sizeof *base);
 	if (!base) {
 		rc = ERR_SET(e, ERR_NOMEM, "hollow: out of memory");
 		goto out;
 	}
-	for (int k = 0; k < nslices; k++)
+	for (int k = 0; k < ncand; k++)
 		paths_init(&base[k]);
 	for (int r = 1; r <= c->rounds; r++) {
-		struct round_in in = {c, res, r == 1 ? c->wall_mm : c->wall_next_mm, m, nslices,
-				      stack_count, r == 1 ? NULL : base, r == 1 ? base : NULL, &nlp};
+		struct round_in in = {c,     res, r == 1 ? c->wall_mm : c->wall_next_mm,
+				      sj,    &nslices, m, r == 1 ? tmax : 0, stack_count,
+				      r == 1 ? NULL : base, r == 1 ? base : NULL, &nlp};
 		struct hl_void *vv = NULL;
 		size_t nvv = 0, kept = 0;
 		double f0 = (double)(r - 1) / c->rounds, f1 = (double)r / c->rounds, t0;
@@ -636,6 +728,13 @@ int hl_opt_run(const struct mesh *part, const struct hl_opt_params *c, struct pr
 		rc = round_voids(&in, st, &vv, &nvv, e);
 		if (rc)
 			goto out;
+		if (r == 1) {
+			st->slices = (size_t)nslices;
+			st->opt_layer_min_used_mm = nslices > 1 ? INFINITY : 0;
+			for (int k = 0; k + 1 < nslices; k++)
+				st->opt_layer_min_used_mm = fmin(st->opt_layer_min_used_mm,
+								 (sj[k + 1] - sj[k]) * c->stack_layer_mm);
+		}
 		if (stab) {
 			double vs, cs[3];
 			hl_mesh_mass(res, &vs, cs);
@@ -664,8 +763,9 @@ int hl_opt_run(const struct mesh *part, const struct hl_opt_params *c, struct pr
 	res = NULL;
 out:
 	mesh_free(res);
-	for (int k = 0; base && k < nslices; k++)
+	for (int k = 0; base && k < ncand; k++)
 		paths_fini(&base[k]);
 	mem_free(base);
+	mem_free(sj);
 	return rc;
 }

@@ -290,12 +290,12 @@ int hl_solve_round(struct hl_void *v, size_t n, const struct hl_nlp_opts *o, int
 			rc = ERR_SET(e, ERR_NOMEM, "hollow: out of memory");
 			goto out;
 		}
-		rc = hl_void_support_start(&v[i], 0.95 * o->h_mm * tan(o->alpha_rad), l, e);
+		rc = hl_void_support_start(&v[i], 0.95 * tan(o->alpha_rad), l, e);
 		if (rc) {
 			mem_free(l);
 			goto out;
 		}
-		hl_void_check(&v[i], l, o->alpha_rad, o->h_mm, o->gate_tau, &c);
+		hl_void_check(&v[i], l, o->alpha_rad, o->gate_tau, &c);
 		if (c.worst_face <= 1e-4 && c.worst_edge_mm <= 1e-3) {
 			mem_free(v[i].l);
 			v[i].l = l;

@@ -2,11 +2,12 @@
  *
  * Top-down sweep over a void's loops: the top loop sits on its poles
  * (collapsed, eq. 6); every vertex of a lower loop takes the smallest
- * offset that keeps it within reach_mm (horizontally) of every vertex of
- * the loop above it is joined to by a cross edge.  With reach_mm <= h tan
- * alpha every cross edge satisfies eq. 5, and then every strip face
- * satisfies eq. 3 too: a face's steepest line runs from one corner to
- * the opposite edge, at most reach_mm horizontally over h.  The result is
+ * offset that keeps it within reach = reach_slope dz (horizontally) of every
+ * vertex of the loop above it is joined to by a cross edge, dz the rise
+ * between the two loops (slices may differ in thickness).  With
+ * reach_slope <= tan alpha every cross edge satisfies eq. 5, and then every
+ * strip face satisfies eq. 3 too: a face's steepest line runs from one
+ * corner to the opposite edge, at most reach horizontally over dz.  The result is
  * feasible (if conservative: floors are held to the same slope) and is
  * both Ipopt's starting point and the fallback when a solve fails.
  * O(cross edges).
@@ -30,7 +31,7 @@ static int ray_disc(double wx, double wy, double rx, double ry, double D, double
 	return 1;
 }
 
-int hl_void_support_start(const struct hl_void *v, double reach_mm, double *l, struct err *e)
+int hl_void_support_start(const struct hl_void *v, double reach_slope, double *l, struct err *e)
 {
 	size_t *cnt, *adj = NULL;
 	size_t top = v->nloops - 1;
@@ -68,6 +69,7 @@ int hl_void_support_start(const struct hl_void *v, double reach_mm, double *l, s
 	for (size_t j = v->off[top]; j < v->off[top + 1]; j++)
 		l[j] = v->ub[j];
 	for (size_t k = top; k-- > 0;) {
+		double reach_mm = reach_slope * (v->z[k + 1] - v->z[k]);
 		for (size_t i = v->off[k]; i < v->off[k + 1]; i++) {
 			double lo = 0, hi = v->ub[i], rx = v->dir[2 * i], ry = v->dir[2 * i + 1];
 			int ok = 1;

@@ -50,11 +50,10 @@ static void rect_loop(struct hl_loop *L, double x0, double y0, double x1, double
 	L->area_mm2 = (x1 - x0) * (y1 - y0);
 }
 
-static void opts_init(struct hl_nlp_opts *o, double alpha_deg, double h)
+static void opts_init(struct hl_nlp_opts *o, double alpha_deg)
 {
 	memset(o, 0, sizeof *o);
 	o->alpha_rad = alpha_deg * M_PI / 180;
-	o->h_mm = h;
 	o->ceil_eps_mm2 = 1e-4;
 	o->gate_tau = 1e-3;
 	o->max_iter = 500;
@@ -90,15 +89,15 @@ static void test_box_roof(void)
 	/* the uniform void (l = 0) has a flat ceiling: the check must see it */
 	{
 		double *zero = mem_calloc(v.nv, sizeof *zero);
-		hl_void_check(&v, zero, M_PI / 4, h, 1e-3, &c);
+		hl_void_check(&v, zero, M_PI / 4, 1e-3, &c);
 		CHECK_NEAR(c.top_area_mm2, 100, 1e-6);
 		CHECK_NEAR(hl_void_volume(&v, zero), 100 * 9.5, 1e-6);
 		mem_free(zero);
 	}
-	opts_init(&o, 45, h);
+	opts_init(&o, 45);
 	REQUIRE_OK(hl_nlp_solve(&v, 1, &o, &e), &e);
 	CHECK_EQ_INT(v.status, 0);
-	hl_void_check(&v, v.l, M_PI / 4, h, 1e-3, &c);
+	hl_void_check(&v, v.l, M_PI / 4, 1e-3, &c);
 	fprintf(stderr, "check: face %g rad, edge %g mm, top %g mm2 (eps %g)\n", c.worst_face, c.worst_edge_mm, c.top_area_mm2, v.ceil_eps_mm2);
 	CHECK(c.worst_face <= 1e-4);
 	CHECK(c.worst_edge_mm <= 1e-3);

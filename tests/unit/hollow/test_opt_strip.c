@@ -363,13 +363,13 @@ static void test_restrip_taper(void)
 	}
 	REQUIRE_OK(hl_void_build(lp, NL, NULL, &v, &used, &e), &e);
 	CHECK_EQ_INT(used, NL);
-	REQUIRE_OK(hl_void_restrip(&v, reach, NULL, &first, &e), &e);
+	REQUIRE_OK(hl_void_restrip(&v, reach / H_MM, NULL, &first, &e), &e);
 	CHECK_EQ_INT(first, 0);
 	CHECK_EQ_INT(v.nloops, NL);
 	REQUIRE(v.start != NULL);
 	l = mem_alloc(v.nv * sizeof *l);
 	REQUIRE(l);
-	REQUIRE_OK(hl_void_support_start(&v, reach, l, &e), &e);
+	REQUIRE_OK(hl_void_support_start(&v, reach / H_MM, l, &e), &e);
 	CHECK(memcmp(l, v.start, v.nv * sizeof *l) == 0);
 	/* every lower loop is outside the loop above: all cross edges count */
 	CHECK_EQ_INT(check_start(&v, l, reach), v.nxe);
@@ -382,7 +382,7 @@ static void test_restrip_taper(void)
 		CHECK_EQ_INT(v.nxe, nt);
 	}
 	/* the check of the solver at alpha (same answer, measured by check.c) */
-	hl_void_check(&v, l, ALPHA, H_MM, 1e-3, &c);
+	hl_void_check(&v, l, ALPHA, 1e-3, &c);
 	CHECK_NUM(c.worst_edge_mm, <=, 1e-9);
 	CHECK_NUM(c.worst_face, <=, 1e-9);
 	CHECK_NUM(c.min_shift_mm, >=, 0);
@@ -443,7 +443,7 @@ static void test_restrip_step_ends_void(void)
 	}
 	REQUIRE_OK(hl_void_build(lp, NL, NULL, &v, &used, &e), &e);
 	CHECK_EQ_INT(used, NL);
-	REQUIRE_OK(hl_void_restrip(&v, reach, NULL, &first, &e), &e);
+	REQUIRE_OK(hl_void_restrip(&v, reach / H_MM, NULL, &first, &e), &e);
 	CHECK_EQ_INT(first, 2);
 	CHECK_EQ_INT(v.nloops, 2);
 	CHECK_EQ_INT(v.slice[0], 12);
@@ -505,7 +505,7 @@ static void test_start_sweep(void)
 	REQUIRE(v.start == NULL);
 	l = mem_alloc(v.nv * sizeof *l);
 	REQUIRE(l);
-	REQUIRE_OK(hl_void_support_start(&v, reach, l, &e), &e);
+	REQUIRE_OK(hl_void_support_start(&v, reach / H_MM, l, &e), &e);
 	for (size_t j = v.off[NL - 1]; j < v.nv; j++)
 		CHECK_NEAR(l[j], v.ub[j], 0);
 	for (size_t i = 0; i < v.off[NL - 1]; i++) {
