@@ -53,7 +53,7 @@ static const struct param_desc hollow_desc[] = {
 	{.name = "opt_layer_mm", .type = PARAM_NUM,
 	 .offset = offsetof(struct hollow_params, opt_layer_mm), .min = 0.05, .max = 5, .def = 0.5,
 	 .unit = "mm",
-	 .help = "Slice spacing h of the optimisation (constraints eq. 3-6); rounded to a multiple "
+	 .help = "Slice spacing h of the optimisation (constraints eq. 3-6; with opt_layer_min_mm > 0 the thickest slab); rounded to a multiple "
 		 "of the offset stack's layer. Independent of the print layer_mm."},
 	{.name = "opt_layer_min_mm", .type = PARAM_NUM,
 	 .offset = offsetof(struct hollow_params, opt_layer_min_mm), .min = 0, .max = 5, .def = 0,
@@ -64,9 +64,10 @@ static const struct param_desc hollow_desc[] = {
 	{.name = "smooth_passes", .type = PARAM_INT,
 	 .offset = offsetof(struct hollow_params, smooth_passes), .min = 0, .max = 1000, .def = 0,
 	 .unit = "",
-	 .help = "Section 6's contour smoothing P -> P~: truncated Laplacian passes over every "
-		 "optimisation contour before its bounds (corners cut inward only; walls only "
-		 "thicken). 0 = none."},
+	 .help = "Section 6's contour smoothing P -> P~ where the constraints are hard to meet: a "
+		 "void whose strips end early is built again from its contours smoothed by this "
+		 "many truncated Laplacian passes (corners cut inward only; walls only thicken) and "
+		 "kept when its support-free start is larger. 0 = never."},
 	{.name = "objective", .type = PARAM_ENUM,
 	 .offset = offsetof(struct hollow_params, objective), .def = 0, .choices = objective_names,
 	 .unit = "",

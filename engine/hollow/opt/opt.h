@@ -26,8 +26,9 @@ struct hl_opt_params {
 	double opt_layer_min_mm; /* > 0: adaptive slices between this (snapped to
 				  * the stack) and opt_layer_mm (slices.c); 0:
 				  * every slice opt_layer_mm thick */
-	int smooth_passes;     /* section 6's P -> P~: truncated Laplacian passes
-				* over every loop before its bounds (0: none) */
+	int smooth_passes;     /* section 6's P -> P~: a void that ends early is
+				* built again from its loops smoothed by this many
+				* truncated Laplacian passes, kept if larger (0: never) */
 	double stack_layer_mm; /* layer height of the eroded stack */
 	double pixel_mm;       /* erosion grid pitch */
 	double sample_mm;      /* loop sampling step s */

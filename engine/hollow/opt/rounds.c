@@ -198,9 +198,70 @@ struct chain_ctx {
 	const struct hl_block *blk;
 	double reach_slope;       /* reach over a slab's rise (0.95 tan alpha) */
 	double gap_mm;            /* wall_next_mm: floor of a void to the next below */
+	int smooth_passes;        /* > 0: a void that ends early is tried smoothed */
 	struct hl_void *vv;
 	size_t nvv, vcap;
 };
+
+/* Section 6's P -> P~ where the paper applies it, at contours whose
+ * constraints are hard to satisfy: the void of loops[0..n) ended early
+ * (*first > 0) or could not be made (*rc0 == 1).  It is built again from
+ * copies of the loops smoothed by smooth_passes (hl_loop_smooth: corners
+ * cut inward only), and that void replaces *V (with its *first) when it
+ * joins all n loops at offset 0 and its support-free start encloses more.
+ * Returns 0 or a negative err_code. */
+static int try_smoothed(struct chain_ctx *x, const struct hl_loop **loops, size_t n,
+			struct hl_void *V, int *rc0, size_t *first, struct err *e)
+{
+	struct hl_loop *cp = mem_calloc(n + 1, sizeof *cp);
+	const struct hl_loop **lp = mem_calloc(n + 1, sizeof *lp);
+	struct hl_void W;
+	size_t used = 0, f2 = 0;
+	int rc = 0;
+
+	hl_void_init(&W);
+	if (!cp || !lp) {
+		rc = ERR_SET(e, ERR_NOMEM, "hollow: out of memory");
+		goto out;
+	}
+	for (size_t i = 0; i < n; i++) {
+		cp[i] = *loops[i];
+		cp[i].xy = mem_alloc(2 * loops[i]->n * sizeof *cp[i].xy);
+		if (!cp[i].xy) {
+			rc = ERR_SET(e, ERR_NOMEM, "hollow: out of memory");
+			goto out;
+		}
+		memcpy(cp[i].xy, loops[i]->xy, 2 * loops[i]->n * sizeof *cp[i].xy);
+		lp[i] = &cp[i];
+		rc = hl_loop_smooth(&cp[i], x->smooth_passes, e);
+		if (rc)
+			goto out;
+	}
+	rc = hl_void_build(lp, n, x->blk, &W, &used, e);
+	if (rc == 0)
+		rc = hl_void_restrip(&W, x->reach_slope, x->blk, &f2, e);
+	if (rc < 0)
+		goto out;
+	if (rc == 0 && used == n) {
+		double v0 = *rc0 == 0 ? hl_void_volume(V, V->start) : 0;
+		double v1 = hl_void_volume(&W, W.start);
+		if (v1 > v0) {
+			hl_void_fini(V);
+			*V = W;
+			hl_void_init(&W);
+			*first = f2;
+			*rc0 = 0;
+		}
+	}
+	rc = 0;
+out:
+	hl_void_fini(&W);
+	for (size_t i = 0; cp && i < n; i++)
+		hl_loop_fini(&cp[i]);
+	mem_free(cp);
+	mem_free(lp);
+	return rc;
+}
 
 static int chain_voids(struct chain_ctx *x, const struct hl_loop **chain, size_t a, size_t b,
 		       struct err *e)
@@ -219,6 +280,13 @@ static int chain_voids(struct chain_ctx *x, const struct hl_loop **chain, size_t
 		if (rc < 0) {
 			hl_void_fini(&V);
 			return rc;
+		}
+		if (x->smooth_passes > 0 && (rc == 1 || first > 0) && used >= 2) {
+			int r2 = try_smoothed(x, chain + a, used, &V, &rc, &first, e);
+			if (r2 < 0) {
+				hl_void_fini(&V);
+				return r2;
+			}
 		}
 		if (rc == 0) {
 			arr = x->vv;
@@ -382,11 +450,6 @@ static int round_voids(const struct round_in *in, struct hl_opt_stats *o, struct
 						     &sl[k], e);
 			if (rc)
 				goto out;
-			for (size_t i = 0; i < sl[k].n; i++) {
-				rc = hl_loop_smooth(&sl[k].loop[i], c->smooth_passes, e);
-				if (rc)
-					goto out;
-			}
 			o->loops += sl[k].n;
 		}
 	}
@@ -417,8 +480,8 @@ static int round_voids(const struct round_in *in, struct hl_opt_stats *o, struct
 		struct block_ctx bx = {bvh, in->wall, c->pixel_mm, 0.5 * in->wall};
 		struct hl_block blk = {blocked, &bx};
 		const struct hl_loop **chain = mem_alloc(((size_t)nslices + 1) * sizeof *chain);
-		struct chain_ctx cx = {&blk, 0.95 * tan(in->nlp->alpha_rad), c->wall_next_mm, vv,
-				       nvv, vcap};
+		struct chain_ctx cx = {&blk, 0.95 * tan(in->nlp->alpha_rad), c->wall_next_mm,
+				       c->smooth_passes, vv, nvv, vcap};
 		if (!chain)
 			goto nomem;
 		for (int k = 0; k < nslices; k++)
