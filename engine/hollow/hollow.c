@@ -58,9 +58,10 @@ static const struct param_desc hollow_desc[] = {
 	{.name = "opt_layer_min_mm", .type = PARAM_NUM,
 	 .offset = offsetof(struct hollow_params, opt_layer_min_mm), .min = 0, .max = 5, .def = 0,
 	 .unit = "mm",
-	 .help = "Adaptive optimisation slices (paper step 2, ref. [30]): > 0, each slab between "
-		 "this and opt_layer_mm, thick where the offset surface is straight in z and thin "
-		 "where it bends (docs/hollow.md); 0 = every slice opt_layer_mm apart."},
+	 .help = "Adaptive optimisation slices (paper step 2, ref. [30]): > 0, each slab a whole "
+		 "number of these (snapped to the offset stack) up to opt_layer_mm, thick where the "
+		 "offset surface is straight in z and thin where it bends (docs/hollow.md); 0 = "
+		 "every slice opt_layer_mm apart."},
 	{.name = "smooth_passes", .type = PARAM_INT,
 	 .offset = offsetof(struct hollow_params, smooth_passes), .min = 0, .max = 1000, .def = 0,
 	 .unit = "",
@@ -89,8 +90,9 @@ static const struct param_desc hollow_desc[] = {
 	 .help = "Layer height of the offset stack; 0 = the print layer, at most 0.1 mm."},
 	{.name = "sample_mm", .type = PARAM_NUM, .offset = offsetof(struct hollow_params, sample_mm),
 	 .min = 0, .max = 5, .def = 0, .flags = PARAM_F_AUTO, .unit = "mm",
-	 .help = "Vertex spacing along the contours; 0 = half of opt_layer_mm * tan(alpha) "
-		 "(0.1..0.5 mm), so zigzag strip edges can meet eq. 5."},
+	 .help = "Vertex spacing along the contours; 0 = half of the thinnest slab (opt_layer_mm, "
+		 "or opt_layer_min_mm when adaptive) * tan(alpha) (0.1..0.5 mm), so zigzag strip "
+		 "edges can meet eq. 5."},
 	{.name = "margin_deg", .type = PARAM_NUM,
 	 .offset = offsetof(struct hollow_params, margin_deg), .min = 0, .max = 10, .def = 0.5,
 	 .unit = "deg", .help = "Safety taken off alpha in the optimisation's constraints."},

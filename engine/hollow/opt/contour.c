@@ -267,9 +267,13 @@ out:
 
 /* The moved vertex, 0.5 v + 0.25 (p + q), lies in the triangle p v q,
  * which lies inside the loop at a convex v unless another stretch of the
- * boundary enters it; the opening of step 1 keeps every other stretch
- * >= 2 s away (the slits are wall_next_mm >= 2 s wide) and the triangle's
- * sides are <= s, so none does, and a pass only cuts corners. */
+ * boundary enters it.  Its sides are <= s; step 1's opening makes the
+ * region a union of discs of radius s, so its boundary never comes within
+ * s of itself across the region, and across the solid the offset keeps
+ * stretches 2 t apart; only a slit narrower than s (wall_next_mm < s) could
+ * bring a stretch that close.  Where that happens, the strips' clearance
+ * test (rounds.c `blocked`) still refuses every triangle nearer than t / 2
+ * to the solid's surface. */
 int hl_loop_smooth(struct hl_loop *l, int passes, struct err *e)
 {
 	size_t n = l->n;

@@ -740,8 +740,10 @@ static int nlp_setup(struct nlp *P, struct hl_void *v, size_t nvoid,
 			P->ev[2 * q + 1] = (uint32_t)(a + V->xe[k].hi);
 			P->ef[2 * q] = (uint32_t)(f + V->xe[k].f[0]);
 			P->ef[2 * q + 1] = (uint32_t)(f + V->xe[k].f[1]);
-			/* eq. 5's h is this edge's rise (slices may differ in thickness) */
-			P->ekap[q] = 1 / pow((V->vz[V->xe[k].hi] - V->vz[V->xe[k].lo]) *
+			/* eq. 5's h is this edge's rise (slices may differ in
+			 * thickness); loops of one void lie at increasing z, so
+			 * it is > 0: the floor only guards hand-built voids */
+			P->ekap[q] = 1 / pow(fmax(V->vz[V->xe[k].hi] - V->vz[V->xe[k].lo], 1e-6) *
 						     tan(o->alpha_rad), 2);
 		}
 		f += V->nt;

@@ -188,12 +188,11 @@ static void voids_fini(struct hl_void *v, size_t n)
 	mem_free(v);
 }
 
-/* Steps 1-3: the voids of one round, unoptimised. */
 /* Voids of chain[a, b) (loops bottom to top): void.c builds upward until
  * a pair of loops has no strip at offset 0 (the rest is the next void);
- * restrip.c may then end a void higher up, and the loops below it, less
- * `gap` loops under its floor (so the wall between the two voids is at
- * least wall_next_mm), are a chain of their own. */
+ * restrip.c may then end a void higher up, and the loops below it, up to
+ * the highest loop at least gap_mm under its floor (so the wall between
+ * the two voids is at least wall_next_mm), are a chain of their own. */
 struct chain_ctx {
 	const struct hl_block *blk;
 	double reach_slope;       /* reach over a slab's rise (0.95 tan alpha) */
@@ -624,11 +623,11 @@ static int void_centroid(const struct hl_void *v, double cxy[2])
 	double A = 0, Mx = 0, My = 0;
 
 	for (size_t k = 0; k < v->nloops; k++) {
-		double a, mx, my;
+		double a, mx, my, h = hl_void_loop_h(v, k); /* eq. 12's slab per loop */
 		hl_loop_moments(v, k, v->l, &a, &mx, &my);
-		A += a;
-		Mx += mx;
-		My += my;
+		A += h * a;
+		Mx += h * mx;
+		My += h * my;
 	}
 	if (!(fabs(A) > 0))
 		return -1;
@@ -734,6 +733,10 @@ int hl_opt_run(const struct mesh *part, const struct hl_opt_params *c, struct pr
 		m = (int)lround(c->opt_layer_min_mm / c->stack_layer_mm);
 		m = m < 1 ? 1 : m > mmax ? mmax : m;
 		tmax = (size_t)(mmax / m);
+		if (tmax < 2) { /* one candidate a slab: nothing to choose */
+			tmax = 0;
+			m = mmax;
+		}
 	}
 	stack_count = layer_count_for(bb.hi.z, c->stack_layer_mm);
 	if (stack_count < 1)

@@ -17,7 +17,8 @@
  * walls, the sagitta on a bend of constant curvature.  Slices are chosen
  * bottom-up, greedily: from the current slice the next is the farthest
  * candidate, at most tmax candidates up, for which every candidate layer
- * in between has dev <= dev_mm; the next candidate is always allowed.
+ * in between has dev <= dev_mm (all t <= tmax are tried: a slab can fail
+ * where a thicker one passes); the next candidate is always allowed.
  */
 #include <math.h>
 
@@ -90,9 +91,8 @@ int hl_slices_adaptive(const struct paths *reg, size_t nc, size_t tmax, double d
 					return rc;
 				ok = d <= dev_mm;
 			}
-			if (!ok)
-				break;
-			best = t;
+			if (ok)
+				best = t;
 		}
 		a += best;
 		pick[n++] = a;

@@ -10,6 +10,14 @@
  * zigzag cross edges, not just the faces, to h tan alpha).  Constraints are re-checked by
  * hl_void_check(), an evaluation independent of the solver's callbacks,
  * and the volume by the divergence theorem.
+ *
+ * Slabs of unequal thickness (adaptive slices): the same box with gaps
+ * alternating 0.4 and 0.6 mm; every face and every facing-down cross edge
+ * is measured here, from the positions alone, against its own rise (a
+ * solver that used one h for all would leave the 0.4 mm slabs' faces at
+ * atan(0.5 / 0.4) = 51 degrees); the volume against the continuous
+ * optimum 100 H - 500 / (3 sqrt 2) for the box's height H; and
+ * hl_void_loop_h against the trapezoid weights by hand.
  */
 #include "harness.h"
 
@@ -113,8 +121,77 @@ static void test_box_roof(void)
 		hl_loop_fini(&L[k]);
 }
 
+static void test_box_roof_uneven(void)
+{
+	enum { NS = 20 };
+	struct hl_loop L[NS];
+	const struct hl_loop *lp[NS];
+	struct hl_void v;
+	struct hl_nlp_opts o;
+	struct err e;
+	size_t used;
+	double z = 0.25, s = 0.5 * 0.4 * tan(M_PI / 4), H, bound, ta = tan(M_PI / 4);
+	double worst_face = -1, worst_edge = -1;
+
+	for (int k = 0; k < NS; k++) {
+		rect_loop(&L[k], 0, 0, 10, 10, s, z, k);
+		lp[k] = &L[k];
+		z += k % 2 ? 0.6 : 0.4;
+	}
+	H = L[NS - 1].z_mm - L[0].z_mm;
+	hl_void_init(&v);
+	err_clear(&e);
+	REQUIRE_OK(hl_void_build(lp, NS, NULL, &v, &used, &e), &e);
+	CHECK_EQ_INT(used, NS);
+	/* trapezoid weights: the end loops their own gap, the others half of each */
+	CHECK_NEAR(hl_void_loop_h(&v, 0), 0.4, 1e-12);
+	CHECK_NEAR(hl_void_loop_h(&v, 1), 0.5, 1e-12);
+	CHECK_NEAR(hl_void_loop_h(&v, 2), 0.5, 1e-12);
+	CHECK_NEAR(hl_void_loop_h(&v, NS - 1), L[NS - 1].z_mm - L[NS - 2].z_mm, 1e-12);
+	opts_init(&o, 45);
+	REQUIRE_OK(hl_nlp_solve(&v, 1, &o, &e), &e);
+	CHECK_EQ_INT(v.status, 0);
+	REQUIRE(v.l != NULL);
+	for (size_t t = 0; t < v.nt; t++) {
+		const uint32_t *q = v.tri + 3 * t;
+		struct vec3 a = hl_void_pos(&v, q[0], v.l[q[0]]), b = hl_void_pos(&v, q[1], v.l[q[1]]),
+			    c = hl_void_pos(&v, q[2], v.l[q[2]]);
+		struct vec3 N = v3_cross(v3_sub(b, a), v3_sub(c, a));
+		double nn = v3_len(N);
+		if (nn > 1e-9) /* -n.z <= sin alpha: within alpha of the vertical */
+			worst_face = fmax(worst_face, -N.z / nn - sin(M_PI / 4));
+	}
+	for (size_t k = 0; k < v.nxe; k++) {
+		const struct hl_xedge *x = &v.xe[k];
+		double nz = 0;
+		for (int i = 0; i < 2; i++) {
+			const uint32_t *q = v.tri + 3 * x->f[i];
+			struct vec3 a = hl_void_pos(&v, q[0], v.l[q[0]]),
+				    b = hl_void_pos(&v, q[1], v.l[q[1]]),
+				    c = hl_void_pos(&v, q[2], v.l[q[2]]);
+			nz += 0.5 * v3_normalize(v3_cross(v3_sub(b, a), v3_sub(c, a))).z;
+		}
+		if (nz < -1e-3) {
+			struct vec3 p = hl_void_pos(&v, x->lo, v.l[x->lo]),
+				    q = hl_void_pos(&v, x->hi, v.l[x->hi]);
+			worst_edge = fmax(worst_edge, hypot(q.x - p.x, q.y - p.y) - (q.z - p.z) * ta);
+		}
+	}
+	fprintf(stderr, "uneven vault: face %g, edge %g mm, volume %.1f mm3 (H %.2f)\n", worst_face,
+		worst_edge, v.volume_mm3, H);
+	CHECK_NUM(worst_face, <=, 1e-4);
+	CHECK_NUM(worst_edge, <=, 1e-3);
+	bound = 100 * H - 500 / (3 * sqrt(2));
+	CHECK_NUM(v.volume_mm3, <=, bound);
+	CHECK_NUM(v.volume_mm3, >=, 0.8 * bound);
+	hl_void_fini(&v);
+	for (int k = 0; k < NS; k++)
+		hl_loop_fini(&L[k]);
+}
+
 int main(void)
 {
 	RUN(test_box_roof);
+	RUN(test_box_roof_uneven);
 	return harness_report();
 }

@@ -123,9 +123,10 @@ static void test_adaptive_choice(void)
 		disc(&reg[i], 6);
 	REQUIRE_OK(hl_slices_adaptive(reg, NC, tmax, tol, pick, &np, &e), &e);
 	CHECK_EQ_INT(np, 1 + (NC - 1 + tmax - 1) / tmax);
-	for (size_t k = 0; k + 1 < np; k++)
-		CHECK_EQ_INT(pick[k + 1] - pick[k], k + 2 < np ? tmax : pick[k + 1] - pick[k]);
-	CHECK_EQ_INT(pick[np - 1], NC - 1);
+	for (size_t k = 0; k + 2 < np; k++)
+		CHECK_EQ_INT(pick[k + 1] - pick[k], tmax);
+	CHECK_EQ_INT(pick[np - 1], NC - 1); /* the last slab: what is left, 1..tmax */
+	CHECK_NUM(pick[np - 1] - pick[np - 2], <=, tmax);
 	/* ball of radius 10 mm, candidates 0.25 mm apart */
 	for (size_t i = 0; i < NC; i++)
 		disc(&reg[i], ball_r(R, dz, i));
@@ -142,12 +143,12 @@ static void test_adaptive_choice(void)
 			worst = fmax(worst, disc_dev(ball_r(R, dz, a), ball_r(R, dz, c),
 						     ball_r(R, dz, b)));
 		CHECK_NUM(worst, <=, tol + 1e-3);
-		/* the farthest: one candidate more breaks it, unless at the top
-		 * or at the most allowed */
-		if (t < tmax && b + 1 < NC) {
-			for (size_t c = a + 1; c <= b; c++)
+		/* the farthest: every thicker slab allowed breaks the tolerance */
+		for (size_t t2 = t + 1; t2 <= tmax && a + t2 < NC; t2++) {
+			next = 0;
+			for (size_t c = a + 1; c < a + t2; c++)
 				next = fmax(next, disc_dev(ball_r(R, dz, a), ball_r(R, dz, c),
-							   ball_r(R, dz, b + 1)));
+							   ball_r(R, dz, a + t2)));
 			CHECK_NUM(next, >, tol - 1e-3);
 		}
 		if (a >= NC / 2 - 4 && b <= NC / 2 + 4)
