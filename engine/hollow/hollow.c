@@ -303,6 +303,7 @@ static int hollow_prepare(const struct engine_ctx *ctx, const void *params, void
 	h = lround((c->opt.opt_layer_min_mm > 0 ? c->opt.opt_layer_min_mm : c->opt.opt_layer_mm) /
 		   c->opt.stack_layer_mm) *
 	    c->opt.stack_layer_mm;
+	c->opt.sample_auto = !(p->sample_mm > 0);
 	c->opt.sample_mm =
 		p->sample_mm > 0
 			? p->sample_mm

@@ -32,6 +32,8 @@ struct hl_opt_params {
 	double stack_layer_mm; /* layer height of the eroded stack */
 	double pixel_mm;       /* erosion grid pitch */
 	double sample_mm;      /* loop sampling step s */
+	int sample_auto;       /* sample_mm derived from the slab: adaptive slices
+				* sample each slice for its own slabs (rounds.c) */
 	double alpha_rad;      /* overhang limit, from the vertical */
 	double margin_rad;     /* safety subtracted from alpha in the constraints */
 	double min_void_mm3;   /* smaller voids are dropped */

@@ -316,6 +316,25 @@ static int chain_voids(struct chain_ctx *x, const struct hl_loop **chain, size_t
 	return 0;
 }
 
+/* Sample spacing s of slice k: the user's, or, derived, h tan(alpha -
+ * margin) / 2 clamped to 0.1..0.5 mm for the thinner of the slabs below
+ * and above it (adaptive slices: a loop between thick slabs needs no
+ * finer sampling than they do; zigzag cross edges still meet eq. 5). */
+static double slice_spacing_mm(const struct hl_opt_params *c, const int *sj, int n, int k)
+{
+	double h = INFINITY;
+
+	if (!c->sample_auto)
+		return c->sample_mm;
+	if (k > 0)
+		h = fmin(h, (sj[k] - sj[k - 1]) * c->stack_layer_mm);
+	if (k + 1 < n)
+		h = fmin(h, (sj[k + 1] - sj[k]) * c->stack_layer_mm);
+	if (!isfinite(h))
+		return c->sample_mm;
+	return fmin(0.5, fmax(0.1, 0.5 * h * tan(c->alpha_rad - c->margin_rad)));
+}
+
 /* Round 1, adaptive: erode every candidate layer j = m i + m / 2 (the
  * uniform plan's layers at the thinnest slab), choose the slices among
  * them (slices.c) and hand their regions back in *pre (*in->nslices
@@ -416,8 +435,8 @@ static int round_voids(const struct round_in *in, struct hl_opt_stats *o, struct
 			goto nomem;
 		for (int k = 0; k < nslices; k++) {
 			int j = in->sj[k];
-			struct hl_contour_params cp = {c->sample_mm, c->wall_next_mm,
-						       4 * c->sample_mm * c->sample_mm};
+			double sp = slice_spacing_mm(c, in->sj, nslices, k);
+			struct hl_contour_params cp = {sp, c->wall_next_mm, 4 * sp * sp};
 			if (pre) {
 				paths_fini(&reg);
 				reg = pre[k];

@@ -12,34 +12,49 @@
 #include "engine/core/mem.h"
 #include "engine/hollow/opt/opt_int.h"
 
-/* Loop around the rectangle [x0, x1] x [y0, y1] (mm), counter-clockwise
- * from (x0, y0), every side cut into steps of at most s (mm). */
-static inline void rect_loop(struct hl_loop *L, double x0, double y0, double x1, double y1,
-			     double s, double z, int slice)
+/* Loop through the nc corners c (mm, counter-clockwise, not repeated),
+ * every side cut into steps of at most s (mm); the corners are vertices. */
+static inline void corner_loop(struct hl_loop *L, const double (*c)[2], int nc, double s, double z,
+			       int slice)
 {
-	double c[5][2] = {{x0, y0}, {x1, y0}, {x1, y1}, {x0, y1}, {x0, y0}};
 	size_t n = 0, cap = 0;
+	double a = 0;
 
 	memset(L, 0, sizeof *L);
-	for (int e = 0; e < 4; e++)
-		cap += (size_t)ceil(hypot(c[e + 1][0] - c[e][0], c[e + 1][1] - c[e][1]) / s);
+	for (int e = 0; e < nc; e++) {
+		const double *p = c[e], *q = c[(e + 1) % nc];
+		cap += (size_t)ceil(hypot(q[0] - p[0], q[1] - p[1]) / s);
+		a += p[0] * q[1] - q[0] * p[1];
+	}
 	L->xy = mem_alloc(2 * cap * sizeof *L->xy);
 	if (!L->xy)
 		return;
-	for (int e = 0; e < 4; e++) {
-		int k = (int)ceil(hypot(c[e + 1][0] - c[e][0], c[e + 1][1] - c[e][1]) / s);
+	for (int e = 0; e < nc; e++) {
+		const double *p = c[e], *q = c[(e + 1) % nc];
+		int k = (int)ceil(hypot(q[0] - p[0], q[1] - p[1]) / s);
 		for (int i = 0; i < k; i++) {
 			double t = (double)i / k;
-			L->xy[2 * n] = c[e][0] + t * (c[e + 1][0] - c[e][0]);
-			L->xy[2 * n + 1] = c[e][1] + t * (c[e + 1][1] - c[e][1]);
+			L->xy[2 * n] = p[0] + t * (q[0] - p[0]);
+			L->xy[2 * n + 1] = p[1] + t * (q[1] - p[1]);
 			n++;
 		}
 	}
 	L->n = n;
 	L->z_mm = z;
 	L->slice = slice;
-	L->area_mm2 = (x1 - x0) * (y1 - y0);
+	L->area_mm2 = 0.5 * a;
 }
+
+/* Loop around the rectangle [x0, x1] x [y0, y1] (mm), counter-clockwise
+ * from (x0, y0), every side cut into steps of at most s (mm). */
+static inline void rect_loop(struct hl_loop *L, double x0, double y0, double x1, double y1,
+			     double s, double z, int slice)
+{
+	const double c[4][2] = {{x0, y0}, {x1, y0}, {x1, y1}, {x0, y1}};
+
+	corner_loop(L, c, 4, s, z, slice);
+}
+
 /* Crossing-number point-in-polygon (any orientation). */
 static inline int point_in(const double *xy, size_t n, double x, double y)
 {

@@ -24,39 +24,7 @@
 #include "engine/core/err.h"
 #include "engine/core/mem.h"
 #include "engine/hollow/opt/opt_int.h"
-
-/* Loop around the rectangle [x0,x1] x [y0,y1] with spacing ~s, CCW. */
-static void rect_loop(struct hl_loop *L, double x0, double y0, double x1, double y1, double s,
-		      double z, int slice)
-{
-	double c[5][2] = {{x0, y0}, {x1, y0}, {x1, y1}, {x0, y1}, {x0, y0}};
-	size_t n = 0, cap = 0;
-
-	memset(L, 0, sizeof *L);
-	for (int e = 0; e < 4; e++) {
-		double len = hypot(c[e + 1][0] - c[e][0], c[e + 1][1] - c[e][1]);
-		int k = (int)ceil(len / s);
-		for (int i = 0; i < k; i++) {
-			double t = (double)i / k;
-			if (n + 1 > cap) {
-				cap = cap ? 2 * cap : 64;
-				L->xy = realloc(L->xy, 2 * cap * sizeof *L->xy);
-			}
-			L->xy[2 * n] = c[e][0] + t * (c[e + 1][0] - c[e][0]);
-			L->xy[2 * n + 1] = c[e][1] + t * (c[e + 1][1] - c[e][1]);
-			n++;
-		}
-	}
-	/* tests own this memory with malloc; copy into mem_alloc storage */
-	double *xy = mem_alloc(2 * n * sizeof *xy);
-	memcpy(xy, L->xy, 2 * n * sizeof *xy);
-	free(L->xy);
-	L->xy = xy;
-	L->n = n;
-	L->z_mm = z;
-	L->slice = slice;
-	L->area_mm2 = (x1 - x0) * (y1 - y0);
-}
+#include "loopgen.h"
 
 static void opts_init(struct hl_nlp_opts *o, double alpha_deg)
 {

@@ -166,25 +166,11 @@ static void test_adaptive_choice(void)
  * the reflex corner (4, 4) is a vertex. */
 static void l_loop(struct hl_loop *L, double s)
 {
-	static const double c[7][2] = {{0, 0}, {10, 0}, {10, 4}, {4, 4}, {4, 10}, {0, 10}, {0, 0}};
-	size_t n = 0, cap = 0;
+	static const double c[6][2] = {{0, 0}, {10, 0}, {10, 4}, {4, 4}, {4, 10}, {0, 10}};
 
-	memset(L, 0, sizeof *L);
-	for (int k = 0; k < 6; k++)
-		cap += (size_t)ceil(hypot(c[k + 1][0] - c[k][0], c[k + 1][1] - c[k][1]) / s);
-	L->xy = mem_alloc(2 * cap * sizeof *L->xy);
+	corner_loop(L, c, 6, s, 0, 0);
 	REQUIRE(L->xy != NULL);
-	for (int k = 0; k < 6; k++) {
-		int m = (int)ceil(hypot(c[k + 1][0] - c[k][0], c[k + 1][1] - c[k][1]) / s);
-		for (int i = 0; i < m; i++) {
-			double t = (double)i / m;
-			L->xy[2 * n] = c[k][0] + t * (c[k + 1][0] - c[k][0]);
-			L->xy[2 * n + 1] = c[k][1] + t * (c[k + 1][1] - c[k][1]);
-			n++;
-		}
-	}
-	L->n = n;
-	L->area_mm2 = 10 * 4 + 4 * 6;
+	CHECK_NEAR(L->area_mm2, 10 * 4 + 4 * 6, 1e-9);
 }
 
 static double orient(const double *a, const double *b, const double *c)
