@@ -60,8 +60,9 @@ static const struct param_desc hollow_desc[] = {
 	 .unit = "mm",
 	 .help = "Adaptive optimisation slices (paper step 2, ref. [30]): > 0, each slab a whole "
 		 "number of these (snapped to the offset stack) up to opt_layer_mm, thick where the "
-		 "offset surface is straight in z and thin where it bends (docs/hollow.md); 0 = "
-		 "every slice opt_layer_mm apart."},
+		 "offset surface is straight in z and thin where it bends; thick slabs can leave flat "
+		 "void tops beyond the support rule (docs/hollow.md, known limit 6); 0 = every slice "
+		 "opt_layer_mm apart."},
 	{.name = "smooth_passes", .type = PARAM_INT,
 	 .offset = offsetof(struct hollow_params, smooth_passes), .min = 0, .max = 1000, .def = 0,
 	 .unit = "",
