@@ -316,6 +316,7 @@ static int hollow_prepare(const struct engine_ctx *ctx, const void *params, void
 	c->opt.objective = p->objective == 1 ? HL_OBJ_STABILITY : HL_OBJ_LIGHTWEIGHT;
 	c->opt.light_weight = HOLLOW_LIGHT_WEIGHT;
 	c->print_layer_mm = ctx->layer_mm;
+	c->opt.print_layer_mm = ctx->layer_mm;
 	/* the fill lives in the layers; a mesh output carries its pixels as
 	 * stepped void surfaces (hmesh.h) */
 	c->fill = p->fill;

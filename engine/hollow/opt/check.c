@@ -6,6 +6,10 @@
 #include <math.h>
 #include <string.h>
 
+#include "engine/core/err.h"
+#include "engine/core/mem.h"
+#include "engine/geom/clip.h"
+
 #include "engine/hollow/opt/opt_int.h"
 
 void hl_loop_moments(const struct hl_void *v, size_t k, const double *l, double *area,
@@ -103,4 +107,41 @@ void hl_void_check(const struct hl_void *v, const double *l, double alpha_rad, d
 		c->max_shift_mm = fmax(c->max_shift_mm, l[j] - v->ub[j]);
 	}
 	hl_loop_moments(v, v->nloops - 1, l, &c->top_area_mm2, NULL, NULL);
+}
+
+int hl_void_top_overhang_mm2(const struct hl_void *v, const double *l, double reach_mm, double *a,
+			      struct err *e)
+{
+	size_t k = v->nloops - 1, o = v->off[k], n = v->off[k + 1] - o;
+	struct paths top, un, er;
+	struct path *p;
+	int rc = 0;
+
+	*a = 0;
+	paths_init(&top);
+	paths_init(&un);
+	paths_init(&er);
+	p = paths_add(&top);
+	if (!p || !(p->pts = mem_alloc((n + 1) * sizeof *p->pts))) {
+		rc = ERR_SET(e, ERR_NOMEM, "hollow: out of memory");
+		goto out;
+	}
+	p->cap = n + 1;
+	for (size_t j = 0; j < n; j++) {
+		struct vec3 q = hl_void_pos(v, o + j, l ? l[o + j] : 0);
+		p->pts[j].x = geom_mm_to_nm(q.x);
+		p->pts[j].y = geom_mm_to_nm(q.y);
+	}
+	p->n = n;
+	/* the walk overlaps itself: its region is where it winds */
+	rc = clip_union(&top, CLIP_FILL_NONZERO, &un, e);
+	if (!rc && un.n)
+		rc = clip_offset(&un, -reach_mm * GEOM_NM_PER_MM, CLIP_JOIN_ROUND, 0, 100.0, &er, e);
+	if (!rc)
+		*a = paths_area_mm2(&er);
+out:
+	paths_fini(&top);
+	paths_fini(&un);
+	paths_fini(&er);
+	return rc;
 }

@@ -35,6 +35,8 @@ struct hl_opt_params {
 	int sample_auto;       /* sample_mm derived from the slab: adaptive slices
 				* sample each slice for its own slabs (rounds.c) */
 	double alpha_rad;      /* overhang limit, from the vertical */
+	double print_layer_mm; /* the print layer: a void's flat top may reach
+				* print_layer_mm tan alpha from its edge (0: not checked) */
 	double margin_rad;     /* safety subtracted from alpha in the constraints */
 	double min_void_mm3;   /* smaller voids are dropped */
 	int rounds;            /* at most this many rounds (0: none, the part copied) */
@@ -58,7 +60,8 @@ struct hl_opt_stats {
 	size_t voids_fallback;    /* of them: kept at their support-free start */
 	size_t loops;             /* optimisation loops, all rounds (0: nothing inside
 				   * the offset wide enough to sample) */
-	size_t groups_failed;     /* optimised groups dropped (check failed) */
+	size_t groups_failed;     /* optimised groups dropped (check failed, or a
+				   * flat top wider than the print layers bridge) */
 	size_t groups_small;      /* dropped: below min_void_mm3 */
 	size_t voids_too_close;   /* dropped: within wall_next_mm of a larger void */
 	size_t voids_against_com; /* stability: dropped because they moved the centre

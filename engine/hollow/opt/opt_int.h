@@ -226,6 +226,16 @@ struct hl_check {
 void hl_void_check(const struct hl_void *v, const double *l, double alpha_rad, double gate_tau,
 		   struct hl_check *c);
 
+/* Area (mm^2) of void v's top polygon at offsets l (NULL: 0) farther than
+ * reach_mm from the polygon's edge: the flat ceiling eq. 6's limit form
+ * leaves (its bound is the pole polygon's own area) that print layers
+ * reaching reach_mm cannot bridge.  A sound collapsed top is a thin walk
+ * round a medial tree (about 0); coarse sampling can leave a blob.  The
+ * walk overlaps itself: its region is where it winds (nonzero).  0,
+ * ERR_NOMEM or a clip error. */
+int hl_void_top_overhang_mm2(const struct hl_void *v, const double *l, double reach_mm, double *a,
+			     struct err *e);
+
 /* Thickness (mm) of the slab loop k of v stands for in eq. 11-12's sums:
  * half the rise to each neighbouring loop, the whole rise at the ends
  * (h for every loop of uniform slices); 0 for a void of one loop. */

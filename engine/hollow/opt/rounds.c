@@ -684,6 +684,21 @@ static int keep_voids(const struct hl_opt_params *c, struct hl_void *vv, size_t 
 			st->groups_small++;
 			continue;
 		}
+		/* a flat top wider than a printer pixel beyond the print layer's
+		 * reach hangs (thinner slivers are the pixel model's, "11", 2) */
+		if (c->print_layer_mm > 0) {
+			double a;
+			rc = hl_void_top_overhang_mm2(&vv[i], vv[i].l, c->print_layer_mm * tan(c->alpha_rad),
+							&a, e);
+			if (rc) {
+				mem_free(kept_mask);
+				return rc;
+			}
+			if (a > c->pixel_mm * c->pixel_mm) {
+				st->groups_failed++;
+				continue;
+			}
+		}
 		for (size_t j = 0; j < i && !close; j++)
 			close = kept_mask[j] && voids_too_close(&vv[i], &vv[j], c->wall_next_mm);
 		if (close) {

@@ -17,7 +17,9 @@
  * solver that used one h for all would leave the 0.4 mm slabs' faces at
  * atan(0.5 / 0.4) = 51 degrees); the volume against the continuous
  * optimum 100 H - 500 / (3 sqrt 2) for the box's height H; and
- * hl_void_loop_h against the trapezoid weights by hand.
+ * hl_void_loop_h against the trapezoid weights by hand.  The flat-top
+ * measure (hl_void_top_overhang_mm2) reads the uncollapsed square less a
+ * rim of the print layer's reach, and about 0 for the collapsed vault.
  */
 #include "harness.h"
 
@@ -84,6 +86,17 @@ static void test_box_roof(void)
 		v.volume_mm3, v.iterations, v.outer, v.seconds);
 	CHECK(v.volume_mm3 <= 832.1);
 	CHECK(v.volume_mm3 >= 0.8 * 832.1);
+	/* the flat top print layers cannot bridge: at offset 0 the whole
+	 * 10 mm square less a reach-wide rim (the check must see it); once
+	 * collapsed onto the diagonals, nothing */
+	{
+		double a, reach = 0.05 * tan(M_PI / 4);
+		REQUIRE_OK(hl_void_top_overhang_mm2(&v, NULL, reach, &a, &e), &e);
+		CHECK_NEAR(a, (10 - 2 * reach) * (10 - 2 * reach), 1e-3);
+		REQUIRE_OK(hl_void_top_overhang_mm2(&v, v.l, reach, &a, &e), &e);
+		fprintf(stderr, "collapsed top beyond %.3f mm of its edge: %g mm2\n", reach, a);
+		CHECK_NUM(a, <, 1e-4);
+	}
 	hl_void_fini(&v);
 	for (int k = 0; k < NS; k++)
 		hl_loop_fini(&L[k]);
