@@ -268,7 +268,7 @@ static int hollow_prepare(const struct engine_ctx *ctx, const void *params, void
 	const struct hollow_params *p = params;
 	struct hollow_state *s;
 	struct hl_config *c;
-	double t0 = progress_now_s(), h;
+	double t0 = progress_now_s();
 	int rc;
 
 	if (!ctx->mesh)
@@ -300,15 +300,7 @@ static int hollow_prepare(const struct engine_ctx *ctx, const void *params, void
 					  ? fmax(p->opt_layer_min_mm, c->opt.stack_layer_mm)
 					  : 0;
 	c->opt.smooth_passes = p->smooth_passes;
-	/* zigzag edges must meet eq. 5 on the thinnest slab */
-	h = lround((c->opt.opt_layer_min_mm > 0 ? c->opt.opt_layer_min_mm : c->opt.opt_layer_mm) /
-		   c->opt.stack_layer_mm) *
-	    c->opt.stack_layer_mm;
-	c->opt.sample_auto = !(p->sample_mm > 0);
-	c->opt.sample_mm =
-		p->sample_mm > 0
-			? p->sample_mm
-			: fmin(0.5, fmax(0.1, 0.5 * h * tan(c->opt.alpha_rad - c->opt.margin_rad)));
+	c->opt.sample_mm = p->sample_mm; /* 0: the optimiser derives it per slice */
 	c->opt.min_void_mm3 = p->min_void_mm3;
 	c->opt.rounds = p->rounds;
 	c->opt.optimise_s = p->optimise_s;

@@ -919,7 +919,7 @@ int hl_nlp_solve(struct hl_void *v, size_t n, const struct hl_nlp_opts *o, struc
 		/* support-free start (start.c), also the fallback of each void */
 		size_t a = 0;
 		for (size_t i = 0; i < n; i++) {
-			rc = hl_void_support_start(&v[i], 0.95 * tan(o->alpha_rad), x + a, e);
+			rc = hl_void_support_start(&v[i], hl_reach_slope(o->alpha_rad), x + a, e);
 			if (rc)
 				goto out;
 			a += v[i].nv;

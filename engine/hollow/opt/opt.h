@@ -31,9 +31,8 @@ struct hl_opt_params {
 				* truncated Laplacian passes, kept if larger (0: never) */
 	double stack_layer_mm; /* layer height of the eroded stack */
 	double pixel_mm;       /* erosion grid pitch */
-	double sample_mm;      /* loop sampling step s */
-	int sample_auto;       /* sample_mm derived from the slab: adaptive slices
-				* sample each slice for its own slabs (rounds.c) */
+	double sample_mm;      /* loop sampling step s; 0: derived for each slice
+				* from its thinner slab (hl_sample_mm) */
 	double alpha_rad;      /* overhang limit, from the vertical */
 	double print_layer_mm; /* the print layer: a void's flat top may reach
 				* print_layer_mm tan alpha from its edge (0: not checked) */
@@ -84,6 +83,11 @@ struct hl_opt_stats {
  * many layers, grid too large) or an error of the slicer (*out NULL). */
 int hl_opt_run(const struct mesh *part, const struct hl_opt_params *p, struct progress *prog,
 	       struct mesh **out, struct hl_opt_stats *st, struct err *e);
+
+/* The derived sampling step (mm) for slabs h_mm thick: h tan(alpha -
+ * margin) / 2, so zigzag cross edges can meet eq. 5, clamped to
+ * 0.1..0.5 mm. */
+double hl_sample_mm(double h_mm, double alpha_rad, double margin_rad);
 
 /* Volume (mm^3) and centre of mass (mm) of a closed, outward mesh
  * (mesh_mass, divided out; 0 for a mesh of no volume). */

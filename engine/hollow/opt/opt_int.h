@@ -226,13 +226,11 @@ struct hl_check {
 void hl_void_check(const struct hl_void *v, const double *l, double alpha_rad, double gate_tau,
 		   struct hl_check *c);
 
-/* Area (mm^2) of void v's top polygon at offsets l (NULL: 0) farther than
- * reach_mm from the polygon's edge: the flat ceiling eq. 6's limit form
- * leaves (its bound is the pole polygon's own area) that print layers
- * reaching reach_mm cannot bridge.  A sound collapsed top is a thin walk
- * round a medial tree (about 0); coarse sampling can leave a blob.  The
- * walk overlaps itself: its region is where it winds (nonzero).  0,
- * ERR_NOMEM or a clip error. */
+/* Area (mm^2) of v's top polygon at offsets l (NULL: 0), as a nonzero
+ * region, farther than reach_mm from its edge: the flat ceiling eq. 6's
+ * limit form can leave that print layers reaching reach_mm cannot bridge
+ * (a sound collapsed top, a thin walk round a medial tree, reads about 0).
+ * 0, ERR_NOMEM or a clip error. */
 int hl_void_top_overhang_mm2(const struct hl_void *v, const double *l, double reach_mm, double *a,
 			     struct err *e);
 
@@ -250,7 +248,6 @@ void hl_loop_moments(const struct hl_void *v, size_t k, const double *l, double 
 		     double *mx, double *my);
 
 /* ---- one round's solves (solve.c) ---- */
-
 
 /* status of a void whose optimum failed its check but whose support-free
  * starting point passed and was used instead */
@@ -270,6 +267,9 @@ int hl_solve_round(struct hl_void *v, size_t n, const struct hl_nlp_opts *o, int
 		   struct progress *prog, double f0, double f1, struct err *e);
 
 /* ---- support-free start (start.c, restrip.c) ---- */
+
+/* Reach (mm) per mm of rise of the start's cross edges: 0.95 tan alpha. */
+double hl_reach_slope(double alpha_rad);
 
 /* Fill l (v->nv offsets): v->start when restrip.c made one, else a sweep
  * top-down: top loop on its poles, every other vertex the smallest offset

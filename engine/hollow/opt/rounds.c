@@ -162,6 +162,7 @@ struct round_in {
 				   * with plan_tmax > 0 chooses them (slices.c) */
 	int *nslices;             /* optimisation slices (set by round 1's plan) */
 	int m;                    /* stack layers per candidate slice */
+	double thin_mm;           /* thinnest slab allowed (mm): a lone slice's sampling */
 	size_t plan_tmax;         /* > 0: adaptive, at most this many candidates a slab */
 	int stack_count;
 	struct paths *base;       /* round 1 offset per slice (rounds >= 2), or NULL */
@@ -195,7 +196,7 @@ static void voids_fini(struct hl_void *v, size_t n)
  * the two voids is at least wall_next_mm), are a chain of their own. */
 struct chain_ctx {
 	const struct hl_block *blk;
-	double reach_slope;       /* reach over a slab's rise (0.95 tan alpha) */
+	double reach_slope;       /* reach over a slab's rise (hl_reach_slope) */
 	double gap_mm;            /* wall_next_mm: floor of a void to the next below */
 	int smooth_passes;        /* > 0: a void that ends early is tried smoothed */
 	struct hl_void *vv;
@@ -316,23 +317,27 @@ static int chain_voids(struct chain_ctx *x, const struct hl_loop **chain, size_t
 	return 0;
 }
 
-/* Sample spacing s of slice k: the user's, or, derived, h tan(alpha -
- * margin) / 2 clamped to 0.1..0.5 mm for the thinner of the slabs below
- * and above it (adaptive slices: a loop between thick slabs needs no
- * finer sampling than they do; zigzag cross edges still meet eq. 5). */
-static double slice_spacing_mm(const struct hl_opt_params *c, const int *sj, int n, int k)
+double hl_sample_mm(double h_mm, double alpha_rad, double margin_rad)
+{
+	return fmin(0.5, fmax(0.1, 0.5 * h_mm * tan(alpha_rad - margin_rad)));
+}
+
+/* Sample spacing s of slice k: the user's, or hl_sample_mm of the thinner
+ * of the slabs below and above it (adaptive slices: a loop between thick
+ * slabs needs no finer sampling than they do), of thin_mm (the thinnest
+ * slab allowed) for a lone slice. */
+static double slice_spacing_mm(const struct hl_opt_params *c, const int *sj, int n, int k,
+			       double thin_mm)
 {
 	double h = INFINITY;
 
-	if (!c->sample_auto)
+	if (c->sample_mm > 0)
 		return c->sample_mm;
 	if (k > 0)
 		h = fmin(h, (sj[k] - sj[k - 1]) * c->stack_layer_mm);
 	if (k + 1 < n)
 		h = fmin(h, (sj[k + 1] - sj[k]) * c->stack_layer_mm);
-	if (!isfinite(h))
-		return c->sample_mm;
-	return fmin(0.5, fmax(0.1, 0.5 * h * tan(c->alpha_rad - c->margin_rad)));
+	return hl_sample_mm(isfinite(h) ? h : thin_mm, c->alpha_rad, c->margin_rad);
 }
 
 /* Round 1, adaptive: erode every candidate layer j = m i + m / 2 (the
@@ -435,7 +440,7 @@ static int round_voids(const struct round_in *in, struct hl_opt_stats *o, struct
 			goto nomem;
 		for (int k = 0; k < nslices; k++) {
 			int j = in->sj[k];
-			double sp = slice_spacing_mm(c, in->sj, nslices, k);
+			double sp = slice_spacing_mm(c, in->sj, nslices, k, in->thin_mm);
 			struct hl_contour_params cp = {sp, c->wall_next_mm, 4 * sp * sp};
 			if (pre) {
 				paths_fini(&reg);
@@ -498,7 +503,7 @@ static int round_voids(const struct round_in *in, struct hl_opt_stats *o, struct
 		struct block_ctx bx = {bvh, in->wall, c->pixel_mm, 0.5 * in->wall};
 		struct hl_block blk = {blocked, &bx};
 		const struct hl_loop **chain = mem_alloc(((size_t)nslices + 1) * sizeof *chain);
-		struct chain_ctx cx = {&blk, 0.95 * tan(in->nlp->alpha_rad), c->wall_next_mm,
+		struct chain_ctx cx = {&blk, hl_reach_slope(in->nlp->alpha_rad), c->wall_next_mm,
 				       c->smooth_passes, vv, nvv, vcap};
 		if (!chain)
 			goto nomem;
@@ -753,6 +758,7 @@ int hl_opt_run(const struct mesh *part, const struct hl_opt_params *c, struct pr
 	int *sj = NULL;
 	int rc = 0, m, mmax, stack_count, nslices, ncand;
 	size_t tmax = 0;
+	double thin_mm;
 
 	*out = NULL;
 	memset(st, 0, sizeof *st);
@@ -767,10 +773,11 @@ int hl_opt_run(const struct mesh *part, const struct hl_opt_params *c, struct pr
 		m = (int)lround(c->opt_layer_min_mm / c->stack_layer_mm);
 		m = m < 1 ? 1 : m > mmax ? mmax : m;
 		tmax = (size_t)(mmax / m);
-		if (tmax < 2) { /* one candidate a slab: nothing to choose */
-			tmax = 0;
-			m = mmax;
-		}
+	}
+	thin_mm = m * c->stack_layer_mm; /* zigzag edges must meet eq. 5 on it */
+	if (c->opt_layer_min_mm > 0 && tmax < 2) { /* one candidate a slab: nothing to choose */
+		tmax = 0;
+		m = mmax;
 	}
 	stack_count = layer_count_for(bb.hi.z, c->stack_layer_mm);
 	if (stack_count < 1)
@@ -778,7 +785,8 @@ int hl_opt_run(const struct mesh *part, const struct hl_opt_params *c, struct pr
 			       bb.hi.z, c->stack_layer_mm);
 	ncand = nslices = (stack_count - 1 - m / 2) / m + 1;
 	st->opt_layer_mm = (tmax ? (int)tmax * m : m) * c->stack_layer_mm;
-	st->sample_mm = c->sample_mm;
+	st->sample_mm = c->sample_mm > 0 ? c->sample_mm
+					 : hl_sample_mm(thin_mm, c->alpha_rad, c->margin_rad);
 	sj = mem_alloc(((size_t)ncand + 1) * sizeof *sj);
 	res = sj ? mesh_clone(part) : NULL;
 	if (!res) {
@@ -810,7 +818,7 @@ int hl_opt_run(const struct mesh *part, const struct hl_opt_params *c, struct pr
 		paths_init(&base[k]);
 	for (int r = 1; r <= c->rounds; r++) {
 		struct round_in in = {c,     res, r == 1 ? c->wall_mm : c->wall_next_mm,
-				      sj,    &nslices, m, r == 1 ? tmax : 0, stack_count,
+				      sj,    &nslices, m, thin_mm, r == 1 ? tmax : 0, stack_count,
 				      r == 1 ? NULL : base, r == 1 ? base : NULL, &nlp};
 		struct hl_void *vv = NULL;
 		size_t nvv = 0, kept = 0;

@@ -290,7 +290,7 @@ int hl_solve_round(struct hl_void *v, size_t n, const struct hl_nlp_opts *o, int
 			rc = ERR_SET(e, ERR_NOMEM, "hollow: out of memory");
 			goto out;
 		}
-		rc = hl_void_support_start(&v[i], 0.95 * tan(o->alpha_rad), l, e);
+		rc = hl_void_support_start(&v[i], hl_reach_slope(o->alpha_rad), l, e);
 		if (rc) {
 			mem_free(l);
 			goto out;

@@ -31,6 +31,11 @@ static int ray_disc(double wx, double wy, double rx, double ry, double D, double
 	return 1;
 }
 
+double hl_reach_slope(double alpha_rad)
+{
+	return 0.95 * tan(alpha_rad);
+}
+
 int hl_void_support_start(const struct hl_void *v, double reach_slope, double *l, struct err *e)
 {
 	size_t *cnt, *adj = NULL;

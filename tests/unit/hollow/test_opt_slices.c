@@ -173,38 +173,6 @@ static void l_loop(struct hl_loop *L, double s)
 	CHECK_NEAR(L->area_mm2, 10 * 4 + 4 * 6, 1e-9);
 }
 
-static double orient(const double *a, const double *b, const double *c)
-{
-	return (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
-}
-
-/* Does point p, collinear with segment ab, lie on it? */
-static int on_seg(const double *a, const double *b, const double *p)
-{
-	return p[0] >= fmin(a[0], b[0]) && p[0] <= fmax(a[0], b[0]) && p[1] >= fmin(a[1], b[1]) &&
-	       p[1] <= fmax(a[1], b[1]);
-}
-
-/* No two non-adjacent edges cross or touch. */
-static int simple_loop(const double *xy, size_t n)
-{
-	for (size_t i = 0; i < n; i++)
-		for (size_t j = i + 2; j < n; j++) {
-			size_t i1 = (i + 1) % n, j1 = (j + 1) % n;
-			const double *a = xy + 2 * i, *b = xy + 2 * i1, *c = xy + 2 * j, *d = xy + 2 * j1;
-			if (j1 == i)
-				continue;
-			double o1 = orient(a, b, c), o2 = orient(a, b, d), o3 = orient(c, d, a),
-			       o4 = orient(c, d, b);
-			if (o1 * o2 < 0 && o3 * o4 < 0)
-				return 0;
-			if ((o1 == 0 && on_seg(a, b, c)) || (o2 == 0 && on_seg(a, b, d)) ||
-			    (o3 == 0 && on_seg(c, d, a)) || (o4 == 0 && on_seg(c, d, b)))
-				return 0;
-		}
-	return 1;
-}
-
 static void test_smooth_l(void)
 {
 	struct hl_loop L, ref;
@@ -240,7 +208,7 @@ static void test_smooth_l(void)
 				 (x == 4 && y >= 4) || (y == 4 && x >= 4);
 			CHECK(on || point_in(L_xy, 6, x, y));
 		}
-		CHECK(simple_loop(L.xy, L.n));
+		CHECK(is_simple(L.xy, L.n));
 	}
 	/* 40 passes round the convex corners by more than a sample step */
 	CHECK_NUM(64 - L.area_mm2, >, 3 * s * s);

@@ -54,45 +54,6 @@ static double shoelace(const double *xy, size_t n)
 	return 0.5 * a;
 }
 
-static double orient(const double *a, const double *b, const double *c)
-{
-	return (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]);
-}
-
-/* Do the closed segments ab and cd cross or touch? */
-static int seg_meet(const double *a, const double *b, const double *c, const double *d)
-{
-	double o1 = orient(a, b, c), o2 = orient(a, b, d), o3 = orient(c, d, a),
-	       o4 = orient(c, d, b);
-
-	if (o1 * o2 < 0 && o3 * o4 < 0)
-		return 1; /* proper crossing */
-	/* collinear touching */
-	for (int k = 0; k < 4; k++) {
-		const double *p = k == 0 ? c : k == 1 ? d : k == 2 ? a : b;
-		const double *s0 = k < 2 ? a : c, *s1 = k < 2 ? b : d;
-		double o = k == 0 ? o1 : k == 1 ? o2 : k == 2 ? o3 : o4;
-		if (o == 0 && p[0] >= fmin(s0[0], s1[0]) && p[0] <= fmax(s0[0], s1[0]) &&
-		    p[1] >= fmin(s0[1], s1[1]) && p[1] <= fmax(s0[1], s1[1]))
-			return 1;
-	}
-	return 0;
-}
-
-/* Is the closed polygon xy simple (no two non-adjacent edges meet)? */
-static int is_simple(const double *xy, size_t n)
-{
-	for (size_t i = 0; i < n; i++)
-		for (size_t j = i + 1; j < n; j++) {
-			size_t i1 = (i + 1) % n, j1 = (j + 1) % n;
-			if (j == i1 || i == j1)
-				continue;
-			if (seg_meet(xy + 2 * i, xy + 2 * i1, xy + 2 * j, xy + 2 * j1))
-				return 0;
-		}
-	return 1;
-}
-
 static void slice_fini(struct hl_slice *s)
 {
 	for (size_t i = 0; i < s->n; i++)
