@@ -37,10 +37,18 @@ struct hollow_params {
 	double margin_deg;
 	int fill;
 	int lean_walls;
+	double optimise_work;
 	double optimise_s;
 };
 
 static const char *const objective_names[] = {"lightweight", "stability", NULL};
+
+/* Default work budget of the optimisation rounds (reference seconds,
+ * docs/hollow.md "3.4": about the seconds it takes on the project's 2-core
+ * machine) and the wall-clock guard (s) that only a far slower or busier
+ * machine meets. */
+#define HOLLOW_WORK_REF_S 60
+#define HOLLOW_GUARD_S 300
 
 static const struct param_desc hollow_desc[] = {
 	{.name = "wall_mm", .type = PARAM_NUM, .offset = offsetof(struct hollow_params, wall_mm),
@@ -110,12 +118,21 @@ static const struct param_desc hollow_desc[] = {
 	 .help = "Fill: a wall between two voids leans at alpha over the larger and ends on the "
 		 "smaller one's floor (more volume removed; one-pixel bumps along the leaning walls' "
 		 "undersides); false: it stands vertical down to a floor (docs/hollow.md)."},
+	{.name = "optimise_work", .type = PARAM_NUM,
+	 .offset = offsetof(struct hollow_params, optimise_work), .min = 0, .max = 86400,
+	 .def = HOLLOW_WORK_REF_S, .unit = "ref s",
+	 .help = "Work budget of the optimisation rounds, in reference seconds: solver iterations "
+		 "priced by a fixed formula of the problem's size (about a second each on the "
+		 "project's 2-core machine, docs/hollow.md). The voids of a round share what is "
+		 "left as one iteration cap each, and no round starts once it is spent, so the "
+		 "result does not depend on the machine, its load or the threads. 0 = no limit."},
 	{.name = "optimise_s", .type = PARAM_NUM,
-	 .offset = offsetof(struct hollow_params, optimise_s), .min = 0, .max = 86400, .def = 60,
-	 .unit = "s",
-	 .help = "Time budget of the optimisation rounds: voids not optimised within it keep their "
-		 "support-free starting shape and no further round starts (the fill then hollows "
-		 "what is left). 0 = no limit."},
+	 .offset = offsetof(struct hollow_params, optimise_s), .min = 0, .max = 86400,
+	 .def = HOLLOW_GUARD_S, .unit = "s",
+	 .help = "Wall-clock guard of the optimisation rounds: voids not optimised within it keep "
+		 "their support-free starting shape and no further round starts (the fill then "
+		 "hollows what is left). The result then depends on the machine's speed and load; "
+		 "optimise_work is the reproducible limit. 0 = no limit."},
 };
 
 /* stability: weight of the lightweight term once the part stands */
@@ -304,6 +321,7 @@ static int hollow_prepare(const struct engine_ctx *ctx, const void *params, void
 	c->opt.min_void_mm3 = p->min_void_mm3;
 	c->opt.rounds = p->rounds;
 	c->opt.optimise_s = p->optimise_s;
+	c->opt.optimise_work = p->optimise_work;
 	c->opt.threads = ctx->threads > 0 ? ctx->threads : 1;
 	c->opt.objective = p->objective == 1 ? HL_OBJ_STABILITY : HL_OBJ_LIGHTWEIGHT;
 	c->opt.light_weight = HOLLOW_LIGHT_WEIGHT;
@@ -586,6 +604,9 @@ static int hollow_metrics(void *state, struct metrics *m, struct err *e)
 	if (o->has_com)
 		rc |= metrics_int(m, "hollow.voids_against_com", (long long)o->opt.voids_against_com);
 	rc |= metrics_bool(m, "hollow.budget_spent", o->opt.budget_spent);
+	rc |= metrics_num(m, "hollow.optimise_work", s->cfg.opt.optimise_work);
+	rc |= metrics_num(m, "hollow.solver_work", o->opt.work_s);
+	rc |= metrics_bool(m, "hollow.work_spent", o->opt.work_spent);
 	rc |= metrics_num(m, "hollow.seconds.offset", o->opt.s_offset);
 	rc |= metrics_num(m, "hollow.seconds.groups", o->opt.s_groups);
 	rc |= metrics_num(m, "hollow.seconds.optimise", o->opt.s_solve);

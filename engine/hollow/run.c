@@ -293,6 +293,14 @@ static void empty_note(const struct hl_config *c, struct hl_outcome *o)
 			 c->opt.optimise_s);
 		return;
 	}
+	if (o->opt.work_spent && !c->fill) {
+		snprintf(o->note, sizeof o->note,
+			 "the optimiser's work budget (optimise_work %g reference s) was "
+			 "spent before it kept a void; a larger optimise_work or fill=true can hollow "
+			 "it; the part is returned unchanged",
+			 c->opt.optimise_work);
+		return;
+	}
 	if (o->opt.loops > 0 && !c->fill) {
 		/* the interior is there: the optimiser's voids were dropped */
 		snprintf(o->note, sizeof o->note,

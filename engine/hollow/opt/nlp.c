@@ -836,7 +836,9 @@ static double cpu_limit_s(const struct hl_nlp_opts *o)
 	return left < 0.5 ? 0.5 : left > 600 ? 600 : left;
 }
 
-static int solve_once(struct nlp *P, double *x, int *app_status, struct err *e)
+/* One Ipopt solve from x (updated in place) of at most max_iter
+ * iterations. */
+static int solve_once(struct nlp *P, double *x, int max_iter, int *app_status, struct err *e)
 {
 	size_t m = P->nf + P->nact + P->nceil + (P->stab ? 3 * P->nloops + 3 : 0), r = 0;
 	size_t nj = 3 * P->nf + 2 * P->nact +
@@ -880,7 +882,7 @@ static int solve_once(struct nlp *P, double *x, int *app_status, struct err *e)
 	AddIpoptIntOption(ip, (char *)"print_level", 0);
 	AddIpoptStrOption(ip, (char *)"linear_solver", (char *)"mumps");
 	AddIpoptStrOption(ip, (char *)"mu_strategy", (char *)"adaptive");
-	AddIpoptIntOption(ip, (char *)"max_iter", P->o->max_iter);
+	AddIpoptIntOption(ip, (char *)"max_iter", max_iter);
 	AddIpoptNumOption(ip, (char *)"tol", 1e-6);
 	AddIpoptNumOption(ip, (char *)"constr_viol_tol", 1e-6);
 	AddIpoptNumOption(ip, (char *)"acceptable_tol", 1e-4);
@@ -928,7 +930,19 @@ int hl_nlp_solve(struct hl_void *v, size_t n, const struct hl_nlp_opts *o, struc
 	gate_edges(&P, x, INFINITY);
 	pthread_mutex_lock(&ipopt_lock);
 	for (outer = 1; outer <= o->max_outer; outer++) {
-		rc = solve_once(&P, x, &st, e);
+		/* the cap counts intermediate callbacks: max_iter m makes at most
+		 * m + 1 of them (the starting point's too) */
+		int max_iter = o->max_iter;
+		if (o->iter_cap > 0) {
+			int left = o->iter_cap - P.iterations - 1;
+			if (left < 1) {
+				outer--; /* this round did not run */
+				break;
+			}
+			if (left < max_iter)
+				max_iter = left;
+		}
+		rc = solve_once(&P, x, max_iter, &st, e);
 		if (rc)
 			break;
 		/* eq. 5's sign gate at the new point: add newly facing-down edges;

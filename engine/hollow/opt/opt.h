@@ -39,9 +39,17 @@ struct hl_opt_params {
 	double margin_rad;     /* safety subtracted from alpha in the constraints */
 	double min_void_mm3;   /* smaller voids are dropped */
 	int rounds;            /* at most this many rounds (0: none, the part copied) */
-	double optimise_s;     /* time budget (s, from hl_opt_run's start): voids not
-				* solved in it keep their support-free start, later
-				* rounds do not start; 0 = none */
+	double optimise_work;  /* work budget, reference seconds: each solve's Ipopt
+				* iterations priced by a fixed formula of its problem's
+				* size (rounds.c iter_cost_s), summed over solves and
+				* rounds.  Every void of a round gets the same iteration
+				* cap, the budget left over the round's price per
+				* iteration, so what is solved does not depend on time,
+				* load or threads; later rounds start while some is
+				* left; 0 = none */
+	double optimise_s;     /* wall-clock guard (s, from hl_opt_run's start): voids
+				* not solved in it keep their support-free start,
+				* later rounds do not start; 0 = none */
 	int threads;           /* solver processes */
 	enum hl_objective objective;
 	double light_weight;   /* stability: weight of the lightweight term */
@@ -54,7 +62,10 @@ struct hl_opt_params {
 
 struct hl_opt_stats {
 	int rounds;               /* rounds whose voids were kept */
-	int budget_spent;         /* optimise_s cut the rounds short */
+	int budget_spent;         /* optimise_s (the wall clock) cut the rounds short */
+	int work_spent;           /* optimise_work capped a round's solves or ended
+				   * the rounds */
+	double work_s;            /* solver work done, reference seconds (optimise_work) */
 	size_t voids;             /* kept (optimised, or at their support-free start) */
 	size_t voids_fallback;    /* of them: kept at their support-free start */
 	size_t loops;             /* optimisation loops, all rounds (0: nothing inside

@@ -2,13 +2,11 @@
  * the data model and the steps rounds.c chains.  Not for use outside
  * engine/hollow/opt/ (opt.h is the optimiser's face).
  *
- * Paper 004 (Wang et al., "Support-Free Hollowing", TVCG 2018); the method
- * and every derivation are in docs/hollow.md.  Frame: printer frame, mm,
- * z up (the printing direction d = +z).  A void is described by contours
- * ("loops"): simple counter-clockwise polygons, one per optimisation slice,
- * the void on their left.  Shrinking a loop shrinks the void (the paper's
- * P -> P'): vertex j moves to v_j + l_j r_j with r_j its inward shifting
- * direction and 0 <= l_j <= ub_j (eq. 1, 7-10).
+ * Paper 004 (Wang et al., "Support-Free Hollowing", TVCG 2018): method and
+ * derivations in docs/hollow.md.  Printer frame, mm, z up (d = +z).  A void
+ * is a stack of loops: simple counter-clockwise polygons, one per slice,
+ * the void on their left; vertex j moves to v_j + l_j r_j, r_j its inward
+ * shifting direction, 0 <= l_j <= ub_j (P -> P', eq. 1, 7-10).
  */
 #ifndef INFILLD_HOLLOW_OPT_INT_H
 #define INFILLD_HOLLOW_OPT_INT_H
@@ -191,6 +189,8 @@ struct hl_nlp_opts {
 	double gate_tau;     /* an edge faces down when n_e . d < -gate_tau */
 	int max_iter;        /* Ipopt iterations per outer round */
 	int max_outer;       /* sign-gating rounds */
+	int iter_cap;        /* work budget: callbacks a solve may make over all its
+				rounds; 0 = no cap, < 0 = no solve starts */
 	enum hl_objective objective;
 	/* stability: the solid before these voids and the target region */
 	double vol_mm3;             /* V(M) */
@@ -252,16 +252,16 @@ void hl_loop_moments(const struct hl_void *v, size_t k, const double *l, double 
 /* status of a void whose optimum failed its check but whose support-free
  * starting point passed and was used instead */
 #define HL_STATUS_FALLBACK 1
-/* status of a void not optimised: the time budget (o->deadline_s) was
- * spent before its turn; it gets the support-free start like a failed one */
+/* status of a void not optimised (o->deadline_s passed, o->iter_cap < 0):
+ * it gets the support-free start like a failed one */
 #define HL_STATUS_UNSOLVED (-2000)
 
 /* Optimise v[0..n): lightweight voids each on their own, in up to
  * `threads` worker processes; stability as one problem.  Every void ends
  * with status 0 (optimum), HL_STATUS_FALLBACK, or < 0 (drop it); past
- * o->deadline_s no solve starts and the rest take their start.  prog
- * (may be NULL) moves from stage fraction f0 to f1 as voids finish and
- * may cancel.
+ * o->deadline_s or with o->iter_cap < 0 no solve starts and the rest take
+ * their start.  prog (may be NULL) moves from stage fraction f0 to f1 as
+ * voids finish and may cancel.
  * Returns 0, ERR_NOMEM, ERR_IO (pipe/poll) or ERR_CANCELLED. */
 int hl_solve_round(struct hl_void *v, size_t n, const struct hl_nlp_opts *o, int threads,
 		   struct progress *prog, double f0, double f1, struct err *e);

@@ -680,7 +680,9 @@ static int keep_voids(const struct hl_opt_params *c, struct hl_void *vv, size_t 
 		return ERR_SET(e, ERR_NOMEM, "hollow: out of memory");
 	for (size_t i = 0; i < nvv; i++) {
 		int close = 0, rc;
-		st->iterations += vv[i].iterations;
+		/* stability solved them as one problem: its iterations once */
+		if (i == 0 || nlp->objective != HL_OBJ_STABILITY)
+			st->iterations += vv[i].iterations;
 		if (vv[i].status < 0) {
 			st->groups_failed++;
 			continue;
@@ -747,6 +749,82 @@ static int keep_voids(const struct hl_opt_params *c, struct hl_void *vv, size_t 
 	return 0;
 }
 
+/* A round's solves get fewer iterations than this from the work budget:
+ * none start (an interior-point solve this short ends far from its
+ * optimum: the box takes about 30 from the start, bench groups 50-400). */
+#define HL_WORK_MIN_ITER 20
+
+/* The work budget's price of one Ipopt iteration of a problem of nv
+ * offsets, in reference seconds: a nv + b nv^2 fitted to two solves on
+ * the project's 2-core machine (docs/hollow.md "3.4": the femur's void,
+ * 3154 offsets, 51.7 ms an iteration; the letter P's stability problem at
+ * 100 mm, 39,322 offsets, 1.86 s).  A fixed formula of the problem's
+ * size, not a clock: the same on every machine. */
+static double iter_cost_s(double nv)
+{
+	return 1.37e-5 * nv + 8.53e-10 * nv * nv;
+}
+
+/* The round's problems and their price per iteration (reference s):
+ * lightweight solves each void on its own, stability all of them as one
+ * problem (hl_solve_round). */
+static double round_cost_s(const struct hl_nlp_opts *nlp, const struct hl_void *vv, size_t nvv)
+{
+	double nv = 0, sum = 0;
+
+	for (size_t i = 0; i < nvv; i++) {
+		nv += (double)vv[i].nv;
+		sum += iter_cost_s((double)vv[i].nv);
+	}
+	return nlp->objective == HL_OBJ_STABILITY ? iter_cost_s(nv) : sum;
+}
+
+/* The work budget's share for the round's voids vv[0..nvv): every solve
+ * the same iteration cap, work_left_s (reference seconds) over the
+ * round's price per iteration (nlp->iter_cap; 0 = none where that is at
+ * least what the solver takes uncapped, max_iter x max_outer); under
+ * HL_WORK_MIN_ITER none solves (nlp->iter_cap < 0: the voids keep their
+ * start).  Deterministic: the cap depends on the voids' sizes and the work
+ * done before, not on time or the order solves finish. */
+static void work_cap(struct hl_nlp_opts *nlp, const struct hl_void *vv, size_t nvv,
+		     double work_left_s)
+{
+	double per = round_cost_s(nlp, vv, nvv), cap,
+	       most = (double)nlp->max_iter * nlp->max_outer;
+
+	cap = per > 0 ? floor(work_left_s / per) : most;
+	nlp->iter_cap = cap >= most ? 0 : cap < HL_WORK_MIN_ITER ? -1 : (int)cap;
+}
+
+/* The work the round's solves did (reference seconds): each problem's
+ * iterations at its price (stability: one problem, the same iterations
+ * on every void). */
+static double work_done_s(const struct hl_nlp_opts *nlp, const struct hl_void *vv, size_t nvv)
+{
+	double w = 0;
+
+	if (nvv == 0)
+		return 0;
+	if (nlp->objective == HL_OBJ_STABILITY)
+		return round_cost_s(nlp, vv, nvv) * vv[0].iterations;
+	for (size_t i = 0; i < nvv; i++)
+		w += iter_cost_s((double)vv[i].nv) * vv[i].iterations;
+	return w;
+}
+
+/* The round's solves met the work budget's cap: none ran, or one used
+ * every iteration it was allowed (hl_nlp_solve stops a solve one short
+ * of the cap: max_iter m makes m + 1 callbacks). */
+static int work_capped(const struct hl_nlp_opts *nlp, const struct hl_void *vv, size_t nvv)
+{
+	if (nlp->iter_cap < 0)
+		return nvv > 0;
+	for (size_t i = 0; nlp->iter_cap > 0 && i < nvv; i++)
+		if (vv[i].iterations >= nlp->iter_cap - 1)
+			return 1;
+	return 0;
+}
+
 int hl_opt_run(const struct mesh *part, const struct hl_opt_params *c, struct progress *prog,
 	       struct mesh **out, struct hl_opt_stats *st, struct err *e)
 {
@@ -758,7 +836,7 @@ int hl_opt_run(const struct mesh *part, const struct hl_opt_params *c, struct pr
 	int *sj = NULL;
 	int rc = 0, m, mmax, stack_count, nslices, ncand;
 	size_t tmax = 0;
-	double thin_mm;
+	double thin_mm, work_left_s = 0;
 
 	*out = NULL;
 	memset(st, 0, sizeof *st);
@@ -803,6 +881,7 @@ int hl_opt_run(const struct mesh *part, const struct hl_opt_params *c, struct pr
 	nlp.max_iter = 400;
 	nlp.max_outer = 4;
 	nlp.deadline_s = c->optimise_s > 0 ? progress_now_s() + c->optimise_s : 0;
+	work_left_s = c->optimise_work;
 	nlp.objective = stab ? HL_OBJ_STABILITY : HL_OBJ_LIGHTWEIGHT;
 	nlp.light_weight = c->light_weight;
 	if (stab) {
@@ -828,6 +907,10 @@ int hl_opt_run(const struct mesh *part, const struct hl_opt_params *c, struct pr
 			st->budget_spent = 1;
 			break;
 		}
+		if (c->optimise_work > 0 && work_left_s <= 0) {
+			st->work_spent = 1;
+			break;
+		}
 		if (prog) {
 			rc = progress_update(prog, f0, e);
 			if (rc)
@@ -850,10 +933,18 @@ int hl_opt_run(const struct mesh *part, const struct hl_opt_params *c, struct pr
 			nlp.com_xy[0] = cs[0];
 			nlp.com_xy[1] = cs[1];
 		}
+		if (c->optimise_work > 0)
+			work_cap(&nlp, vv, nvv, work_left_s);
 		t0 = progress_now_s();
 		rc = hl_solve_round(vv, nvv, &nlp, c->threads, prog, f0 + 0.2 * (f1 - f0), f1, e);
 		st->s_solve += progress_now_s() - t0;
 		st->budget_spent |= nlp.deadline_s > 0 && progress_now_s() >= nlp.deadline_s;
+		st->work_spent |= work_capped(&nlp, vv, nvv);
+		{
+			double w = work_done_s(&nlp, vv, nvv);
+			work_left_s -= w;
+			st->work_s += w;
+		}
 		if (!rc) {
 			t0 = progress_now_s();
 			rc = keep_voids(c, vv, nvv, &nlp, res, st, &kept, e);

@@ -125,10 +125,11 @@ static void slot_deliver(struct slot *s, struct hl_void *v)
 	v->ceil_eps_mm2 = h.ceil_eps_mm2;
 }
 
-/* The time budget is spent (Ipopt's own limit stops a running solve). */
-static int past_deadline(const struct hl_nlp_opts *o)
+/* No solve may start: the time budget is spent (Ipopt's own limit stops
+ * a running solve) or the work budget left no iterations. */
+static int budget_out(const struct hl_nlp_opts *o)
 {
-	return o->deadline_s > 0 && progress_now_s() >= o->deadline_s;
+	return o->iter_cap < 0 || (o->deadline_s > 0 && progress_now_s() >= o->deadline_s);
 }
 
 static int solve_forked(struct hl_void *v, size_t n, const size_t *order,
@@ -152,7 +153,7 @@ static int solve_forked(struct hl_void *v, size_t n, const size_t *order,
 			struct hl_void *V = &v[order[next]];
 			if (sl[i].pid > 0)
 				continue;
-			if (past_deadline(o)) {
+			if (budget_out(o)) {
 				for (; next < n; next++, done++)
 					v[order[next]].status = HL_STATUS_UNSOLVED;
 				break;
@@ -246,7 +247,7 @@ int hl_solve_round(struct hl_void *v, size_t n, const struct hl_nlp_opts *o, int
 	if (n == 0)
 		return 0;
 	if (o->objective == HL_OBJ_STABILITY) {
-		if (past_deadline(o))
+		if (budget_out(o))
 			for (size_t i = 0; i < n; i++)
 				v[i].status = HL_STATUS_UNSOLVED;
 		else
@@ -266,7 +267,7 @@ int hl_solve_round(struct hl_void *v, size_t n, const struct hl_nlp_opts *o, int
 			rc = solve_forked(v, n, order, o, threads, prog, f0, f1, e);
 		} else {
 			for (size_t i = 0; i < n && !rc; i++) {
-				if (past_deadline(o)) {
+				if (budget_out(o)) {
 					v[order[i]].status = HL_STATUS_UNSOLVED;
 					continue;
 				}

@@ -170,9 +170,65 @@ static void test_box_roof_uneven(void)
 		hl_loop_fini(&L[k]);
 }
 
+/* The work budget's cap (hl_nlp_opts.iter_cap): a solve stops at the cap
+ * (the vault takes more uncapped), a capped solve repeated is the same
+ * point (nothing depends on time), and a round with no iterations left
+ * solves nothing: its void keeps its support-free start. */
+static void test_iteration_cap(void)
+{
+	enum { NS = 20 };
+	struct hl_loop L[NS];
+	const struct hl_loop *lp[NS];
+	struct hl_void v, w;
+	struct hl_nlp_opts o;
+	struct hl_check c;
+	struct err e;
+	size_t used;
+	double h = 0.5, s = 0.5 * h * tan(M_PI / 4), *first;
+	int free_it;
+
+	for (int k = 0; k < NS; k++) {
+		rect_loop(&L[k], 0, 0, 10, 10, s, 0.25 + h * k, k);
+		lp[k] = &L[k];
+	}
+	hl_void_init(&v);
+	hl_void_init(&w);
+	err_clear(&e);
+	REQUIRE_OK(hl_void_build(lp, NS, NULL, &v, &used, &e), &e);
+	REQUIRE_OK(hl_void_build(lp, NS, NULL, &w, &used, &e), &e);
+	opts_init(&o, 45);
+	REQUIRE_OK(hl_nlp_solve(&v, 1, &o, &e), &e);
+	free_it = v.iterations;
+	fprintf(stderr, "vault uncapped: %d iterations\n", free_it);
+	CHECK_NUM(free_it, >, 24);
+	o.iter_cap = 20;
+	REQUIRE_OK(hl_nlp_solve(&v, 1, &o, &e), &e);
+	CHECK_NUM(v.iterations, <=, 20);
+	CHECK_NUM(v.iterations, >=, 19);
+	first = mem_alloc(v.nv * sizeof *first);
+	memcpy(first, v.l, v.nv * sizeof *first);
+	REQUIRE_OK(hl_nlp_solve(&v, 1, &o, &e), &e);
+	for (size_t j = 0; j < v.nv; j++)
+		CHECK_NEAR(v.l[j], first[j], 0);
+	mem_free(first);
+	/* none left: the start, support-free, no iteration */
+	o.iter_cap = -1;
+	REQUIRE_OK(hl_solve_round(&w, 1, &o, 1, NULL, 0, 1, &e), &e);
+	CHECK_EQ_INT(w.iterations, 0);
+	CHECK_EQ_INT(w.status, HL_STATUS_FALLBACK);
+	hl_void_check(&w, w.l, M_PI / 4, 1e-3, &c);
+	CHECK(c.worst_face <= 1e-4);
+	CHECK(c.worst_edge_mm <= 1e-3);
+	hl_void_fini(&v);
+	hl_void_fini(&w);
+	for (int k = 0; k < NS; k++)
+		hl_loop_fini(&L[k]);
+}
+
 int main(void)
 {
 	RUN(test_box_roof);
 	RUN(test_box_roof_uneven);
+	RUN(test_iteration_cap);
 	return harness_report();
 }
