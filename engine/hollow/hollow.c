@@ -122,10 +122,11 @@ static const struct param_desc hollow_desc[] = {
 	 .offset = offsetof(struct hollow_params, optimise_work), .min = 0, .max = 86400,
 	 .def = HOLLOW_WORK_REF_S, .unit = "ref s",
 	 .help = "Work budget of the optimisation rounds, in reference seconds: solver iterations "
-		 "priced by a fixed formula of the problem's size (about a second each on the "
-		 "project's 2-core machine, docs/hollow.md). The voids of a round share what is "
-		 "left as one iteration cap each, and no round starts once it is spent, so the "
-		 "result does not depend on the machine, its load or the threads. 0 = no limit."},
+		 "priced by a fixed formula of the problem's size, about seconds on the project's "
+		 "2-core machine (docs/hollow.md). Every void of a round gets the same iteration "
+		 "cap from what is left, and no round starts after one the budget cut, so the "
+		 "result does not depend on the machine's speed, its load or the threads. "
+		 "0 = no limit."},
 	{.name = "optimise_s", .type = PARAM_NUM,
 	 .offset = offsetof(struct hollow_params, optimise_s), .min = 0, .max = 86400,
 	 .def = HOLLOW_GUARD_S, .unit = "s",

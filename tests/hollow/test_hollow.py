@@ -320,6 +320,10 @@ class HollowTest(unittest.TestCase):
         for h in (a, b):
             self.assertTrue(h["work_spent"], h)
             self.assertLessEqual(h["solver_work"], budget)
+            # solved up to the cap, not skipped (a cap under 20 iterations
+            # would solve nothing, and the layers would agree trivially)
+            self.assertGreater(h["solver_work"], budget / 2)
+            self.assertGreater(h["solver_iterations"], 0)
             self.assertLess(h["solver_iterations"], free["solver_iterations"])
             # support-free on the polygons the layers are drawn from (the
             # capped optima fail their check and the voids keep their

@@ -65,6 +65,7 @@ struct nlp {
 	int stab;
 	double lenscale;
 	int iterations;
+	int capped; /* the work budget's cap (o->iter_cap) cut the solve */
 	int cancelled;
 };
 
@@ -625,6 +626,11 @@ static Bool cb_iter(Index alg_mod, Index iter, Number obj, Number inf_pr, Number
 		P->cancelled = 1;
 		return FALSE;
 	}
+	/* the work budget's cap (restoration phases add callbacks max_iter misses) */
+	if (P->o->iter_cap > 0 && P->iterations >= P->o->iter_cap) {
+		P->capped = 1;
+		return FALSE;
+	}
 	/* the time budget is wall-clock; max_cpu_time counts CPU seconds,
 	 * which fall behind the wall when the cores are shared (Ipopt 3.11
 	 * has no max_wall_time): stop here, the point reached is checked
@@ -823,15 +829,15 @@ static void aux_from(struct nlp *P, double *x)
 	x[G + 2] = f * My;
 }
 
-/* Ipopt's max_cpu_time (s) for one solve: 600, or what is left of the
- * time budget (at least 0.5 s: Ipopt needs a positive limit; the caller
- * does not start a solve past the deadline). */
+/* Ipopt's max_cpu_time (s) for one solve: without a time budget none (1e6:
+ * a clock would tie the result to the machine), else what is left of it,
+ * 0.5-600 s (the caller does not start a solve past the deadline). */
 static double cpu_limit_s(const struct hl_nlp_opts *o)
 {
 	double left;
 
 	if (!(o->deadline_s > 0))
-		return 600;
+		return 1e6;
 	left = o->deadline_s - progress_now_s();
 	return left < 0.5 ? 0.5 : left > 600 ? 600 : left;
 }
@@ -930,12 +936,11 @@ int hl_nlp_solve(struct hl_void *v, size_t n, const struct hl_nlp_opts *o, struc
 	gate_edges(&P, x, INFINITY);
 	pthread_mutex_lock(&ipopt_lock);
 	for (outer = 1; outer <= o->max_outer; outer++) {
-		/* the cap counts intermediate callbacks: max_iter m makes at most
-		 * m + 1 of them (the starting point's too) */
-		int max_iter = o->max_iter;
-		if (o->iter_cap > 0) {
+		int max_iter = o->max_iter; /* m makes <= m + 1 callbacks */
+		if (o->iter_cap != 0) { /* < 0: none left, the start stays */
 			int left = o->iter_cap - P.iterations - 1;
 			if (left < 1) {
+				P.capped = 1;
 				outer--; /* this round did not run */
 				break;
 			}
@@ -944,6 +949,10 @@ int hl_nlp_solve(struct hl_void *v, size_t n, const struct hl_nlp_opts *o, struc
 		}
 		rc = solve_once(&P, x, max_iter, &st, e);
 		if (rc)
+			break;
+		if (st == Maximum_Iterations_Exceeded && max_iter < o->max_iter)
+			P.capped = 1;
+		if (P.capped)
 			break;
 		/* eq. 5's sign gate at the new point: add newly facing-down edges;
 		 * solve again only if one of them is violated (and time is left) */
@@ -971,6 +980,7 @@ int hl_nlp_solve(struct hl_void *v, size_t n, const struct hl_nlp_opts *o, struc
 			mem_free(v[i].l);
 			v[i].l = l;
 			v[i].iterations = P.iterations;
+			v[i].capped = P.capped;
 			v[i].outer = outer > o->max_outer ? o->max_outer : outer;
 			v[i].seconds = progress_now_s() - t0;
 			hl_void_check(&v[i], l, o->alpha_rad, o->gate_tau, &c);

@@ -127,7 +127,7 @@ struct hl_void {
 	double *start;        /* nv: support-free start (restrip.c), NULL: start.c's sweep */
 	/* solver record */
 	int status;           /* 0 solved; < 0 failed (void dropped) */
-	int iterations;
+	int iterations, capped; /* capped: the work budget's iter_cap cut it */
 	int outer;            /* sign-gating rounds (eq. 5) */
 	double seconds;
 	double ceil_eps_mm2;  /* eq. 6 bound used for the top loop */

@@ -782,15 +782,16 @@ static double round_cost_s(const struct hl_nlp_opts *nlp, const struct hl_void *
 /* The work budget's share for the round's voids vv[0..nvv): every solve
  * the same iteration cap, work_left_s (reference seconds) over the
  * round's price per iteration (nlp->iter_cap; 0 = none where that is at
- * least what the solver takes uncapped, max_iter x max_outer); under
- * HL_WORK_MIN_ITER none solves (nlp->iter_cap < 0: the voids keep their
- * start).  Deterministic: the cap depends on the voids' sizes and the work
- * done before, not on time or the order solves finish. */
+ * least the most callbacks the solver makes uncapped, (max_iter + 1) x
+ * max_outer); under HL_WORK_MIN_ITER none solves (nlp->iter_cap < 0: the
+ * voids keep their start).  Deterministic: the cap depends on the voids'
+ * sizes and the work done before, not on time or the order solves
+ * finish. */
 static void work_cap(struct hl_nlp_opts *nlp, const struct hl_void *vv, size_t nvv,
 		     double work_left_s)
 {
 	double per = round_cost_s(nlp, vv, nvv), cap,
-	       most = (double)nlp->max_iter * nlp->max_outer;
+	       most = (nlp->max_iter + 1.0) * nlp->max_outer;
 
 	cap = per > 0 ? floor(work_left_s / per) : most;
 	nlp->iter_cap = cap >= most ? 0 : cap < HL_WORK_MIN_ITER ? -1 : (int)cap;
@@ -812,15 +813,14 @@ static double work_done_s(const struct hl_nlp_opts *nlp, const struct hl_void *v
 	return w;
 }
 
-/* The round's solves met the work budget's cap: none ran, or one used
- * every iteration it was allowed (hl_nlp_solve stops a solve one short
- * of the cap: max_iter m makes m + 1 callbacks). */
+/* The round's solves met the work budget's cap: none could start, or
+ * the cap cut one (hl_nlp_solve's record). */
 static int work_capped(const struct hl_nlp_opts *nlp, const struct hl_void *vv, size_t nvv)
 {
 	if (nlp->iter_cap < 0)
 		return nvv > 0;
 	for (size_t i = 0; nlp->iter_cap > 0 && i < nvv; i++)
-		if (vv[i].iterations >= nlp->iter_cap - 1)
+		if (vv[i].capped)
 			return 1;
 	return 0;
 }
@@ -907,10 +907,6 @@ int hl_opt_run(const struct mesh *part, const struct hl_opt_params *c, struct pr
 			st->budget_spent = 1;
 			break;
 		}
-		if (c->optimise_work > 0 && work_left_s <= 0) {
-			st->work_spent = 1;
-			break;
-		}
 		if (prog) {
 			rc = progress_update(prog, f0, e);
 			if (rc)
@@ -957,6 +953,8 @@ int hl_opt_run(const struct mesh *part, const struct hl_opt_params *c, struct pr
 			break;
 		st->voids += kept;
 		st->rounds = r;
+		if (st->work_spent)
+			break; /* the budget cut this round: no later round starts */
 	}
 	*out = res;
 	res = NULL;

@@ -28,7 +28,7 @@
 
 /* What a worker sends back before its nv offsets. */
 struct wire_head {
-	int rc, status, iterations, outer;
+	int rc, status, iterations, capped, outer;
 	double seconds, volume_mm3, ceil_eps_mm2;
 	size_t nv;
 	char msg[200];
@@ -63,6 +63,7 @@ static void worker(int fd, struct hl_void *v, const struct hl_nlp_opts *o)
 	h.rc = hl_nlp_solve(v, 1, &oo, &e);
 	h.status = v->status;
 	h.iterations = v->iterations;
+	h.capped = v->capped;
 	h.outer = v->outer;
 	h.seconds = v->seconds;
 	h.volume_mm3 = v->volume_mm3;
@@ -119,6 +120,7 @@ static void slot_deliver(struct slot *s, struct hl_void *v)
 	memcpy(v->l, s->buf + sizeof h, v->nv * sizeof *v->l);
 	v->status = h.status;
 	v->iterations = h.iterations;
+	v->capped = h.capped;
 	v->outer = h.outer;
 	v->seconds = h.seconds;
 	v->volume_mm3 = h.volume_mm3;
