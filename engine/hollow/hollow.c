@@ -596,6 +596,7 @@ static int hollow_metrics(void *state, struct metrics *m, struct err *e)
 	rc |= metrics_int(m, "hollow.voids_fallback", (long long)o->voids_fallback);
 	rc |= metrics_int(m, "hollow.groups_failed", (long long)o->opt.groups_failed);
 	rc |= metrics_int(m, "hollow.groups_small", (long long)o->opt.groups_small);
+	rc |= metrics_int(m, "hollow.groups_unbuilt", (long long)o->opt.groups_unbuilt);
 	rc |= metrics_int(m, "hollow.voids_too_close", (long long)o->opt.voids_too_close);
 	rc |= metrics_num(m, "hollow.optimised_volume_mm3", o->opt.volume_mm3);
 	rc |= metrics_num(m, "hollow.fill_alone_volume_mm3", o->fill_alone_mm3);

@@ -306,9 +306,10 @@ static void empty_note(const struct hl_config *c, struct hl_outcome *o)
 		snprintf(o->note, sizeof o->note,
 			 "the optimiser kept no void: %zu loops inside the wall, no support-free "
 			 "void >= min_void_mm3 %g between them (%zu smaller, %zu failed, %zu too "
-			 "close); fill=true hollows the interior; the part is returned unchanged",
+			 "close, %zu runs of loops no support-free strip could join); fill=true "
+			 "hollows the interior; the part is returned unchanged",
 			 o->opt.loops, c->opt.min_void_mm3, o->opt.groups_small,
-			 o->opt.groups_failed, o->opt.voids_too_close);
+			 o->opt.groups_failed, o->opt.voids_too_close, o->opt.groups_unbuilt);
 		return;
 	}
 	snprintf(o->note, sizeof o->note,

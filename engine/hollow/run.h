@@ -49,7 +49,7 @@ struct hl_outcome {
 	size_t voids_dropped_for_fill;
 	struct hl_fill fill;      /* top-down fill; empty when off */
 	double s_fill;            /* seconds in the fill */
-	char note[256];           /* "" or why nothing was hollowed */
+	char note[384];           /* "" or why nothing was hollowed */
 	/* stability */
 	int has_com;
 	double com_before_mm;     /* signed distance to the contact hull, > 0 inside */

@@ -73,6 +73,8 @@ struct hl_opt_stats {
 	size_t groups_failed;     /* optimised groups dropped (check failed, or a
 				   * flat top wider than the print layers bridge) */
 	size_t groups_small;      /* dropped: below min_void_mm3 */
+	size_t groups_unbuilt;    /* runs of a chain no support-free strip joined
+				   * (their top pair fails: docs/hollow.md limit 1) */
 	size_t voids_too_close;   /* dropped: within wall_next_mm of a larger void */
 	size_t voids_against_com; /* stability: dropped because they moved the centre
 				   * of mass away from the target */

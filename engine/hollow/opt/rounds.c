@@ -201,6 +201,7 @@ struct chain_ctx {
 	int smooth_passes;        /* > 0: a void that ends early is tried smoothed */
 	struct hl_void *vv;
 	size_t nvv, vcap;
+	size_t unbuilt;           /* runs of loops no void could be made of */
 };
 
 /* Section 6's P -> P~ where the paper applies it, at contours whose
@@ -298,6 +299,7 @@ static int chain_voids(struct chain_ctx *x, const struct hl_loop **chain, size_t
 			x->vv[x->nvv++] = V;
 		} else {
 			hl_void_fini(&V);
+			x->unbuilt++;
 		}
 		if (first > 0) {
 			/* the chain below ends at the highest loop at least
@@ -504,7 +506,7 @@ static int round_voids(const struct round_in *in, struct hl_opt_stats *o, struct
 		struct hl_block blk = {blocked, &bx};
 		const struct hl_loop **chain = mem_alloc(((size_t)nslices + 1) * sizeof *chain);
 		struct chain_ctx cx = {&blk, hl_reach_slope(in->nlp->alpha_rad), c->wall_next_mm,
-				       c->smooth_passes, vv, nvv, vcap};
+				       c->smooth_passes, vv, nvv, vcap, 0};
 		if (!chain)
 			goto nomem;
 		for (int k = 0; k < nslices; k++)
@@ -522,6 +524,7 @@ static int round_voids(const struct round_in *in, struct hl_opt_stats *o, struct
 		vv = cx.vv;
 		nvv = cx.nvv;
 		vcap = cx.vcap;
+		o->groups_unbuilt += cx.unbuilt;
 		if (rc) {
 			mem_free(chain);
 			goto out;
