@@ -260,6 +260,10 @@ enum MHD_Result api_cors_preflight(struct api_req *r, const char *allow);
 /* Uploads (meshes.c): called by the server as the body streams in. */
 enum MHD_Result api_upload_begin(struct api_req *r);
 int api_upload_feed(struct api_req *r, const char *data, size_t len);
+/* Close and remove the upload's temp file (idempotent; none once published).
+ * api_queue calls it before queuing any refusal of an upload, so a client
+ * that read the refusal finds nothing left (api_upload_free runs after). */
+void api_upload_discard(struct upload *u);
 void api_upload_free(struct upload *u);
 
 /* Group commit (committer.c): queue jn (copied) and park r; the

@@ -64,6 +64,8 @@ enum MHD_Result api_queue(struct api_req *r, unsigned status, struct MHD_Respons
 	 * slot while its head trickles in. */
 	if (r->srv->gate && api_gate_live(r->srv->gate) * 4 >= r->srv->cfg.max_connections * 3)
 		MHD_add_response_header(resp, MHD_HTTP_HEADER_CONNECTION, "close");
+	if (status >= 400 && r->upload)
+		api_upload_discard(r->upload); /* a refused upload leaves no file */
 	r->status = status;
 	ret = MHD_queue_response(r->conn, status, resp);
 	MHD_destroy_response(resp);

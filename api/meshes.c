@@ -68,11 +68,7 @@ static const char *format_of_name(const char *name)
 	return dot && format_valid(dot + 1) ? dot + 1 : NULL;
 }
 
-/* Close and remove the upload's temporary file (idempotent).  Called where
- * the upload is refused, before the refusal is answered: a client that has
- * read the answer finds nothing left behind (the request's own cleanup,
- * api_upload_free, runs only after the answer is sent). */
-static void upload_discard(struct upload *u)
+void api_upload_discard(struct upload *u)
 {
 	if (u->fd >= 0)
 		close(u->fd);
@@ -86,7 +82,7 @@ void api_upload_free(struct upload *u)
 {
 	if (!u)
 		return;
-	upload_discard(u);
+	api_upload_discard(u);
 	free(u);
 }
 
@@ -282,14 +278,12 @@ int api_upload_feed(struct api_req *r, const char *data, size_t len)
 			   "the upload would take the tenant past its storage quota of %lld bytes "
 			   "(%lld in use)",
 			   (long long)r->tenant.quota_bytes, (long long)r->tenant.used_bytes);
-		upload_discard(u);
 		return -1;
 	}
 	if (u->bytes > u->limit) {
 		/* Chunked or lying Content-Length: stop at the limit. */
 		api_reject(r, PROB_TOO_LARGE, "the upload exceeds this tenant's limit of %lld bytes",
 			   (long long)u->limit);
-		upload_discard(u);
 		return -1;
 	}
 	if (u->multipart) {
@@ -303,14 +297,12 @@ int api_upload_feed(struct api_req *r, const char *data, size_t len)
 				api_reject(r, PROB_BAD_REQUEST, "malformed multipart body: %s",
 					   u->mp.error);
 			}
-			upload_discard(u);
 			return -1;
 		}
 		return 0;
 	}
 	if (write_all(u, data, len)) {
 		api_reject(r, PROB_UNAVAILABLE, "cannot store the upload");
-		upload_discard(u);
 		return -1;
 	}
 	return 0;
@@ -325,32 +317,23 @@ enum MHD_Result api_mesh_upload(struct api_req *r)
 	struct err e;
 
 	if (u->multipart) {
-		/* refusals remove the temp file before they are answered */
-		if (multipart_finish(&u->mp)) {
-			upload_discard(u);
+		if (multipart_finish(&u->mp))
 			return api_problem(r, PROB_BAD_REQUEST, NULL, "malformed multipart body: %s",
 					   u->mp.error);
-		}
-		if (!u->files) {
-			upload_discard(u);
+		if (!u->files)
 			return api_problem(r, PROB_BAD_REQUEST, "file",
 					   "the multipart body has no part named 'file'");
-		}
-		if (!u->format[0]) {
-			upload_discard(u);
+		if (!u->format[0])
 			return api_problem(r, PROB_INVALID_PARAM, "format",
 					   "cannot tell the mesh format: name the file *.stl/.obj/.off/.ply "
 					   "or pass ?format=");
-		}
 	}
 	sha256_digest(&u->sha, SHA256_DIGEST_SIZE, digest);
 	db_sha256_hex(digest, u->sha_hex);
-	if (u->expect_sha[0] && strcmp(u->expect_sha, u->sha_hex) != 0) {
-		upload_discard(u);
+	if (u->expect_sha[0] && strcmp(u->expect_sha, u->sha_hex) != 0)
 		return api_problem(r, PROB_CHECKSUM, "sha256",
 				   "received %lld bytes with SHA-256 %s, expected %s",
 				   (long long)u->file_bytes, u->sha_hex, u->expect_sha);
-	}
 	close(u->fd);
 	u->fd = -1;
 	/* Readers pick binary/ASCII by content and use the extension as a
@@ -358,10 +341,8 @@ enum MHD_Result api_mesh_upload(struct api_req *r)
 	err_clear(&e);
 	if (db_make_id("m_", u->mesh_id, &e) ||
 	    snprintf(final_tmp, sizeof final_tmp, "%s.%s", u->tmp, u->format) >= (int)sizeof final_tmp ||
-	    rename(u->tmp, final_tmp) != 0) {
-		upload_discard(u);
+	    rename(u->tmp, final_tmp) != 0)
 		return api_problem(r, PROB_UNAVAILABLE, NULL, "cannot store the upload");
-	}
 	snprintf(u->tmp, sizeof u->tmp, "%s", final_tmp);
 	if (api_analyze_submit(r))
 		return MHD_NO;
@@ -492,7 +473,6 @@ void api_upload_complete(struct api_req *r)
 fail:
 	/* The reader names the temporary file; the client knows its own name. */
 	store_redact(detail, sizeof detail, s->cfg.store_dir, u->tmp, u->name);
-	upload_discard(u); /* before the answer is queued */
 	r->pending = api_problem_response_members(p, r->url, NULL, detail,
 						  api_problem_members(r, p), &r->pending_status);
 }
