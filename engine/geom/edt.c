@@ -19,8 +19,16 @@ void edt_scratch_fini(struct edt_scratch *s)
 	mem_free(s->z);
 	mem_free(s->v);
 	mem_free(s->a);
+	mem_free(s->tf);
+	mem_free(s->td);
+	mem_free(s->ta);
+	mem_free(s->tn);
 	memset(s, 0, sizeof *s);
 }
+
+/* Columns per block of the column pass: 16 floats are one 64-byte cache
+ * line of a row. */
+#define EDT_BLOCK 16
 
 /* 1D: d[q] = min_p (sp*(q-p))^2 + f[p] over n samples (f may be INF);
  * arg (may be NULL): arg[q] = that p (the lower p on ties), -1 when every
@@ -75,7 +83,11 @@ static int scratch_need(struct edt_scratch *s, size_t n, struct err *e)
 {
 	if (n + 1 <= s->cap)
 		return 0;
-	edt_scratch_fini(s);
+	mem_free(s->f);
+	mem_free(s->d);
+	mem_free(s->z);
+	mem_free(s->v);
+	mem_free(s->a);
 	s->f = mem_alloc((n + 1) * sizeof *s->f);
 	s->d = mem_alloc((n + 1) * sizeof *s->d);
 	s->z = mem_alloc((n + 2) * sizeof *s->z);
@@ -86,6 +98,29 @@ static int scratch_need(struct edt_scratch *s, size_t n, struct err *e)
 		return ERR_SET(e, ERR_NOMEM, "distance transform: out of memory");
 	}
 	s->cap = n + 1;
+	return 0;
+}
+
+/* Tiles for EDT_BLOCK columns of h samples. */
+static int tiles_need(struct edt_scratch *s, size_t h, struct err *e)
+{
+	size_t n = EDT_BLOCK * h;
+
+	if (n <= s->tcap)
+		return 0;
+	mem_free(s->tf);
+	mem_free(s->td);
+	mem_free(s->ta);
+	mem_free(s->tn);
+	s->tf = mem_alloc(n * sizeof *s->tf);
+	s->td = mem_alloc(n * sizeof *s->td);
+	s->ta = mem_alloc(n * sizeof *s->ta);
+	s->tn = mem_alloc(n * sizeof *s->tn);
+	if (!s->tf || !s->td || !s->ta || !s->tn) {
+		edt_scratch_fini(s);
+		return ERR_SET(e, ERR_NOMEM, "distance transform: out of memory");
+	}
+	s->tcap = n;
 	return 0;
 }
 
@@ -124,25 +159,42 @@ int edt_nearest_sq(const uint8_t *seed, size_t stride, int w, int h, double px_m
 			for (int x = 0; x < w; x++)
 				near[(size_t)y * (size_t)w + (size_t)x] = s->a[x];
 	}
-	/* columns: along y; the row chosen picks that row's column */
-	for (int x = 0; x < w; x++) {
-		for (int y = 0; y < h; y++)
-			s->f[y] = out[(size_t)y * (size_t)w + (size_t)x];
-		edt_1d(s->f, s->d, h, py_mm, s->v, s->z, near ? s->a : NULL);
-		for (int y = 0; y < h; y++)
-			out[(size_t)y * (size_t)w + (size_t)x] = s->d[y];
+	/* columns: along y, EDT_BLOCK columns at a time through the tiles;
+	 * the row chosen picks that row's column */
+	if (tiles_need(s, (size_t)h, e))
+		return ERR_NOMEM;
+	for (int x0 = 0; x0 < w; x0 += EDT_BLOCK) {
+		int nb = w - x0 < EDT_BLOCK ? w - x0 : EDT_BLOCK;
+		size_t H = (size_t)h;
+		for (int y = 0; y < h; y++) {
+			const float *o = out + (size_t)y * (size_t)w + (size_t)x0;
+			for (int b = 0; b < nb; b++)
+				s->tf[(size_t)b * H + (size_t)y] = o[b];
+		}
+		for (int b = 0; b < nb; b++)
+			edt_1d(s->tf + (size_t)b * H, s->td + (size_t)b * H, h, py_mm, s->v, s->z,
+			       near ? s->ta + (size_t)b * H : NULL);
+		for (int y = 0; y < h; y++) {
+			float *o = out + (size_t)y * (size_t)w + (size_t)x0;
+			for (int b = 0; b < nb; b++)
+				o[b] = s->td[(size_t)b * H + (size_t)y];
+		}
 		if (!near)
 			continue;
-		/* near[q][x] of every row q is read before row y is written:
-		 * stash the column in v (edt_1d is done with it) */
-		for (int y = 0; y < h; y++)
-			s->v[y] = near[(size_t)y * (size_t)w + (size_t)x];
+		/* every row's column of the row pass is read before any is
+		 * written: the block's columns of near go to tn first */
 		for (int y = 0; y < h; y++) {
-			int q = s->a[y];
-			near[(size_t)y * (size_t)w + (size_t)x] =
-				q < 0 || s->v[q] < 0
-					? -1
-					: (int32_t)((size_t)q * (size_t)w + (size_t)s->v[q]);
+			const int32_t *nr = near + (size_t)y * (size_t)w + (size_t)x0;
+			for (int b = 0; b < nb; b++)
+				s->tn[(size_t)b * H + (size_t)y] = nr[b];
+		}
+		for (int y = 0; y < h; y++) {
+			int32_t *nr = near + (size_t)y * (size_t)w + (size_t)x0;
+			for (int b = 0; b < nb; b++) {
+				int q = s->ta[(size_t)b * H + (size_t)y];
+				int32_t c = q < 0 ? -1 : s->tn[(size_t)b * H + (size_t)q];
+				nr[b] = c < 0 ? -1 : (int32_t)((size_t)q * (size_t)w + (size_t)c);
+			}
 		}
 	}
 	return 0;

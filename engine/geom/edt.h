@@ -20,6 +20,12 @@ struct edt_scratch {
 	double *z;
 	int *v, *a;
 	size_t cap;
+	/* the column pass works on EDT_BLOCK columns at a time, copied into
+	 * contiguous tiles (column-major: tile[b * h + y]) so that the image
+	 * is read and written a row at a time */
+	float *tf, *td;
+	int32_t *ta, *tn;
+	size_t tcap;
 };
 
 void edt_scratch_init(struct edt_scratch *s);

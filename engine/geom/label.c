@@ -27,32 +27,36 @@ int label_components8(const uint8_t *mask, int w, int h, int32_t *lab, int32_t *
 	int32_t *par = NULL, next = 1;
 	size_t cap = 0;
 
-	/* first pass: provisional labels from the W, NW, N, NE neighbours */
-	for (int y = 0; y < h; y++)
+	/* first pass: provisional labels from the W, NW, N, NE neighbours.
+	 * N touches the other three (8-connected), so when N is labelled
+	 * they already share its set; else NW touches W, and only NE can
+	 * join another set (to NW's or W's) */
+	for (int y = 0; y < h; y++) {
+		const uint8_t *m = mask + (size_t)y * (size_t)w;
+		int32_t *l = lab + (size_t)y * (size_t)w;
+		const int32_t *u = y > 0 ? l - w : NULL; /* the row above */
 		for (int x = 0; x < w; x++) {
-			size_t i = (size_t)y * (size_t)w + (size_t)x;
-			int32_t best = 0;
-			static const int dx[4] = {-1, -1, 0, 1}, dy[4] = {0, -1, -1, -1};
-			lab[i] = 0;
-			if (!mask[i])
+			int32_t n = 0, nw = 0, ne = 0, wl = x > 0 ? l[x - 1] : 0, best;
+			l[x] = 0;
+			if (!m[x])
 				continue;
-			for (int q = 0; q < 4; q++) {
-				int xx = x + dx[q], yy = y + dy[q];
-				int32_t l;
-				if (xx < 0 || xx >= w || yy < 0)
-					continue;
-				l = lab[(size_t)yy * (size_t)w + (size_t)xx];
-				if (!l)
-					continue;
-				if (!best) {
-					best = l;
-				} else {
-					int32_t a = uf_root(par, best), b = uf_root(par, l);
+			if (u) {
+				n = u[x];
+				nw = x > 0 ? u[x - 1] : 0;
+				ne = x + 1 < w ? u[x + 1] : 0;
+			}
+			if (n) {
+				best = n;
+			} else if (nw || wl) {
+				best = nw ? nw : wl;
+				if (ne) {
+					int32_t a = uf_root(par, best), b = uf_root(par, ne);
 					if (a != b)
 						par[a > b ? a : b] = a < b ? a : b;
 				}
-			}
-			if (!best) {
+			} else if (ne) {
+				best = ne;
+			} else {
 				void *arr = par;
 				if (next == INT32_MAX ||
 				    mem_grow(&arr, &cap, (size_t)next + 1, sizeof *par)) {
@@ -65,8 +69,9 @@ int label_components8(const uint8_t *mask, int w, int h, int32_t *lab, int32_t *
 				par[next] = next;
 				best = next++;
 			}
-			lab[i] = best;
+			l[x] = best;
 		}
+	}
 	/* second pass: roots, renumbered 1..count */
 	{
 		int32_t c = 0;

@@ -423,6 +423,28 @@ int verify_layer(struct verify *v, const struct raster *r, struct err *e)
 	return verify_layer_ref(v, r, NULL, e);
 }
 
+/* First x in row[0..w) with row[x] >= thr (thr >= 1), or -1: zero bytes
+ * are skipped eight at a time (most of a layer image is empty). */
+static int row_first_at_least(const uint8_t *row, int w, int thr)
+{
+	int x = 0;
+
+	for (;;) {
+		uint64_t word;
+		while (x + 8 <= w) {
+			memcpy(&word, row + x, sizeof word);
+			if (word)
+				break;
+			x += 8;
+		}
+		if (x >= w)
+			return -1;
+		for (int end = x + 8 < w ? x + 8 : w; x < end; x++)
+			if (row[x] >= thr)
+				return x;
+	}
+}
+
 int verify_layer_ref(struct verify *v, const struct raster *r, const struct raster *ref,
 		     struct err *e)
 {
@@ -476,16 +498,20 @@ int verify_layer_ref(struct verify *v, const struct raster *r, const struct rast
 		pc->w = 0;
 	verify_subpx_fits_reset(&c->fits);
 	v->cur_first = (uint32_t)v->nuf;
-	/* solid bounding box of this layer */
+	/* solid bounding box of this layer: each row's first and last solid
+	 * pixel, the stretch between them unread */
 	for (int y = 0; y < r->h; y++) {
 		const uint8_t *row = r->px + (size_t)y * r->stride;
-		for (int x = 0; x < r->w; x++)
-			if (row[x] >= v->p.threshold) {
-				x0 = x < x0 ? x : x0;
-				x1 = x > x1 ? x : x1;
-				y0 = y < y0 ? y : y0;
-				y1 = y > y1 ? y : y1;
-			}
+		int a = row_first_at_least(row, r->w, v->p.threshold), b;
+		if (a < 0)
+			continue;
+		b = r->w - 1;
+		while (row[b] < v->p.threshold)
+			b--;
+		x0 = a < x0 ? a : x0;
+		x1 = b > x1 ? b : x1;
+		y0 = y < y0 ? y : y0;
+		y1 = y;
 	}
 	c->sx0 = x0;
 	c->sy0 = y0;
