@@ -76,7 +76,10 @@ static void check_image(const uint8_t *seed, int w, int h, double px, double py,
 
 static void test_random_images(void)
 {
-	static const int size[][2] = {{1, 1}, {1, 17}, {23, 1}, {31, 19}, {40, 40}, {64, 37}};
+	/* widths across the column pass's blocks of 16: one partial block,
+	 * whole blocks, whole blocks and a partial one (101, 16 x 6 + 5) */
+	static const int size[][2] = {{1, 1},  {1, 17},  {23, 1}, {31, 19},
+				      {40, 40}, {64, 37}, {101, 9}, {16, 70}};
 	static const int permille[] = {0, 1, 20, 300, 950};
 	struct edt_scratch s;
 
