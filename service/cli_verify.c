@@ -1,6 +1,6 @@
 /* cli_verify.c - `infilld verify ARCHIVE [--alpha-deg A] [--layer-mm H]
  * [--pixel-mm P] [--tolerance-px T] [--solid SOLID_ARCHIVE] [--strict |
- * --strict-all]`: check a written
+ * --strict-all] [--threads N]`: check a written
  * SL1/SL1S/zip layer stack for interior overhangs, floating islands and
  * wall thickness (engine/verify/, docs/verify.md) and print the report as
  * JSON.  Works on any producer's archive; it knows nothing of the engine
@@ -10,7 +10,8 @@
  * overhang and no island over an enclosed void (islands_interior; with
  * --solid, islands_added); the part's own islands (islands_part) need
  * external supports whatever fills it and are reported apart
- * (`part_needs_supports`).  Exit 0 when checked (--strict: 3 when not
+ * (`part_needs_supports`).  --threads: threads for the distance
+ * transforms (1 by default; the report does not depend on it).  Exit 0 when checked (--strict: 3 when not
  * printable; --strict-all: 3 also when the part needs supports), 1 on
  * errors, 2 on usage errors. */
 #include <errno.h>
@@ -81,6 +82,23 @@ int cmd_verify(int argc, char **argv)
 		} else if (!strcmp(a, "--tolerance-px")) {
 			slot = &vp.tolerance_px;
 			hi = 10;
+		} else if (!strcmp(a, "--threads")) {
+			char *end;
+			long t;
+			if (++i >= argc) {
+				fprintf(stderr, "infilld verify: %s needs a value\n", a);
+				return 2;
+			}
+			errno = 0;
+			t = strtol(argv[i], &end, 10);
+			if (*end || errno || t < 1 || t > 64) {
+				fprintf(stderr,
+					"infilld verify: --threads wants a whole number 1..64, not '%s'\n",
+					argv[i]);
+				return 2;
+			}
+			vp.threads = (int)t;
+			continue;
 		} else if (a[0] == '-') {
 			fprintf(stderr, "infilld verify: unknown option '%s'\n", a);
 			return 2;

@@ -22,7 +22,7 @@ static const struct command commands[] = {
 	{"engines", cmd_engines, "engines                              (JSON: engines and parameters)"},
 	{"verify", cmd_verify,
 	 "verify ARCHIVE [--alpha-deg A] [--layer-mm H] [--pixel-mm P] [--tolerance-px T]\n"
-	 "       [--solid SOLID] [--strict | --strict-all]\n"
+	 "       [--solid SOLID] [--strict | --strict-all] [--threads N]\n"
 	 "              (JSON: interior overhangs, floating islands, walls of an SL1/zip stack)"},
 	{"fea", cmd_fea,
 	 "fea INPUT [--loads FILE.json] [--printer NAME] [--set KEY=VALUE]... [--out-vtk FILE.vti]\n"

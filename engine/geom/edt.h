@@ -14,18 +14,30 @@
 
 struct err;
 
-/* Reusable scratch for edt_sq(); edt_scratch_fini() frees. */
-struct edt_scratch {
+/* Most threads one transform runs on (edt_scratch.threads). */
+#define EDT_LANES 8
+
+/* One thread's buffers: a line (f, d, z, v, a; cap samples) and the
+ * column pass's tiles (EDT_BLOCK columns copied column-major, tile[b * h
+ * + y], so the image is read and written a row at a time; tcap floats). */
+struct edt_lane {
 	float *f, *d;
 	double *z;
 	int *v, *a;
 	size_t cap;
-	/* the column pass works on EDT_BLOCK columns at a time, copied into
-	 * contiguous tiles (column-major: tile[b * h + y]) so that the image
-	 * is read and written a row at a time */
 	float *tf, *td;
 	int32_t *ta, *tn;
 	size_t tcap;
+};
+
+/* Reusable scratch for edt_sq(); edt_scratch_fini() frees.  threads: how
+ * many threads edt_sq() and edt_nearest_sq() may use (0 or 1 after
+ * edt_scratch_init: the caller's alone; at most EDT_LANES): rows, then
+ * blocks of columns, are shared out, and every output is computed as on
+ * one thread, so the result does not depend on it. */
+struct edt_scratch {
+	struct edt_lane lane[EDT_LANES];
+	int threads;
 };
 
 void edt_scratch_init(struct edt_scratch *s);

@@ -224,6 +224,7 @@ static void verify_params_of(const struct hollow_state *s, struct verify_params 
 	memset(vp, 0, sizeof *vp);
 	vp->layer_mm = s->layer_mm;
 	vp->alpha_deg = s->alpha_deg;
+	vp->threads = s->cfg.opt.threads;
 	if (s->map)
 		map_pitch(s->map, &vp->pixel_x_mm, &vp->pixel_y_mm);
 	else if (s->own_is_printer)

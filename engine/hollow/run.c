@@ -38,6 +38,7 @@ static void fill_params(const struct hl_config *c, struct hl_fill_params *p)
 	p->min_void_mm3 = c->opt.min_void_mm3;
 	p->lean = c->fill_lean;
 	p->map = c->fill_map;
+	p->threads = c->opt.threads;
 }
 
 /* Standing fill: at most this many passes of the half-plane's fixed
@@ -200,6 +201,8 @@ static int fill_stage(const struct mesh *part, const struct hl_config *c,
 	int rc, have_alone = 0;
 
 	fill_params(c, &fp);
+	if (both && c->opt.threads >= 2)
+		fp.threads = c->opt.threads / 2; /* two fills side by side share them */
 	if (both && c->opt.threads >= 2 && (aj = mem_calloc(1, sizeof *aj)) != NULL) {
 		struct progress_hooks hk = {NULL, alone_cancelled, aj};
 		aj->part = part;

@@ -145,6 +145,7 @@ int verify_new(const struct verify_params *p, struct verify **out, struct err *e
 	v->cur = &v->b;
 	edt_scratch_init(&v->es);
 	verify_between_init(&v->vb);
+	v->es.threads = v->vb.es.threads = p->threads;
 	verify_fins_init(&v->vf);
 	v->r.worst_layer = -1;
 	v->r.first_island_layer = -1;

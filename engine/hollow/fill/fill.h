@@ -41,6 +41,8 @@ struct hl_fill_params {
 	 * only where keep[0] x + keep[1] y < keep[2] (stability) */
 	int keep_set;
 	double keep[3];
+	int threads;         /* threads the distance transforms may use (<= 1: one;
+			      * the result does not depend on it) */
 };
 
 struct hl_fill_layer {

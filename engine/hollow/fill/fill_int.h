@@ -32,10 +32,10 @@ void hl_grid_paint(uint8_t *mask, int w, const struct hl_span *runs, size_t n, u
  * pixel, d2 = squared distance (mm^2, pitches px_mm along x, py_mm along
  * y) between pixel centres to the nearest pixel with lab != 0, and
  * near = that pixel's lab (0 and INFINITY without seeds).  O(w h).
- * Scratch is allocated per call (edt_nearest_sq does the work).  0 or
- * ERR_NOMEM. */
+ * edt_nearest_sq does the work in es (the caller's, with its threads);
+ * the seed and feature images are allocated per call.  0 or ERR_NOMEM. */
 int hl_grid_nearest(const int32_t *lab, int w, int h, double px_mm, double py_mm, float *d2,
-		    int32_t *near, struct err *e);
+		    int32_t *near, struct edt_scratch *es, struct err *e);
 
 /* ---- the per-layer steps (fillstep.c, fillwall.c) ---- */
 

@@ -439,7 +439,7 @@ int hl_step_near_voids(struct hl_win *s, int ww, int wh, const struct hl_geo *g,
 
 	if (!rc)
 		rc = hl_grid_nearest(s->step_label, ww, wh, g->px, g->py, s->near_void_d2_mm2,
-				     s->near_void, e);
+				     s->near_void, &s->edt, e);
 	return rc;
 }
 

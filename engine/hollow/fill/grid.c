@@ -48,15 +48,13 @@ void hl_grid_paint(uint8_t *mask, int w, const struct hl_span *runs, size_t n, u
 }
 
 int hl_grid_nearest(const int32_t *lab, int w, int h, double px_mm, double py_mm, float *d2,
-		    int32_t *near, struct err *e)
+		    int32_t *near, struct edt_scratch *es, struct err *e)
 {
 	size_t np = (size_t)w * (size_t)h;
 	uint8_t *seed = mem_alloc(np + 1);
 	int32_t *idx = mem_alloc((np + 1) * sizeof *idx);
-	struct edt_scratch es;
 	int rc;
 
-	edt_scratch_init(&es);
 	if (!seed || !idx) {
 		mem_free(seed);
 		mem_free(idx);
@@ -64,10 +62,9 @@ int hl_grid_nearest(const int32_t *lab, int w, int h, double px_mm, double py_mm
 	}
 	for (size_t i = 0; i < np; i++)
 		seed[i] = lab[i] != 0;
-	rc = edt_nearest_sq(seed, (size_t)w, w, h, px_mm, py_mm, d2, idx, &es, e);
+	rc = edt_nearest_sq(seed, (size_t)w, w, h, px_mm, py_mm, d2, idx, es, e);
 	for (size_t i = 0; !rc && i < np; i++)
 		near[i] = idx[i] < 0 ? 0 : lab[idx[i]];
-	edt_scratch_fini(&es);
 	mem_free(seed);
 	mem_free(idx);
 	return rc;

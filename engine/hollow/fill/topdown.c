@@ -451,6 +451,7 @@ int hl_fill_build(const struct mesh *part, const struct mesh *solid, const struc
 		rc = ERR_SET(e, ERR_NOMEM, "hollow: out of memory (fill)");
 		goto out;
 	}
+	s.edt.threads = c->threads; /* after hl_win_init, which resets the scratch */
 	for (size_t i = 0; i < (size_t)r.w * (size_t)r.h; i++) {
 		sig[i] = INFINITY;
 		lastv[i] = INT32_MAX;

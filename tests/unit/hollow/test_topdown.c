@@ -456,9 +456,46 @@ static void test_rotated_map_empty(void)
 	mem_free(m.tri);
 }
 
+/* The distance transforms' threads (p.threads) change nothing: a box
+ * whose window is past the transforms' one-thread size (14 x 14 mm, 300 x
+ * 300 pixels) gives the same runs, layer by layer, on 1 and 3 threads. */
+static void test_threads_same(void)
+{
+	const struct vec3 lo = {0, 0, 0}, hi = {14, 14, 3};
+	struct hl_fill_params p;
+	struct hl_fill f1, f3;
+	struct mesh m;
+	struct err e;
+
+	memset(&f1, 0, sizeof f1);
+	memset(&f3, 0, sizeof f3);
+	err_clear(&e);
+	REQUIRE(boxes(&m, &lo, &hi, 1));
+	params(&p, 0.5);
+	REQUIRE_OK(hl_fill_build(&m, NULL, &p, NULL, 0, 1, &f1, &e), &e);
+	p.threads = 3;
+	REQUIRE_OK(hl_fill_build(&m, NULL, &p, NULL, 0, 1, &f3, &e), &e);
+	REQUIRE((size_t)f1.w * (size_t)f1.h > 65536);
+	CHECK(f1.volume_mm3 > 0);
+	CHECK_EQ_INT(f1.n, f3.n);
+	CHECK_EQ_INT(f1.voids, f3.voids);
+	CHECK_NEAR(f1.volume_mm3, f3.volume_mm3, 0);
+	for (int k = 0; k < f1.n && k < f3.n; k++) {
+		CHECK_EQ_INT(f1.layer[k].n, f3.layer[k].n);
+		if (f1.layer[k].n == f3.layer[k].n && f1.layer[k].n)
+			CHECK(memcmp(f1.layer[k].run, f3.layer[k].run,
+				     f1.layer[k].n * sizeof *f1.layer[k].run) == 0);
+	}
+	hl_fill_fini(&f1);
+	hl_fill_fini(&f3);
+	mem_free(m.v);
+	mem_free(m.tri);
+}
+
 int main(void)
 {
 	RUN(test_box);
+	RUN(test_threads_same);
 	RUN(test_two_boxes_min_void);
 	RUN(test_keep_half_plane);
 	RUN(test_rotated_map_empty);

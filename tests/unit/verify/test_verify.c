@@ -53,7 +53,7 @@ static int solid_at(enum shape s, double x, double y, double z)
 
 static void run_stack(enum shape s, double alpha, struct verify_report *rep)
 {
-	struct verify_params p = {LAYER, alpha, PX, PX, 0, 0, 0};
+	struct verify_params p = {LAYER, alpha, PX, PX, 0, 0, 0, 0};
 	struct verify *v = NULL;
 	struct raster *r = raster_new(N, N);
 	struct err e;
@@ -130,7 +130,7 @@ static void test_island(void)
 
 static void test_params(void)
 {
-	struct verify_params p = {0, 45, PX, PX, 0, 0, 0};
+	struct verify_params p = {0, 45, PX, PX, 0, 0, 0, 0};
 	struct verify *v = NULL;
 	struct err e;
 

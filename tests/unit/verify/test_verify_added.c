@@ -53,7 +53,7 @@ static void fill(struct raster *r, enum shape s, int k)
 
 static void run_pair(enum shape s, struct verify_report *rep)
 {
-	struct verify_params p = {LAYER, 45, PX, PX, 0, 0, 0};
+	struct verify_params p = {LAYER, 45, PX, PX, 0, 0, 0, 0};
 	struct verify *v = NULL;
 	struct raster *r = raster_new(N, N), *ref = raster_new(N, N);
 	struct err e;
@@ -113,7 +113,7 @@ static void test_chin_moved(void)
 
 static void test_without_reference(void)
 {
-	struct verify_params p = {LAYER, 45, PX, PX, 0, 0, 0};
+	struct verify_params p = {LAYER, 45, PX, PX, 0, 0, 0, 0};
 	struct verify *v = NULL;
 	struct raster *r = raster_new(N, N), *small = raster_new(N / 2, N);
 	struct verify_report rep;

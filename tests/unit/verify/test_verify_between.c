@@ -31,7 +31,7 @@ typedef int (*solid_fn)(int i, int j, int k, const void *arg);
 
 static void run_stack(solid_fn f, const void *arg, int layers, struct verify_report *rep)
 {
-	struct verify_params p = {LAYER, 45, PX, PX, 0, 0, 0};
+	struct verify_params p = {LAYER, 45, PX, PX, 0, 0, 0, 0};
 	struct verify *v = NULL;
 	struct raster *r = raster_new(N, N);
 	struct err e;

@@ -265,7 +265,7 @@ static int rect(double x0, double x1, double y0, double y1, struct hp *r)
  * along the diagonal a layer. */
 static void run_l(double m_px, struct verify_report *rep)
 {
-	struct verify_params p = {LAYER, 45, PX, PX, 0, 0, 0};
+	struct verify_params p = {LAYER, 45, PX, PX, 0, 0, 0, 0};
 	struct verify *v = NULL;
 	struct raster *r = raster_new(LN, LN);
 	struct err e;

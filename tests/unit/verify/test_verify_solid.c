@@ -40,7 +40,7 @@ static void run_solid(double shell_mm, struct verify_report *rep)
 	struct engine_ctx ctx;
 	struct raster_map map;
 	struct progress prog;
-	struct verify_params vp = {0.1, 45, 0.1, 0.1, 0, 0, 0};
+	struct verify_params vp = {0.1, 45, 0.1, 0.1, 0, 0, 0, 0};
 	struct verify *v = NULL;
 	struct raster *r = raster_new(160, 160);
 	void *params, *state = NULL;

@@ -76,7 +76,7 @@ static double g_tol_px; /* 0: the default */
  * vertical; theta_deg turns the wedge in the plane. */
 static void run(enum shape s, double beta_deg, double theta_deg, struct verify_report *rep)
 {
-	struct verify_params p = {LAYER, 45, PX, PX, g_tol_px, 0, 0};
+	struct verify_params p = {LAYER, 45, PX, PX, g_tol_px, 0, 0, 0};
 	struct verify *v = NULL;
 	struct raster *r = raster_new(N, N);
 	struct hp h[DISC_EDGES];

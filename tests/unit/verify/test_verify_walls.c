@@ -25,7 +25,7 @@ typedef uint8_t (*layer_fn)(int i, int j, int k, int cavity, const void *arg);
 
 static void run_box(layer_fn f, const void *arg, int speck_voxels, struct verify_report *rep)
 {
-	struct verify_params p = {LAYER, 45, PX, PX, 0, 0, speck_voxels};
+	struct verify_params p = {LAYER, 45, PX, PX, 0, 0, speck_voxels, 0};
 	struct verify *v = NULL;
 	struct raster *r = raster_new(N, N);
 	struct err e;
