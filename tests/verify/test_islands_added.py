@@ -84,6 +84,24 @@ class IslandsAdded(unittest.TestCase):
     def test_cow(self):
         self.check_part("cow.off")
 
+    def test_threads_option(self):
+        """--threads N shares the distance transforms out and changes
+        nothing in the report (the camel's hollow stack: SL1 layers past the
+        transforms' one-thread size); bad values are usage errors."""
+        place = PARTS["camel.off"]
+        src = os.path.join(MESHES, "camel.off")
+        out = os.path.join(self.tmp.name, "threads.sl1")
+        run("run", src, "-o", out, "--quiet", *place, "--engine", "hollow")
+        one = json.loads(run("verify", out))
+        three = json.loads(run("verify", out, "--threads", "3"))
+        self.assertGreater(one["enclosed_void_mm3"], 0, one)
+        self.assertEqual(one, three)
+        for bad in ("0", "65", "2.5", "x", ""):
+            p = subprocess.run([BIN, "verify", out, "--threads", bad],
+                               capture_output=True, text=True, timeout=60)
+            self.assertEqual(p.returncode, 2, (bad, p.stderr))
+            self.assertIn("--threads", p.stderr)
+
     def test_checker_fails_a_floating_lattice(self):
         """The bare lattice (skin_mm = 0) starts in mid-air: the check must
         say so (the synthetic stacks are in tests/unit/verify)."""
