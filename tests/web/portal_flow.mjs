@@ -90,8 +90,12 @@ try {
   result.job_id = await page.locator("#job-id").innerText();
   const deadline = Date.now() + 240000;
   for (;;) {
-    const v = await page.locator("#job-progress").evaluate((e) => e.value);
-    const st = await page.locator("#job-state").innerText();
+    // progress and state in one turn of the page's event loop: read one
+    // after the other, the final snapshot could land between them
+    const [v, st] = await page.locator("#job").evaluate((j) => [
+      j.querySelector("#job-progress").value,
+      j.querySelector("#job-state").innerText,
+    ]);
     if (result.progress[result.progress.length - 1] !== v) result.progress.push(v);
     if (st === "succeeded" || st === "failed" || st === "cancelled") {
       result.final_state = st;
