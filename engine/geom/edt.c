@@ -231,6 +231,8 @@ int edt_nearest_sq(const uint8_t *seed, size_t stride, int w, int h, double px_m
 	int threads = s->threads < 1 ? 1 : s->threads > EDT_LANES ? EDT_LANES : s->threads;
 	size_t n = (size_t)(w > h ? w : h), blocks = ((size_t)w + EDT_BLOCK - 1) / EDT_BLOCK;
 
+	if (w <= 0 || h <= 0)
+		return 0; /* nothing to transform (and no tiles to point into) */
 	if ((size_t)w * (size_t)h < EDT_PAR_MIN_PX)
 		threads = 1;
 	for (int t = 0; t < threads; t++)

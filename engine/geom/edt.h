@@ -19,7 +19,8 @@ struct err;
 
 /* One thread's buffers: a line (f, d, z, v, a; cap samples) and the
  * column pass's tiles (EDT_BLOCK columns copied column-major, tile[b * h
- * + y], so the image is read and written a row at a time; tcap floats). */
+ * + y], so the image is read and written a row at a time; tcap entries
+ * in each of tf, td, ta, tn). */
 struct edt_lane {
 	float *f, *d;
 	double *z;

@@ -71,7 +71,7 @@ static struct hull_pt com_after(const struct hl_outcome *o)
  * when its own fill stops (progress.h: helpers never touch the job's). */
 struct alone_job {
 	const struct mesh *part;
-	const struct hl_fill_params *c;
+	struct hl_fill_params c; /* its own copy: half the threads */
 	struct hl_fill fill;
 	struct progress prog;
 	struct err e;
@@ -88,7 +88,7 @@ static void *alone_main(void *arg)
 {
 	struct alone_job *j = arg;
 
-	j->rc = hl_fill_build(j->part, NULL, j->c, &j->prog, 0, 1, &j->fill, &j->e);
+	j->rc = hl_fill_build(j->part, NULL, &j->c, &j->prog, 0, 1, &j->fill, &j->e);
 	return NULL;
 }
 
@@ -201,18 +201,19 @@ static int fill_stage(const struct mesh *part, const struct hl_config *c,
 	int rc, have_alone = 0;
 
 	fill_params(c, &fp);
-	if (both && c->opt.threads >= 2)
-		fp.threads = c->opt.threads / 2; /* two fills side by side share them */
 	if (both && c->opt.threads >= 2 && (aj = mem_calloc(1, sizeof *aj)) != NULL) {
 		struct progress_hooks hk = {NULL, alone_cancelled, aj};
 		aj->part = part;
-		aj->c = &fp;
+		aj->c = fp;
+		aj->c.threads = c->opt.threads / 2; /* two fills side by side share them */
 		err_clear(&aj->e);
 		atomic_init(&aj->stop, 0);
 		progress_init(&aj->prog, &hk);
 		if (pthread_create(&th, NULL, alone_main, aj) != 0) {
 			mem_free(aj); /* no thread: the fill alone runs after, here */
 			aj = NULL;
+		} else {
+			fp.threads = aj->c.threads; /* the other half */
 		}
 	}
 	rc = fill_run(part, &fp, target, ntarget, hull, nhull, res->hull_offset_mm, prog, res, e);

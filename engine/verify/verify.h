@@ -45,8 +45,8 @@ struct verify_params {
 			      * voxels are specks: counted apart, kept out of the wall
 			      * minima (VERIFY_SPECK_VOXELS when 0 is given) */
 	int threads;         /* threads the distance transforms may use (0 or 1:
-			      * one; at most EDT_LANES); the report does not depend
-			      * on it */
+			      * one; larger than EDT_LANES acts as EDT_LANES); the
+			      * report does not depend on it */
 };
 
 /* Default speck size: a 2 x 2 x 2 voxel pocket. */
