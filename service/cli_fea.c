@@ -76,14 +76,10 @@ static int parse(int argc, char **argv, struct fea_cli *o)
 			o->quiet = 1;
 			continue;
 		} else if (!strcmp(a, "--threads")) {
-			char *end;
-			long n;
 			if (++i >= argc)
 				return usage_error("%s needs a value", a);
-			n = strtol(argv[i], &end, 10);
-			if (*end || n < 1 || n > 256)
+			if (!(o->threads = cmd_threads_arg(argv[i], 256)))
 				return usage_error("--threads wants 1..256, not '%s'", argv[i]);
-			o->threads = (int)n;
 			continue;
 		} else if (!strcmp(a, "--set") || !strcmp(a, "-s")) {
 			if (++i >= argc)

@@ -83,14 +83,10 @@ static int parse_opts(const char *cmd, int argc, char **argv, struct cli_opts *o
 			o->quiet = 1;
 			continue;
 		} else if (!strcmp(a, "--threads")) {
-			char *end;
-			long n;
 			if (++i >= argc)
 				return usage_error(cmd, "%s needs a value", a);
-			n = strtol(argv[i], &end, 10);
-			if (*end || n < 1 || n > 256)
+			if (!(o->threads = cmd_threads_arg(argv[i], 256)))
 				return usage_error(cmd, "--threads wants 1..256, not '%s'", argv[i]);
-			o->threads = (int)n;
 			continue;
 		} else if (!strcmp(a, "--set") || !strcmp(a, "-s")) {
 			if (++i >= argc)
@@ -204,6 +200,16 @@ static int write_json_file(const char *path, json_t *j, struct err *e)
 		return ERR_SET(e, ERR_IO, "cannot write %s: %s", path, strerror(errno));
 	}
 	return 0;
+}
+
+int cmd_threads_arg(const char *s, int max)
+{
+	char *end;
+	long n;
+
+	errno = 0;
+	n = strtol(s, &end, 10);
+	return *end || errno || n < 1 || n > max ? 0 : (int)n;
 }
 
 void cmd_print_warnings(const struct metrics *m)

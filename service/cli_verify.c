@@ -84,21 +84,16 @@ int cmd_verify(int argc, char **argv)
 			slot = &vp.tolerance_px;
 			hi = 10;
 		} else if (!strcmp(a, "--threads")) {
-			char *end;
-			long t;
 			if (++i >= argc) {
 				fprintf(stderr, "infilld verify: %s needs a value\n", a);
 				return 2;
 			}
-			errno = 0;
-			t = strtol(argv[i], &end, 10);
-			if (*end || errno || t < 1 || t > 64) {
+			if (!(vp.threads = cmd_threads_arg(argv[i], 64))) {
 				fprintf(stderr,
 					"infilld verify: --threads wants a whole number 1..64, not '%s'\n",
 					argv[i]);
 				return 2;
 			}
-			vp.threads = (int)t;
 			continue;
 		} else if (a[0] == '-') {
 			fprintf(stderr, "infilld verify: unknown option '%s'\n", a);

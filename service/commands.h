@@ -24,6 +24,11 @@ struct err;
  * name in the message.  cli_fea.c; `infilld fea` and `infilld run`. */
 int cmd_loads_read(const char *path, char **text, struct err *e);
 
+/* A --threads value: the whole number in s when it lies in 1..max, else
+ * 0 (the caller names the usage error).  cli_run.c; `infilld run`, `fea`
+ * and `verify`. */
+int cmd_threads_arg(const char *s, int max);
+
 struct metrics;
 /* A run's "warnings" list (docs/metrics.md), one line each on stderr
  * (`infilld: warning: ...`).  cli_run.c; `infilld run` and `infilld fea`. */
