@@ -36,14 +36,16 @@ sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."
 from meshgen import write_ball_stl  # noqa: E402
 
 
-def layout(R, t, w, alpha_deg, lone, dz=0.01, births=True):
+def layout(R, t, w, alpha_deg, lone, dz=0.01, births=True, z0=None, on_layer=None):
+    """Run the model from z0 (r by default) down in steps of dz; on_layer(z,
+    voids) sees every step's annuli after growth, walls and births."""
     r = R - t
     dd = dz * math.tan(math.radians(alpha_deg))
     wall = w / math.cos(math.radians(alpha_deg))
     voids = []  # [a, b]
     vol = 0.0
     made = 0
-    z = r
+    z = r if z0 is None else z0
     while z > -r:
         rmax = math.sqrt(max(r * r - z * z, 0.0))
         for v in voids:
@@ -75,6 +77,8 @@ def layout(R, t, w, alpha_deg, lone, dz=0.01, births=True):
             voids.sort()
         for a, b in voids:
             vol += math.pi * (b * b - a * a) * dz
+        if on_layer:
+            on_layer(z, [tuple(v) for v in voids if v[1] > v[0]])
         z -= dz
     return vol / (4.0 / 3.0 * math.pi * R ** 3), made
 
