@@ -20,8 +20,9 @@ static void lane_lines_free(struct edt_lane *l)
 	mem_free(l->z);
 	mem_free(l->v);
 	mem_free(l->a);
+	mem_free(l->g);
 	l->f = l->d = NULL;
-	l->z = NULL;
+	l->z = l->g = NULL;
 	l->v = l->a = NULL;
 	l->cap = 0;
 }
@@ -56,20 +57,23 @@ void edt_scratch_fini(struct edt_scratch *s)
 
 /* 1D: d[q] = min_p (sp*(q-p))^2 + f[p] over n samples (f may be INF);
  * arg (may be NULL): arg[q] = that p (the lower p on ties), -1 when every
- * f is INF. */
-static void edt_1d(const float *f, float *d, int n, double sp, int *v, double *z, int *arg)
+ * f is INF.  v, z, g: scratch of n + 1, n + 2, n + 1 (g[k] holds kept
+ * parabola v[k]'s f + (sp v[k])^2, computed once). */
+static void edt_1d(const float *f, float *d, int n, double sp, int *v, double *z, double *g,
+		   int *arg)
 {
 	int k = -1;
 	double s2 = sp * sp;
 
 	for (int q = 0; q < n; q++) {
+		double gq;
 		if (!isfinite(f[q]))
 			continue;
+		gq = f[q] + s2 * (double)q * q;
 		/* parabola q vs the last kept one: intersection abscissa */
 		while (k >= 0) {
 			int p = v[k];
-			double s = ((f[q] + s2 * (double)q * q) - (f[p] + s2 * (double)p * p)) /
-				   (2 * s2 * (q - p));
+			double s = (gq - g[k]) / (2 * s2 * (q - p));
 			if (s <= z[k]) {
 				k--;
 				continue;
@@ -80,6 +84,7 @@ static void edt_1d(const float *f, float *d, int n, double sp, int *v, double *z
 		if (k < 0)
 			z[0] = -INFINITY;
 		v[++k] = q;
+		g[k] = gq;
 		z[k + 1] = INFINITY;
 		if (k == 0)
 			z[0] = -INFINITY;
@@ -115,7 +120,8 @@ static int lane_need(struct edt_lane *l, size_t n, size_t h, struct err *e)
 		l->z = mem_alloc((n + 2) * sizeof *l->z);
 		l->v = mem_alloc((n + 1) * sizeof *l->v);
 		l->a = mem_alloc((n + 1) * sizeof *l->a);
-		if (!l->f || !l->d || !l->z || !l->v || !l->a) {
+		l->g = mem_alloc((n + 1) * sizeof *l->g);
+		if (!l->f || !l->d || !l->z || !l->v || !l->a || !l->g) {
 			lane_lines_free(l);
 			return ERR_SET(e, ERR_NOMEM, "distance transform: out of memory");
 		}
@@ -192,7 +198,7 @@ static void edt_cols(void *ctx, size_t bi, int tid)
 			l->tf[(size_t)b * H + (size_t)y] = o[b];
 	}
 	for (int b = 0; b < nb; b++)
-		edt_1d(l->tf + (size_t)b * H, l->td + (size_t)b * H, h, j->py_mm, l->v, l->z,
+		edt_1d(l->tf + (size_t)b * H, l->td + (size_t)b * H, h, j->py_mm, l->v, l->z, l->g,
 		       j->near ? l->ta + (size_t)b * H : NULL);
 	for (int y = 0; y < h; y++) {
 		float *o = j->out + (size_t)y * (size_t)w + (size_t)x0;
@@ -259,7 +265,7 @@ int edt3_sq(const uint8_t *seed, int w, int h, int d, double vox_mm, float *out,
 		struct edt_lane *l = &s.lane[0];
 		for (int z = 0; z < d; z++)
 			l->f[z] = out[z * plane + c];
-		edt_1d(l->f, l->d, d, vox_mm, l->v, l->z, NULL);
+		edt_1d(l->f, l->d, d, vox_mm, l->v, l->z, l->g, NULL);
 		for (int z = 0; z < d; z++)
 			out[z * plane + c] = l->d[z];
 	}

@@ -23,7 +23,7 @@ struct err;
  * in each of tf, td, ta, tn). */
 struct edt_lane {
 	float *f, *d;
-	double *z;
+	double *z, *g;
 	int *v, *a;
 	size_t cap;
 	float *tf, *td;

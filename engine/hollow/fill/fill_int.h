@@ -33,9 +33,11 @@ void hl_grid_paint(uint8_t *mask, int w, const struct hl_span *runs, size_t n, u
  * y) between pixel centres to the nearest pixel with lab != 0, and
  * near = that pixel's lab (0 and INFINITY without seeds).  O(w h).
  * edt_nearest_sq does the work in es (the caller's, with its threads);
- * the seed and feature images are allocated per call.  0 or ERR_NOMEM. */
+ * seed (w h bytes) and idx (w h) are the caller's scratch, overwritten.
+ * 0 or an EDT error. */
 int hl_grid_nearest(const int32_t *lab, int w, int h, double px_mm, double py_mm, float *d2,
-		    int32_t *near, struct edt_scratch *es, struct err *e);
+		    int32_t *near, uint8_t *seed, int32_t *idx, struct edt_scratch *es,
+		    struct err *e);
 
 /* ---- the per-layer steps (fillstep.c, fillwall.c) ---- */
 
@@ -142,8 +144,9 @@ struct hl_win {
 	float *off_ridge_d2_mm2;
 
 	/* ---- per-step scratch: each step fills these before it reads them */
-	/* Mask.  grow: E u not C(k) (seeds of support_d2_mm2); standing
-	 * keep-apart: B (seeds of bisector_d2_mm2); vertical walls: the floor
+	/* Mask.  grow: E u not C(k) (seeds of support_d2_mm2); keep-apart:
+	 * first the seeds of hl_grid_nearest(), then, standing, B (seeds of
+	 * bisector_d2_mm2); vertical walls: the floor
 	 * pixels (void in layer k and in one of k + 2 .. k + mv, solid in
 	 * k + 1); born: the void of layers k .. k + mv (seeds of
 	 * recent_void_d2_mm2), then F (where ridge() looks), then the pixels
@@ -156,6 +159,9 @@ struct hl_win {
 	 * born: the components of C(k); islands: the solid components of
 	 * layer k + 1.  8-connected components, label_components8(). */
 	int32_t *step_label;
+	/* Feature indices of hl_grid_nearest() (its seeds go in step_mask).
+	 * w, r: keep-apart. */
+	int32_t *nearest_index;
 	/* Scratch of the squared distance transforms (edt_sq()). */
 	struct edt_scratch edt;
 };

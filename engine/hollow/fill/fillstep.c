@@ -39,6 +39,7 @@ void hl_win_fini(struct hl_win *s)
 	mem_free(s->off_ridge_d2_mm2);
 	mem_free(s->step_mask);
 	mem_free(s->step_label);
+	mem_free(s->nearest_index);
 	edt_scratch_fini(&s->edt);
 }
 
@@ -72,12 +73,13 @@ int hl_win_init(struct hl_win *s, size_t np)
 	s->off_ridge_d2_mm2 = mem_alloc(nf);
 	s->step_mask = mem_alloc(np);
 	s->step_label = mem_alloc(ni);
+	s->nearest_index = mem_alloc(ni);
 	return s->region && s->void_above && s->sig_above_mm && s->last_void && s->void_out &&
 	       s->sig_out_mm && s->void_above_d2_mm2 && s->inside_mm && s->core &&
 	       s->support_d2_mm2 && s->keep && s->fin_steps && s->fin_queue && s->near_void &&
 	       s->near_void_d2_mm2 && s->bisector_d2_mm2 && s->bisector_side &&
 	       s->recent_void_d2_mm2 && s->not_free && s->free_d2_mm2 && s->ridge &&
-	       s->off_ridge_d2_mm2 && s->step_mask && s->step_label;
+	       s->off_ridge_d2_mm2 && s->step_mask && s->step_label && s->nearest_index;
 }
 
 /* Squared distance transform of seed (nonzero), or all INFINITY when
@@ -439,7 +441,7 @@ int hl_step_near_voids(struct hl_win *s, int ww, int wh, const struct hl_geo *g,
 
 	if (!rc)
 		rc = hl_grid_nearest(s->step_label, ww, wh, g->px, g->py, s->near_void_d2_mm2,
-				     s->near_void, &s->edt, e);
+				     s->near_void, s->step_mask, s->nearest_index, &s->edt, e);
 	return rc;
 }
 

@@ -89,7 +89,7 @@ int hl_step_keep_apart_lean(struct hl_win *s, int ww, int wh, const struct hl_ge
 		}
 	if (anyb)
 		rc = hl_grid_nearest(s->step_label, ww, wh, g->px, g->py, s->bisector_d2_mm2, side,
-				     &s->edt, e);
+				     s->step_mask, s->nearest_index, &s->edt, e);
 	else
 		memset(side, 0, np * sizeof *side);
 	if (rc)

@@ -48,24 +48,16 @@ void hl_grid_paint(uint8_t *mask, int w, const struct hl_span *runs, size_t n, u
 }
 
 int hl_grid_nearest(const int32_t *lab, int w, int h, double px_mm, double py_mm, float *d2,
-		    int32_t *near, struct edt_scratch *es, struct err *e)
+		    int32_t *near, uint8_t *seed, int32_t *idx, struct edt_scratch *es,
+		    struct err *e)
 {
 	size_t np = (size_t)w * (size_t)h;
-	uint8_t *seed = mem_alloc(np + 1);
-	int32_t *idx = mem_alloc((np + 1) * sizeof *idx);
 	int rc;
 
-	if (!seed || !idx) {
-		mem_free(seed);
-		mem_free(idx);
-		return ERR_SET(e, ERR_NOMEM, "hollow: out of memory (fill distances)");
-	}
 	for (size_t i = 0; i < np; i++)
 		seed[i] = lab[i] != 0;
 	rc = edt_nearest_sq(seed, (size_t)w, w, h, px_mm, py_mm, d2, idx, es, e);
 	for (size_t i = 0; !rc && i < np; i++)
 		near[i] = idx[i] < 0 ? 0 : lab[idx[i]];
-	mem_free(seed);
-	mem_free(idx);
 	return rc;
 }
