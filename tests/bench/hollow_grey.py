@@ -78,11 +78,12 @@ def disc(x, y, rho):
 
 def quadrant(q, radii_out, annuli):
     """One layer's quadrant (q x q, pixel (i, j) centred (i + .5, j + .5) px
-    from the axis): the rows of solid coverage 0..255, and their sum (pixels
-    of solid)."""
+    from the axis): the rows of solid coverage 0..255, their sum (pixels of
+    solid) and the same sum for the disc of radius radii_out alone (the
+    unhollowed part's section)."""
     circles = [radii_out] + [r for a, b in annuli for r in (a, b) if r > 0]
     rows = []
-    solid_sum = 0.0
+    solid_sum = part_sum = 0.0
     for j in range(q):
         y = j + 0.5
         row = bytearray(q)
@@ -100,6 +101,13 @@ def quadrant(q, radii_out, annuli):
                 if b < s1:
                     nxt.append((b, s1))
             spans = nxt
+        # the part's section: centres inside radii_out count whole, then
+        # the edge pixels below trade that for their coverage
+        if radii_out > y:
+            part_in = min(q, int(math.floor(math.sqrt(radii_out ** 2 - y * y) - 0.5)) + 1)
+        else:
+            part_in = 0
+        part_sum += part_in
         for s0, s1 in spans:
             if s1 <= y:
                 continue
@@ -120,13 +128,14 @@ def quadrant(q, radii_out, annuli):
         for i in edge:
             x = i + 0.5
             c = disc(x, y, radii_out)
+            part_sum += c - (i < part_in)
             for a, b in annuli:
                 c -= disc(x, y, b) - (disc(x, y, a) if a > 0 else 0.0)
             c = min(1.0, max(0.0, c))
             row[i] = int(round(255 * c))
         rows.append(row)
         solid_sum += sum(row) / 255.0
-    return rows, solid_sum
+    return rows, solid_sum, part_sum
 
 
 def main():
@@ -163,8 +172,7 @@ def main():
         zc = (k + 0.5) * LAYER - R
         ro = math.sqrt(max(0.0, R * R - zc * zc)) / PX
         voids = [(a / PX, b / PX) for a, b in state.get(k, [])]
-        _, s_full = quadrant(q, ro, [])
-        rows, s_hol = quadrant(q, ro, voids)
+        rows, s_hol, s_full = quadrant(q, ro, voids)
         part += s_full
         hollow += s_hol
         img = bytearray()
