@@ -299,7 +299,7 @@ static int read_element(struct ply *p, const struct ply_elem *el)
 							 (long long)i,
 							 "face %llu has %llu corners (need at least 3)", i,
 							 c);
-				if (mem_grow(&arr, &p->icap, (size_t)c, sizeof *p->idx))
+				if (mem_grow(&arr, &p->icap, (size_t)k + (size_t)c, sizeof *p->idx))
 					return ERR_SET(p->e, ERR_NOMEM,
 						       "out of memory for a %llu-corner face", c);
 				p->idx = arr;
