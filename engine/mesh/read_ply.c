@@ -356,7 +356,7 @@ static int check_counts(struct ply *p, size_t body)
 				have_y |= pr->role == ROLE_Y;
 				have_z |= pr->role == ROLE_Z;
 			}
-			have_idx |= pr->role == ROLE_INDICES;
+			have_idx += pr->role == ROLE_INDICES;
 		}
 		if (el->kind == KIND_VERTEX && !(have_x && have_y && have_z))
 			return ERR_PLACE(p->e, ERR_PARSE, 0, 0, -1,
@@ -368,6 +368,12 @@ static int check_counts(struct ply *p, size_t body)
 		if (el->kind == KIND_FACE && !have_idx)
 			return ERR_PLACE(p->e, ERR_PARSE, 0, 0, -1,
 					 "PLY face element has no vertex_indices list");
+		/* which list would make the polygon is anyone's guess */
+		if (el->kind == KIND_FACE && have_idx > 1)
+			return ERR_PLACE(p->e, ERR_PARSE, 0, 0, -1,
+					 "PLY face element has %d vertex index lists (vertex_indices "
+					 "or vertex_index), not one",
+					 have_idx);
 		if (el->kind == KIND_VERTEX && el->count > MESH_MAX_VERTICES)
 			return ERR_PLACE(p->e, ERR_LIMIT, 0, 0, -1,
 					 "PLY declares %llu vertices, more than the limit of %u",

@@ -454,6 +454,9 @@ static void test_fuzz_regressions(void)
 		{"ply-zero-vertices", MESH_FMT_PLY, ERR_PARSE, "face 0 has 0 corners"},
 		/* 1e300: extents and areas overflow to inf downstream */
 		{"off-huge-coordinate", MESH_FMT_OFF, ERR_GEOMETRY, "vertex 1: coordinate 1e+300"},
+		/* vertex_indices and vertex_index in one face element: the index
+		 * buffer was grown for the second list alone (heap overflow) */
+		{"ply-two-index-lists", MESH_FMT_PLY, ERR_PARSE, "has 2 vertex index lists"},
 	};
 	size_t i;
 
