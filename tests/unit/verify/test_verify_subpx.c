@@ -200,11 +200,94 @@ static void test_tolerance_matters(void)
 	g_tol_px = 0;
 }
 
+/* verify_far_pixels on one pair: below solid on the side n.p <= c of a
+ * line turned 20 degrees, above the same line moved d px into the void
+ * (solid band [c, c + d] over nothing).  Every pixel of above it reports
+ * lies in that band, beyond the reach, and the farthest reads d within
+ * 0.1 px (d = 1.5: a small excess, measured, not bounded); with d under
+ * the reach it reports none; a nonzero return of fn stops the scan. */
+struct far_seen {
+	int n, stop_at;
+	double lo, hi; /* far range seen, px */
+	double hi_mid; /* the largest of rows 30..170, away from the box's ends */
+	double d, nx, ny, c;
+};
+
+static int far_seen(void *ctx, int x, int y, double far_mm)
+{
+	struct far_seen *f = ctx;
+	double s = f->nx * (x + 0.5) + f->ny * (y + 0.5) - f->c; /* centre past below's edge, px */
+
+	f->n++;
+	f->lo = fmin(f->lo, far_mm / PX);
+	f->hi = fmax(f->hi, far_mm / PX);
+	if (y >= 30 && y <= 170)
+		f->hi_mid = fmax(f->hi_mid, far_mm / PX);
+	CHECK(s > -1 && s < f->d + 1);
+	CHECK(x >= 19 && x <= 180 && y >= 19 && y <= 180);
+	return f->stop_at && f->n == f->stop_at ? 7 : 0;
+}
+
+static void far_pair(double d_px, int stop_at, struct far_seen *f)
+{
+	struct raster *below = raster_new(N, N), *above = raster_new(N, N);
+	double th = 20 * M_PI / 180;
+	/* the line, capped by the box [20, 180]^2 (an image's empty margin) */
+	struct hp hb[5] = {{0, 0, 0}, {1, 0, 180}, {-1, 0, -20}, {0, 1, 180}, {0, -1, -20}}, ha[5];
+	struct err e;
+	int rc;
+
+	REQUIRE(below && above);
+	memset(f, 0, sizeof *f);
+	f->lo = INFINITY;
+	f->hi = f->hi_mid = -INFINITY;
+	f->d = d_px;
+	f->nx = cos(th);
+	f->ny = sin(th);
+	f->c = 80.3;
+	f->stop_at = stop_at;
+	hb[0] = (struct hp){f->nx, f->ny, f->c};
+	memcpy(ha, hb, sizeof ha);
+	ha[0].c = f->c + d_px;
+	for (int j = 0; j < N; j++)
+		for (int i = 0; i < N; i++) {
+			below->px[(size_t)j * below->stride + (size_t)i] =
+			    (uint8_t)lround(255 * clip_area(i, j, hb, 5));
+			above->px[(size_t)j * above->stride + (size_t)i] =
+			    (uint8_t)lround(255 * clip_area(i, j, ha, 5));
+		}
+	err_clear(&e);
+	rc = verify_far_pixels(below, above, PX, PX, LAYER, 1, far_seen, f, &e);
+	CHECK_EQ_INT(rc, stop_at ? 7 : 0);
+	raster_free(below);
+	raster_free(above);
+}
+
+static void test_far_pixels(void)
+{
+	struct far_seen f;
+
+	far_pair(1.5, 0, &f); /* 1.5 px a layer: 0.44 px over the reach of 1.064 */
+	printf("band 1.5 px: %d pixels read %.3f..%.3f px (%.3f away from the ends)\n", f.n, f.lo,
+	       f.hi, f.hi_mid);
+	CHECK(f.n > 160 / 2); /* a pixel every other row at least along the line */
+	CHECK(f.lo > LAYER / PX);
+	CHECK_NEAR(f.hi_mid, 1.5, 0.1);
+	/* at the ends the band's corner lies 1.5 / cos 20 from below's, read
+	 * within the tolerance */
+	CHECK(f.hi < 1.5 / cos(20 * M_PI / 180) + VERIFY_TOLERANCE_PX);
+	far_pair(0.9, 0, &f); /* under the reach: nothing */
+	CHECK_EQ_INT(f.n, 0);
+	far_pair(3.0, 5, &f); /* fn's nonzero return stops the scan */
+	CHECK_EQ_INT(f.n, 5);
+}
+
 int main(void)
 {
 	RUN(test_cone);
 	RUN(test_wedge);
 	RUN(test_pyramid);
 	RUN(test_tolerance_matters);
+	RUN(test_far_pixels);
 	return harness_report();
 }

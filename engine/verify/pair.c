@@ -1,0 +1,160 @@
+/* pair.c - the overhang reading of verify_layer for one pair of layer
+ * images, pixel by pixel, for a caller that mends its layers before they
+ * are written (verify.h: verify_far_pixels; the hollow engine's repair).
+ * The bounds and the measurement are verify_overhangs()' (support.c):
+ * an upper bound from the nearest solid pixel settles most pixels, a
+ * lower bound from the nearest grey one the gross overhangs, and the rest
+ * are measured by subpx.h.
+ */
+#include <math.h>
+#include <stdint.h>
+#include <string.h>
+
+#include "engine/core/err.h"
+#include "engine/core/mem.h"
+#include "engine/geom/edt.h"
+#include "engine/geom/raster.h"
+#include "engine/verify/subpx.h"
+#include "engine/verify/verify.h"
+
+struct pair_scratch {
+	uint8_t *box_below, *box_above; /* the pixels' box of each image */
+	uint8_t *seed;
+	float *d2_solid, *d2_any;
+	int32_t *near;
+	struct verify_subpx_fits fb, fa;
+	struct edt_scratch es;
+};
+
+static void pair_fini(struct pair_scratch *s)
+{
+	mem_free(s->box_below);
+	mem_free(s->box_above);
+	mem_free(s->seed);
+	mem_free(s->d2_solid);
+	mem_free(s->d2_any);
+	mem_free(s->near);
+	verify_subpx_fits_fini(&s->fb);
+	verify_subpx_fits_fini(&s->fa);
+	edt_scratch_fini(&s->es);
+}
+
+/* Grey pixels (0 < gray < 255) of r. */
+static size_t grey_count(const struct raster *r)
+{
+	size_t n = 0;
+
+	for (int y = 0; y < r->h; y++)
+		for (int x = 0; x < r->w; x++) {
+			uint8_t g = r->px[(size_t)y * r->stride + (size_t)x];
+			n += g > 0 && g < 255;
+		}
+	return n;
+}
+
+int verify_far_pixels(const struct raster *below, const struct raster *above, double px_mm,
+		      double py_mm, double reach_mm, int threads,
+		      int (*fn)(void *ctx, int x, int y, double far_mm), void *ctx, struct err *e)
+{
+	struct pair_scratch s;
+	struct raster b, a;
+	double pmin = fmin(px_mm, py_mm), hd = 0.5 * hypot(px_mm, py_mm);
+	int x0 = INT32_MAX, y0 = INT32_MAX, x1 = -1, y1 = -1, pad, rc = 0;
+	size_t np;
+
+	if (below->w != above->w || below->h != above->h)
+		return ERR_SET(e, ERR_PARAM, "verify: a pair of layers of different sizes");
+	/* the pixels that can read over: some solid over a pixel not whole */
+	for (int y = 0; y < above->h; y++) {
+		const uint8_t *ra = above->px + (size_t)y * above->stride;
+		const uint8_t *rb = below->px + (size_t)y * below->stride;
+		for (int x = 0; x < above->w; x++)
+			if (ra[x] && rb[x] != 255) {
+				x0 = x < x0 ? x : x0;
+				x1 = x > x1 ? x : x1;
+				y0 = y < y0 ? y : y0;
+				y1 = y > y1 ? y : y1;
+			}
+	}
+	if (x1 < 0)
+		return 0;
+	/* their box, grown past every pixel of below that a reading within
+	 * the reach looks at (the window of verify_subpx_far_mm, at most
+	 * (reach + 6 hd) / pmin, and the 5 x 5 neighbourhood of each pixel in
+	 * it): a pixel read over for want of solid beyond the box reads over
+	 * with it too */
+	pad = (int)ceil((reach_mm + 6 * hd) / pmin) + 3;
+	x0 = x0 - pad < 0 ? 0 : x0 - pad;
+	y0 = y0 - pad < 0 ? 0 : y0 - pad;
+	x1 = x1 + pad >= above->w ? above->w - 1 : x1 + pad;
+	y1 = y1 + pad >= above->h ? above->h - 1 : y1 + pad;
+	b.w = a.w = x1 - x0 + 1;
+	b.h = a.h = y1 - y0 + 1;
+	b.stride = a.stride = (size_t)b.w;
+	np = (size_t)b.w * (size_t)b.h;
+	memset(&s, 0, sizeof s);
+	edt_scratch_init(&s.es);
+	s.es.threads = threads;
+	b.px = s.box_below = mem_alloc(np);
+	a.px = s.box_above = mem_alloc(np);
+	s.seed = mem_alloc(np);
+	s.d2_solid = mem_alloc(np * sizeof *s.d2_solid);
+	s.d2_any = mem_alloc(np * sizeof *s.d2_any);
+	s.near = mem_alloc(np * sizeof *s.near);
+	if (!s.box_below || !s.box_above || !s.seed || !s.d2_solid || !s.d2_any || !s.near) {
+		rc = ERR_SET(e, ERR_NOMEM, "verify: out of memory (a pair of layers)");
+		goto out;
+	}
+	for (int y = 0; y < b.h; y++) {
+		memcpy(b.px + (size_t)y * b.stride, below->px + (size_t)(y + y0) * below->stride + x0,
+		       (size_t)b.w);
+		memcpy(a.px + (size_t)y * a.stride, above->px + (size_t)(y + y0) * above->stride + x0,
+		       (size_t)a.w);
+	}
+	if (verify_subpx_fits_size(&s.fb, np, grey_count(&b)) ||
+	    verify_subpx_fits_size(&s.fa, np, grey_count(&a))) {
+		rc = ERR_SET(e, ERR_NOMEM, "verify: out of memory (a pair of layers)");
+		goto out;
+	}
+	for (size_t i = 0; i < np; i++)
+		s.seed[i] = b.px[i] >= VERIFY_THRESHOLD;
+	rc = edt_nearest_sq(s.seed, (size_t)b.w, b.w, b.h, px_mm, py_mm, s.d2_solid, s.near, &s.es,
+			    e);
+	for (size_t i = 0; !rc && i < np; i++)
+		s.seed[i] = b.px[i] > 0;
+	if (!rc)
+		rc = edt_sq(s.seed, (size_t)b.w, b.w, b.h, px_mm, py_mm, s.d2_any, &s.es, e);
+	if (rc)
+		goto out;
+	{
+		/* the box's pixel (0, 0) is pixel (x0, y0) of the images */
+		struct verify_subpx_img bi = {b.px, x0, y0, b.w, b.h, px_mm, py_mm, 0, &s.fb};
+		struct verify_subpx_img ai = {a.px, x0, y0, a.w, a.h, px_mm, py_mm, 0, &s.fa};
+		for (int y = 0; y < a.h && !rc; y++)
+			for (int x = 0; x < a.w && !rc; x++) {
+				size_t i = (size_t)y * (size_t)a.w + (size_t)x;
+				double u = INFINITY, lo, far;
+				if (a.px[i] == 0 || b.px[i] == 255)
+					continue;
+				if (s.near[i] >= 0)
+					u = sqrt(s.d2_solid[i]) +
+					    verify_subpx_gap_mm(&bi, s.near[i] % b.w + x0,
+								s.near[i] / b.w + y0);
+				if (u <= reach_mm)
+					continue;
+				lo = sqrt(s.d2_any[i]) - (a.px[i] >= 128 ? hd : 2 * hd);
+				if (lo > reach_mm) {
+					far = lo;
+				} else {
+					double wmm = fmin(u, sqrt(s.d2_any[i]) + 2 * hd) + 2 * hd;
+					far = verify_subpx_far_mm(&bi, &ai, x + x0, y + y0,
+								  (int)ceil(wmm / pmin));
+				}
+				if (far > reach_mm)
+					rc = fn(ctx, x + x0, y + y0, far);
+			}
+	}
+out:
+	pair_fini(&s);
+	return rc;
+}
