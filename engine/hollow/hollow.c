@@ -15,6 +15,7 @@
 #include "engine/geom/clip.h"
 #include "engine/hollow/fill/fill.h"
 #include "engine/hollow/hmesh.h"
+#include "engine/hollow/repair.h"
 #include "engine/hollow/run.h"
 #include "engine/hollow/slopes.h"
 #include "engine/mesh/mesh.h"
@@ -159,6 +160,7 @@ struct hollow_state {
 	 * output has none) and what the output has beyond it, layer by layer */
 	double part_overhang_mm2, added_overhang_mm2;
 	struct hl_fill frag;         /* beads of the optimised voids, painted solid */
+	struct hl_repair repair;     /* the optimised voids' images mended (layer outputs) */
 	struct hl_slopes slopes;     /* the optimised voids' slopes on their polygons */
 	double t_slopes;
 	struct hl_config cfg;
@@ -231,6 +233,15 @@ static void verify_params_of(const struct hollow_state *s, struct verify_params 
 		map_pitch(&s->own_map, &vp->pixel_x_mm, &vp->pixel_y_mm);
 	else
 		vp->pixel_x_mm = vp->pixel_y_mm = HOLLOW_VERIFY_PIXEL_MM;
+}
+
+/* What the mending (repair.h) allows: the slope plus half the check's
+ * tolerance, so that what it leaves reads within the tolerance with
+ * room to spare. */
+static double hollow_mend_reach_mm(const struct verify_params *vp)
+{
+	return vp->layer_mm * tan(vp->alpha_deg * M_PI / 180) +
+	       0.5 * VERIFY_TOLERANCE_PX * fmax(vp->pixel_x_mm, vp->pixel_y_mm);
 }
 
 static int start_verify(struct hollow_state *s, const struct mesh *m, struct err *e)
@@ -369,6 +380,16 @@ static int hollow_prepare(const struct engine_ctx *ctx, const void *params, void
 		rc = hl_fragments_find(s->out.mesh, ctx->mesh->nv, ctx->mesh->nt,
 				       s->map ? s->map : &s->own_map, s->map ? s->antialias : 1,
 				       VERIFY_THRESHOLD, s->layer_mm, c->opt.min_void_mm3, &s->frag, e);
+	/* images written: mend what the optimised voids' grey edges read over
+	 * (repair.h); mesh and G-code outputs carry the polygons */
+	if (!rc && s->map && s->out.voids_optimised > 0) {
+		struct verify_params vp;
+		verify_params_of(s, &vp);
+		rc = hl_repair_build(s->out.mesh, s->part_nv, s->part_nt, s->map, s->antialias,
+				     &s->out.fill, &s->frag, s->layer_mm, vp.pixel_x_mm,
+				     vp.pixel_y_mm, hollow_mend_reach_mm(&vp), vp.threads, &s->repair,
+				     e);
+	}
 	if (rc) {
 		hollow_release(s);
 		return rc;
@@ -396,24 +417,19 @@ static int hollow_layer(void *state, struct layer *ly, struct err *e)
 	if (ly->raster && s->map) {
 		/* render it here, as the writer would, so the check sees the
 		 * very pixels that are written */
-		rc = slice_rasterize(&ly->region, s->map, s->antialias, ly->raster, e);
-		if (!rc && frag)
-			hl_fill_paint(&s->frag, frag, ly->raster, 255);
-		if (!rc && fill)
-			hl_fill_paint(&s->out.fill, fill, ly->raster, 0);
+		rc = hl_layer_draw(&ly->region, s->map, s->antialias, fill ? &s->out.fill : NULL,
+				   frag ? &s->frag : NULL, ly->z_mm, 0, 0, ly->raster, e);
 		if (rc)
 			return rc;
+		hl_repair_apply(&s->repair, ly->z_mm, ly->raster);
 		ly->raster_ready = 1;
 		rc = verify_layer(s->ver, ly->raster, e);
 	} else {
 		raster_clear(s->own);
 		/* anti-aliased, as a resin writer would: the verifier measures
 		 * the optimised voids' slopes at sub-pixel accuracy */
-		rc = slice_rasterize(&ly->region, &s->own_map, 1, s->own, e);
-		if (!rc && frag)
-			hl_fill_paint(&s->frag, frag, s->own, 255);
-		if (!rc && fill)
-			hl_fill_paint(&s->out.fill, fill, s->own, 0);
+		rc = hl_layer_draw(&ly->region, &s->own_map, 1, fill ? &s->out.fill : NULL,
+				   frag ? &s->frag : NULL, ly->z_mm, 0, 0, s->own, e);
 		if (!rc)
 			rc = verify_layer(s->ver, s->own, e);
 	}
@@ -560,12 +576,14 @@ static int hollow_metrics(void *state, struct metrics *m, struct err *e)
 	}
 	rc |= metrics_int(m, "hollow.voids", (long long)o->voids);
 	rc |= metrics_int(m, "hollow.rounds", o->rounds);
-	/* the beads painted solid are not voids of what is printed */
+	/* the beads painted solid and the gray the mending adds are not voids
+	 * of what is printed */
 	rc |= metrics_num(m, "hollow.volume_reduction",
-			  o->part_volume_mm3 > 0
-				  ? (o->void_volume_mm3 - s->frag.volume_mm3) / o->part_volume_mm3
-				  : 0);
-	rc |= metrics_num(m, "hollow.void_volume_mm3", o->void_volume_mm3 - s->frag.volume_mm3);
+			  o->part_volume_mm3 > 0 ? (o->void_volume_mm3 - s->frag.volume_mm3 -
+						    s->repair.mm3) / o->part_volume_mm3
+						 : 0);
+	rc |= metrics_num(m, "hollow.void_volume_mm3",
+			  o->void_volume_mm3 - s->frag.volume_mm3 - s->repair.mm3);
 	rc |= metrics_int(m, "hollow.fragments", (long long)s->frag.voids);
 	rc |= metrics_num(m, "hollow.polygon_slopes.excess_mm2", s->slopes.excess_mm2);
 	rc |= metrics_num(m, "hollow.polygon_slopes.worst_mm2", s->slopes.worst_mm2);
@@ -574,6 +592,11 @@ static int hollow_metrics(void *state, struct metrics *m, struct err *e)
 	rc |= metrics_int(m, "hollow.polygon_slopes.layers_checked", s->slopes.layers_checked);
 	rc |= metrics_num(m, "hollow.polygon_slopes.seconds", s->t_slopes);
 	rc |= metrics_num(m, "hollow.fragment_mm3", s->frag.volume_mm3);
+	rc |= metrics_int(m, "hollow.mended.pixels", s->repair.pixels);
+	rc |= metrics_num(m, "hollow.mended.mm3", s->repair.mm3);
+	rc |= metrics_int(m, "hollow.mended.layers", s->repair.layers);
+	rc |= metrics_int(m, "hollow.mended.layers_left", s->repair.layers_left);
+	rc |= metrics_num(m, "hollow.mended.seconds", s->repair.seconds);
 	rc |= metrics_num(m, "hollow.part_volume_mm3", o->part_volume_mm3);
 	rc |= metrics_num(m, "hollow.interior_overhang_mm2", s->rep.interior_overhang_mm2);
 	rc |= metrics_num(m, "hollow.part_interior_overhang_mm2", s->part_overhang_mm2);
@@ -663,6 +686,7 @@ static void hollow_release(void *state)
 	hl_outcome_fini(&s->out);
 	mesh_free(s->result);
 	hl_fill_fini(&s->frag);
+	hl_repair_fini(&s->repair);
 	slice_free(s->slicer);
 	verify_free(s->ver);
 	verify_report_fini(&s->rep);

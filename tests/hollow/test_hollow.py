@@ -90,7 +90,9 @@ class HollowTest(unittest.TestCase):
         # an 8 mm cube: the optimiser's cost is not monotone in size (12 mm
         # at alpha 30 took 72 s, 8 mm 4 s) and these checks need no more
         res = {}
-        for a, max_px in ((45, 4), (30, 16)):  # 2 and 13 px measured
+        # gray the mending adds: 0.015 and 0.109 mm3 measured (the images
+        # read 2 and 13 px over before it)
+        for a, max_mended in ((45, 0.1), (30, 0.5)):
             # optimise_s=0: no wall-clock guard, so what is checked does not
             # depend on the machine's speed (under ASan on shared cores the
             # round once outran a 60 s budget); the work budget is
@@ -104,7 +106,8 @@ class HollowTest(unittest.TestCase):
             self.assertGreaterEqual(h["voids_optimised"], 1)
             self.assertEqual(h["voids_fill"], 0)
             self.assertFalse(h["budget_spent"])
-            optimised_slopes_ok(self, h, max_px)
+            optimised_slopes_ok(self, h, max_mended)
+            self.assertGreater(h["mended"]["pixels"], 0, h["mended"])
             self.assertEqual(h["verify"]["islands"], 0)
             # walls never thinner than allowed (1 pixel of rasterisation)
             self.assertGreaterEqual(h["min_wall_3d_mm"], 0.8 - 0.06)
@@ -228,7 +231,7 @@ class HollowTest(unittest.TestCase):
         bx = hollow(self.tmp.name, box, opt_layer_min_mm=0.25, opt_layer_mm=1.0, **opt)["hollow"]
         self.assertLessEqual(bx["slices"], 13)
         self.assertGreaterEqual(bx["voids_optimised"], 1)
-        optimised_slopes_ok(self, bx, 16)  # 9 px measured (known limit 2)
+        optimised_slopes_ok(self, bx, 0.5)
         # smoothing: a 12 mm ball, whose top pairs fail unsmoothed (no void),
         # keeps a void from 10 passes; corners are only cut inward, so walls
         # keep their thickness and the polygons the exact rule
@@ -242,12 +245,14 @@ class HollowTest(unittest.TestCase):
         self.assertEqual(h10["polygon_slopes"]["excess_mm2"], 0.0)
         self.assertGreaterEqual(h10["min_wall_3d_mm"], 1.0 - 0.06)
         # its rasterised ceiling leaves a one-pixel speck of solid in the
-        # void (1 interior island, 0.002 mm2) and 13 px over the sub-pixel
-        # tolerance: docs/hollow.md known limit 2, bounded here
+        # void (1 interior island, 0.002 mm2), which the mending does not
+        # hold up (it holds only the islands it makes): docs/hollow.md
+        # known limit 2, bounded here; the 13 px the images read over
+        # before the mending read none
         self.assertEqual(h10["verify"]["islands_part"], 0)
         self.assertLessEqual(h10["verify"]["islands_interior"], 1)
         self.assertLessEqual(h10["verify"]["island_interior_mm2"], 0.01)
-        self.assertLessEqual(h10["verify"]["interior_overhang_px"], 16)
+        optimised_slopes_ok(self, h10, 0.1)
 
     def test_mesh_output_is_what_its_metrics_say(self):
         # an STL carries every void the layers carve (the optimised ones
@@ -390,7 +395,7 @@ class HollowTest(unittest.TestCase):
         self.assertEqual(h["groups_failed"], 0, h)
         self.assertGreaterEqual(h["voids_optimised"], 2, h)  # 3 measured, 18.4 %
         self.assertGreater(h["volume_reduction"], 0.1)
-        optimised_slopes_ok(self, h, 3)
+        optimised_slopes_ok(self, h, 0.5)
         self.assertEqual(h["verify"]["islands"], 0)
         self.assertGreaterEqual(h["min_wall_mm"], 1.0 - 0.06)
         between_walls_ok(self, h["verify"])

@@ -83,9 +83,10 @@ class HollowMeshTest(unittest.TestCase):
             self.assertEqual(h["groups_failed"], 0, h)
             self.assertGreaterEqual(h["voids_optimised"], 3, h)  # 5 measured
             self.assertEqual(h["voids_fill"], 0)
-            # 23 px measured (17 with the one-edge pixel model; the 6 more
-            # read 0.20-0.25 px); polygons: 0.0011 mm2 on 2 layers (void tops)
-            optimised_slopes_ok(self, h, 25, max_polygon_mm2=0.003)
+            # 23 px read over before the mending (0.43 px), 0.44 mm3 of gray
+            # added by it (8,855 pixels); polygons: 0.0011 mm2 on 2 layers
+            # (void tops)
+            optimised_slopes_ok(self, h, 1.0, max_polygon_mm2=0.003)
             self.assertGreaterEqual(v["min_wall_mm"], 1.0 - 0.06, v)
             check_between(self, v, required=False)
             self.assertEqual(v["specks"], 0, v)

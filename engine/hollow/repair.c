@@ -1,0 +1,363 @@
+/* repair.c - the optimised voids' layer images mended to the verifier's
+ * sub-pixel reading (repair.h).  Their polygons keep the support rule
+ * (slopes.c), but drawn with grey edges a corner or a collapsed ceiling
+ * can read a few tenths of a pixel beyond it (docs/hollow.md "Mended
+ * images"); this adds the few grey levels of solid under such pixels,
+ * top down, so that what is written is what the check passes.
+ */
+#include "engine/hollow/repair.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "engine/core/err.h"
+#include "engine/core/mem.h"
+#include "engine/core/progress.h"
+#include "engine/geom/label.h"
+#include "engine/mesh/mesh.h"
+#include "engine/slice/slice.h"
+#include "engine/verify/verify.h"
+
+int hl_layer_draw(const struct paths *region, const struct raster_map *map, int antialias,
+		  const struct hl_fill *fill, const struct hl_fill *frag, double z_mm, int x0,
+		  int y0, struct raster *r, struct err *e)
+{
+	struct raster_map m = *map;
+	const struct hl_fill_layer *l;
+	int rc;
+
+	m.b[0] -= x0;
+	m.b[1] -= y0;
+	rc = slice_rasterize(region, &m, antialias, r, e);
+	if (!rc && frag && (l = hl_fill_at(frag, z_mm)) != NULL) {
+		struct hl_fill f = *frag; /* its pixels, shifted to r's origin */
+		f.u0 -= x0;
+		f.v0 -= y0;
+		hl_fill_paint(&f, l, r, 255);
+	}
+	if (!rc && fill && (l = hl_fill_at(fill, z_mm)) != NULL) {
+		struct hl_fill f = *fill;
+		f.u0 -= x0;
+		f.v0 -= y0;
+		hl_fill_paint(&f, l, r, 0);
+	}
+	return rc;
+}
+
+void hl_repair_fini(struct hl_repair *r)
+{
+	for (int k = 0; r->layer && k < r->n; k++)
+		mem_free(r->layer[k].px);
+	mem_free(r->layer);
+	memset(r, 0, sizeof *r);
+}
+
+void hl_repair_apply(const struct hl_repair *rp, double z_mm, struct raster *r)
+{
+	int k;
+
+	if (!rp->layer || !(rp->layer_mm > 0))
+		return;
+	k = (int)floor(z_mm / rp->layer_mm + 1e-9);
+	if (k < 0 || k >= rp->n)
+		return;
+	for (size_t i = 0; i < rp->layer[k].n; i++) {
+		const struct hl_mend *q = &rp->layer[k].px[i];
+		uint8_t *p;
+		if (q->x < 0 || q->y < 0 || q->x >= r->w || q->y >= r->h)
+			continue;
+		p = r->px + (size_t)q->y * r->stride + (size_t)q->x;
+		if (q->g > *p)
+			*p = q->g;
+	}
+}
+
+/* The pixels read over in one pass: crop pixels (i = y w + x). */
+struct over {
+	int32_t *at;
+	size_t n, cap;
+	int w;
+};
+
+static int note_over(void *ctx, int x, int y, double far_mm)
+{
+	struct over *o = ctx;
+	void *arr = o->at;
+
+	(void)far_mm;
+	if (mem_grow(&arr, &o->cap, o->n + 1, sizeof *o->at))
+		return ERR_NOMEM;
+	o->at = arr;
+	o->at[o->n++] = y * o->w + x;
+	return 0;
+}
+
+/* Islands the mending made in layer k + 1 (above; above_drawn as drawn
+ * before it was mended): a solid component (gray >= VERIFY_THRESHOLD,
+ * 8-connected, the verifier's islands) holding a mended pixel with no
+ * solid pixel of layer k (cur) under any of its pixels gets its mended
+ * pixels' gray under them.  lab: w h scratch.  0 or ERR_NOMEM. */
+static int hold_islands(struct raster *cur, const struct raster *above,
+			const struct raster *above_drawn, int32_t *lab, struct err *e)
+{
+	size_t np = (size_t)cur->w * (size_t)cur->h;
+	uint8_t *mask = mem_alloc(np), *need = NULL;
+	int32_t count = 0;
+	int rc;
+
+	if (!mask)
+		return ERR_SET(e, ERR_NOMEM, "hollow: out of memory (mending layers)");
+	for (size_t i = 0; i < np; i++)
+		mask[i] = above->px[i] >= VERIFY_THRESHOLD;
+	rc = label_components8(mask, cur->w, cur->h, lab, &count, e);
+	if (!rc && !(need = mem_calloc((size_t)count + 1, 1)))
+		rc = ERR_SET(e, ERR_NOMEM, "hollow: out of memory (mending layers)");
+	if (!rc) {
+		/* need: 1 = holds a mended pixel, 2 = and stands on layer k */
+		for (size_t i = 0; i < np; i++)
+			if (lab[i] && above->px[i] != above_drawn->px[i])
+				need[lab[i]] = 1;
+		for (size_t i = 0; i < np; i++)
+			if (lab[i] && need[lab[i]] && cur->px[i] >= VERIFY_THRESHOLD)
+				need[lab[i]] = 2;
+		for (size_t i = 0; i < np; i++)
+			if (lab[i] && need[lab[i]] == 1 && above->px[i] != above_drawn->px[i] &&
+			    above->px[i] > cur->px[i])
+				cur->px[i] = above->px[i];
+	}
+	mem_free(need);
+	mem_free(mask);
+	return rc;
+}
+
+/* The part alone at one layer, drawn when first needed: img's pixels
+ * (255 = wholly inside the part) are where solid may be added. */
+struct inside {
+	struct slicer *part;
+	const struct raster_map *map; /* shifted to the crop */
+	int antialias, ready;
+	double z_mm;
+	struct paths *region;         /* scratch */
+	struct raster *img;
+};
+
+static int inside_draw(struct inside *in, struct err *e)
+{
+	int rc;
+
+	if (in->ready)
+		return 0;
+	raster_clear(in->img);
+	rc = slice_at(in->part, in->z_mm, in->region, NULL, e);
+	if (!rc)
+		rc = slice_rasterize(in->region, in->map, in->antialias, in->img, e);
+	in->ready = !rc;
+	return rc;
+}
+
+/* Mend layer k (cur, drawn) under layer k + 1 (above, final): first the
+ * islands the mending of above made (hold_islands), then passes of
+ * verify_far_pixels, raising each pixel read over, or when that was not
+ * enough its neighbours, to above's gray where the part is wholly solid.
+ * *left: 1 when a pixel still reads over. */
+static int mend_layer(struct raster *cur, const struct raster *above,
+		      const struct raster *above_drawn, struct inside *in, int32_t *lab,
+		      double px_mm, double py_mm, double reach_mm, int threads, int *left,
+		      struct err *e)
+{
+	struct over o = {NULL, 0, 0, cur->w};
+	const uint8_t *inside;
+	int rc = 0;
+
+	*left = 0;
+	/* islands only where above was mended */
+	if (memcmp(above->px, above_drawn->px, (size_t)cur->w * (size_t)cur->h) != 0)
+		rc = hold_islands(cur, above, above_drawn, lab, e);
+	if (rc)
+		return rc;
+	/* a check, then a raise, HL_REPAIR_PASSES times; a last check */
+	for (int pass = 0; pass <= HL_REPAIR_PASSES; pass++) {
+		size_t mine = 0;
+		int raised = 0;
+		o.n = 0;
+		rc = verify_far_pixels(cur, above, px_mm, py_mm, reach_mm, threads, note_over, &o, e);
+		if (rc == ERR_NOMEM)
+			rc = ERR_SET(e, ERR_NOMEM, "hollow: out of memory (mending layers)");
+		if (!rc && o.n > 0)
+			rc = inside_draw(in, e);
+		if (rc || o.n == 0)
+			break;
+		/* a pixel of the part's own outside (an overhang it needs
+		 * supports for) is not the voids' to mend */
+		inside = in->img->px;
+		for (size_t i = 0; i < o.n; i++)
+			if (inside[o.at[i]] == 255)
+				o.at[mine++] = o.at[i];
+		if (mine == 0)
+			break;
+		if (pass == HL_REPAIR_PASSES) {
+			*left = 1;
+			break;
+		}
+		for (size_t i = 0; i < mine; i++) {
+			int x = o.at[i] % cur->w, y = o.at[i] / cur->w;
+			size_t c = (size_t)o.at[i];
+			/* the pixel itself first: above's gray under it holds it
+			 * (the same edge, a layer down); its neighbours only when
+			 * it has that already */
+			if (above->px[c] > cur->px[c]) {
+				cur->px[c] = above->px[c];
+				raised = 1;
+				continue;
+			}
+			for (int dy = -1; dy <= 1; dy++)
+				for (int dx = -1; dx <= 1; dx++) {
+					int u = x + dx, v = y + dy;
+					size_t j;
+					if (u < 0 || v < 0 || u >= cur->w || v >= cur->h)
+						continue;
+					j = (size_t)v * (size_t)cur->w + (size_t)u;
+					if (inside[j] == 255 && above->px[j] > cur->px[j]) {
+						cur->px[j] = above->px[j];
+						raised = 1;
+					}
+				}
+		}
+		if (!raised) {
+			*left = 1; /* what reads over has above's gray all round */
+			break;
+		}
+	}
+	mem_free(o.at);
+	return rc;
+}
+
+int hl_repair_build(const struct mesh *res, size_t part_nv, size_t part_nt,
+		    const struct raster_map *map, int antialias, const struct hl_fill *fill,
+		    const struct hl_fill *frag, double layer_mm, double px_mm, double py_mm,
+		    double reach_mm, int threads, struct hl_repair *r, struct err *e)
+{
+	struct mesh part = {res->v, res->tri, part_nv, part_nt};
+	struct slicer *sl = NULL, *sp = NULL;
+	struct raster *cur = NULL, *above = NULL, *orig = NULL, *above_orig = NULL, *inside = NULL;
+	int32_t *lab = NULL;
+	struct paths reg;
+	double umin = INFINITY, umax = -INFINITY, vmin = INFINITY, vmax = -INFINITY;
+	double zmin = INFINITY, zmax = -INFINITY, ztop = -INFINITY, t0 = progress_now_s();
+	int x0, y0, w, h, k0, k1, n, pad, rc = 0, have_above = 0;
+
+	hl_repair_fini(r);
+	if (res->nv <= part_nv || !(layer_mm > 0))
+		return 0;
+	for (size_t i = 0; i < res->nv; i++)
+		ztop = fmax(ztop, res->v[i].z);
+	for (size_t i = part_nv; i < res->nv; i++) {
+		double u, v;
+		raster_map_apply(map, res->v[i].x, res->v[i].y, &u, &v);
+		umin = fmin(umin, u);
+		umax = fmax(umax, u);
+		vmin = fmin(vmin, v);
+		vmax = fmax(vmax, v);
+		zmin = fmin(zmin, res->v[i].z);
+		zmax = fmax(zmax, res->v[i].z);
+	}
+	n = (int)ceil(ztop / layer_mm - 1e-9);
+	pad = (int)ceil(reach_mm / fmin(px_mm, py_mm)) + 3;
+	x0 = (int)floor(umin) - pad;
+	y0 = (int)floor(vmin) - pad;
+	w = (int)ceil(umax) + pad - x0;
+	h = (int)ceil(vmax) + pad - y0;
+	k0 = (int)floor(zmin / layer_mm) - 1;
+	k1 = (int)ceil(zmax / layer_mm) + 1;
+	k0 = k0 < 0 ? 0 : k0;
+	k1 = k1 >= n ? n - 1 : k1;
+	if (n < 1 || k1 < k0)
+		return 0;
+	if (w > 65535 || h > 65535 || (double)w * h > (double)(1 << 28))
+		return ERR_SET(e, ERR_LIMIT, "hollow: the optimised voids span %d x %d pixels, too "
+				  "many to mend", w, h);
+	paths_init(&reg);
+	r->layer = mem_calloc((size_t)n, sizeof *r->layer);
+	cur = raster_new(w, h);
+	above = raster_new(w, h);
+	orig = raster_new(w, h);
+	above_orig = raster_new(w, h);
+	inside = raster_new(w, h);
+	lab = mem_alloc((size_t)w * (size_t)h * sizeof *lab);
+	if (!r->layer || !cur || !above || !orig || !above_orig || !inside || !lab) {
+		rc = ERR_SET(e, ERR_NOMEM, "hollow: out of memory (mending layers)");
+		goto out;
+	}
+	r->n = n;
+	r->layer_mm = layer_mm;
+	rc = slice_new(res, &sl, e);
+	if (!rc)
+		rc = slice_new(&part, &sp, e);
+	for (int k = k1; !rc && k >= k0; k--) {
+		double z = (k + 0.5) * layer_mm;
+		struct raster_map m = *map;
+		int left = 0;
+		size_t cnt = 0;
+		raster_clear(cur);
+		if ((rc = slice_at(sl, z, &reg, NULL, e)) != 0 ||
+		    (rc = hl_layer_draw(&reg, map, antialias, fill, frag, z, x0, y0, cur, e)) != 0)
+			break;
+		memcpy(orig->px, cur->px, (size_t)w * (size_t)h);
+		if (have_above) {
+			struct inside in = {sp, &m, antialias, 0, z, &reg, inside};
+			m.b[0] -= x0;
+			m.b[1] -= y0;
+			rc = mend_layer(cur, above, above_orig, &in, lab, px_mm, py_mm, reach_mm,
+					threads, &left, e);
+			if (rc)
+				break;
+		}
+		for (size_t i = 0; i < (size_t)w * (size_t)h; i++)
+			cnt += cur->px[i] != orig->px[i];
+		if (cnt) {
+			struct hl_mend *q = mem_alloc(cnt * sizeof *q);
+			if (!q) {
+				rc = ERR_SET(e, ERR_NOMEM, "hollow: out of memory (mending layers)");
+				break;
+			}
+			r->layer[k].px = q;
+			for (size_t i = 0; i < (size_t)w * (size_t)h; i++)
+				if (cur->px[i] != orig->px[i]) {
+					r->mm3 += (cur->px[i] - orig->px[i]) / 255.0 * px_mm * py_mm *
+						  layer_mm;
+					q->x = x0 + (int32_t)(i % (size_t)w);
+					q->y = y0 + (int32_t)(i / (size_t)w);
+					q->g = cur->px[i];
+					q++;
+				}
+			r->layer[k].n = cnt;
+			r->pixels += (long long)cnt;
+			r->layers++;
+		}
+		r->layers_left += left;
+		{
+			/* cur, mended, is the next layer's above; orig its drawing */
+			struct raster *t = above;
+			above = cur;
+			cur = t;
+			t = above_orig;
+			above_orig = orig;
+			orig = t;
+		}
+		have_above = 1;
+	}
+out:
+	r->seconds = progress_now_s() - t0;
+	slice_free(sl);
+	slice_free(sp);
+	raster_free(cur);
+	raster_free(above);
+	raster_free(orig);
+	raster_free(above_orig);
+	raster_free(inside);
+	mem_free(lab);
+	paths_fini(&reg);
+	if (rc)
+		hl_repair_fini(r);
+	return rc;
+}

@@ -1,0 +1,75 @@
+/* repair.h - the layer images of the optimised voids mended to the
+ * verifier's sub-pixel reading (repair.c; docs/hollow.md "Mended
+ * images"), and the drawing of one layer that both the mending and the
+ * layer pass use.  Frame: printer mm through a raster_map; images in
+ * pixels of that map, crops offset by (x0, y0).
+ */
+#ifndef INFILLD_HOLLOW_REPAIR_H
+#define INFILLD_HOLLOW_REPAIR_H
+
+#include <stddef.h>
+#include <stdint.h>
+
+#include "engine/geom/path.h"
+#include "engine/geom/raster.h"
+#include "engine/hollow/fill/fill.h"
+
+struct err;
+struct mesh;
+
+/* Draw print layer z_mm's image into r, whose pixel (0, 0) is pixel
+ * (x0, y0) of map's images: region (the hollowed part's section, nm)
+ * rasterised with antialias (max-ed into r: the caller clears it), then
+ * frag's pixels of that layer painted solid and fill's cleared (either
+ * may be NULL).  0, ERR_NOMEM or a rasteriser error. */
+int hl_layer_draw(const struct paths *region, const struct raster_map *map, int antialias,
+		  const struct hl_fill *fill, const struct hl_fill *frag, double z_mm, int x0,
+		  int y0, struct raster *r, struct err *e);
+
+/* Passes of the mending a layer gets at most. */
+#define HL_REPAIR_PASSES 8
+
+/* One mended pixel: image pixel (x, y) drawn with gray g. */
+struct hl_mend {
+	int32_t x, y;
+	uint8_t g;
+};
+
+struct hl_repair {
+	struct { struct hl_mend *px; size_t n; } *layer; /* n print layers */
+	int n;
+	double layer_mm;
+	long long pixels;  /* mended pixels, all layers */
+	double mm3;        /* solid they add: gray added / 255 x pixel x layer */
+	int layers;        /* layers with a mended pixel */
+	int layers_left;   /* layers where a pixel still reads over after the passes */
+	double seconds;
+};
+
+void hl_repair_fini(struct hl_repair *r);
+
+/* Mend the layers of res (the part: its first part_nv vertices and
+ * part_nt triangles, then the optimised voids' surfaces) drawn as
+ * hl_layer_draw does through map with antialias, with fill and frag (may
+ * be NULL), print layers of layer_mm.  Top down over the layers the voids
+ * span (and one more each way), on the image box of their surfaces grown
+ * by the reach: where a pixel of layer k + 1 reads farther than reach_mm
+ * from layer k's solid (verify_far_pixels, pitches px_mm, py_mm), the
+ * pixel of layer k under it takes layer k + 1's gray there, or when it
+ * has that already its eight neighbours take theirs, where the part is
+ * wholly solid, up to HL_REPAIR_PASSES times a layer; islands the
+ * mending made in layer k + 1 get its gray under them; the gray added
+ * to layer k is checked against layer k - 1 in its turn.
+ * Only solid is added, and only inside the part.  r (zeroed or finished)
+ * receives the mended pixels per layer.  0, ERR_NOMEM, ERR_LIMIT (a box
+ * over 2^28 pixels) or a slicer error. */
+int hl_repair_build(const struct mesh *res, size_t part_nv, size_t part_nt,
+		    const struct raster_map *map, int antialias, const struct hl_fill *fill,
+		    const struct hl_fill *frag, double layer_mm, double px_mm, double py_mm,
+		    double reach_mm, int threads, struct hl_repair *r, struct err *e);
+
+/* Draw the mended pixels of the print layer at mid-plane z_mm into r, an
+ * image of the map r was built on (pixels outside r skipped). */
+void hl_repair_apply(const struct hl_repair *rp, double z_mm, struct raster *r);
+
+#endif

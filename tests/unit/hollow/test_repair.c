@@ -1,0 +1,218 @@
+/* test_repair.c - the optimised voids' images mended to the verifier's
+ * reading (engine/hollow/repair.c) on a synthetic part: a 10 mm cube
+ * holding a void with vertical walls under a hip roof that leans beta
+ * from the vertical (a square pyramid frustum: its corners lean more, as
+ * the diagonal).  Drawn at a resin printer's pitch (0.047 mm pixels,
+ * 0.05 mm layers, alpha 45), the layers are checked by the verifier
+ * (engine/verify), as drawn and as mended:
+ * - beta 50 (too flat by 0.204 px a layer): the drawing fails, the
+ *   mended layers pass with no island, and the gray the mending adds
+ *   (its mm3) is the void the verifier finds lost; against a roof too
+ *   flat everywhere that is far more than a 45 degree roof would cost
+ *   (the front stands where it first read over): the mending is for the
+ *   optimised voids' local misreadings, whose polygons keep the rule;
+ * - beta 40 (support-free): both pass, and the mending adds almost
+ *   nothing;
+ * - nothing is ever added outside the part or where the part is not
+ *   wholly solid (the ledger's pixels all lie inside the cube).
+ */
+#include "harness.h"
+
+#include <math.h>
+#include <string.h>
+
+#include "engine/core/err.h"
+#include "engine/core/mem.h"
+#include "engine/geom/raster.h"
+#include "engine/hollow/repair.h"
+#include "engine/mesh/mesh.h"
+#include "engine/slice/slice.h"
+#include "engine/verify/verify.h"
+
+#include "boxgen.h"
+
+#define PX 0.047
+#define LAYER 0.05
+#define SIDE 10.0
+#define W 230 /* image pixels a side: the cube and a margin */
+#define TOP 0.02 /* the roof's top, half-width (mm): flat over 0.85 px, in reach */
+
+/* The cube, then the void: [2, 8]^2 from z 2 to 5, then a roof rising
+ * at beta from the vertical to a 1 mm square top (normals into it). */
+static void part(struct mesh *m, double beta_deg)
+{
+	double h = (3 - TOP) / tan(beta_deg * M_PI / 180), zt = 5 + h;
+	/* rings of four at z 2, 5 and zt; faces wound for outward normals,
+	 * then flipped for the void */
+	static const uint32_t f[20][3] = {
+	    {0, 2, 1}, {0, 3, 2},                                   /* bottom */
+	    {0, 1, 5}, {0, 5, 4}, {1, 2, 6}, {1, 6, 5},             /* walls */
+	    {2, 3, 7}, {2, 7, 6}, {3, 0, 4}, {3, 4, 7},
+	    {4, 5, 9}, {4, 9, 8}, {5, 6, 10}, {5, 10, 9},           /* roof */
+	    {6, 7, 11}, {6, 11, 10}, {7, 4, 8}, {7, 8, 11},
+	    {8, 9, 10}, {8, 10, 11}};                               /* top */
+	static const double sq[4][2] = {{-1, -1}, {1, -1}, {1, 1}, {-1, 1}};
+	uint32_t v0;
+
+	m->v = mem_alloc(20 * sizeof *m->v);
+	m->tri = mem_alloc(32 * 3 * sizeof *m->tri);
+	REQUIRE(m->v && m->tri);
+	m->nv = m->nt = 0;
+	add_box(m, v3(0, 0, 0), v3(SIDE, SIDE, SIDE), 0);
+	v0 = (uint32_t)m->nv;
+	for (int r = 0; r < 3; r++)
+		for (int q = 0; q < 4; q++) {
+			double half = r < 2 ? 3 : TOP, z = r == 0 ? 2 : r == 1 ? 5 : zt;
+			m->v[m->nv++] = v3(5 + half * sq[q][0], 5 + half * sq[q][1], z);
+		}
+	for (int t = 0; t < 20; t++) {
+		uint32_t *q = m->tri + 3 * m->nt++;
+		q[0] = v0 + f[t][0];
+		q[1] = v0 + f[t][2];
+		q[2] = v0 + f[t][1];
+	}
+}
+
+static void map_of(struct raster_map *map)
+{
+	memset(map, 0, sizeof *map);
+	map->a[0][0] = 1 / PX;
+	map->a[1][1] = 1 / PX;
+	map->b[0] = 7.3;
+	map->b[1] = 6.6;
+}
+
+/* Draw every layer of m (as drawn, or mended by r) and check them;
+ * *solid_mm3: the stack's solid from its gray (gray / 255 x pixel x
+ * layer), summed here. */
+static void check_stack(const struct mesh *m, const struct hl_repair *r,
+			struct verify_report *rep, double *solid_mm3)
+{
+	struct verify_params p = {LAYER, 45, PX, PX, 0, 0, 0, 0};
+	struct verify *v = NULL;
+	struct slicer *sl = NULL;
+	struct raster *img = raster_new(W, W);
+	struct raster_map map;
+	struct paths reg;
+	struct err e;
+	int n = (int)ceil(SIDE / LAYER - 1e-9);
+
+	err_clear(&e);
+	memset(rep, 0, sizeof *rep); /* verify_finish replaces it */
+	map_of(&map);
+	paths_init(&reg);
+	*solid_mm3 = 0;
+	REQUIRE(img);
+	REQUIRE_OK(verify_new(&p, &v, &e), &e);
+	REQUIRE_OK(slice_new(m, &sl, &e), &e);
+	for (int k = 0; k < n; k++) {
+		double z = (k + 0.5) * LAYER;
+		raster_clear(img);
+		REQUIRE_OK(slice_at(sl, z, &reg, NULL, &e), &e);
+		REQUIRE_OK(hl_layer_draw(&reg, &map, 1, NULL, NULL, z, 0, 0, img, &e), &e);
+		if (r)
+			hl_repair_apply(r, z, img);
+		REQUIRE_OK(verify_layer(v, img, &e), &e);
+		for (size_t i = 0; i < (size_t)W * W; i++)
+			*solid_mm3 += img->px[i] / 255.0 * PX * PX * LAYER;
+	}
+	REQUIRE_OK(verify_finish(v, rep, &e), &e);
+	verify_free(v);
+	slice_free(sl);
+	paths_fini(&reg);
+	raster_free(img);
+}
+
+/* Mend m's layers; every mended pixel inside the cube's image. */
+static void mend(const struct mesh *m, struct hl_repair *r)
+{
+	struct raster_map map;
+	struct err e;
+	double reach = LAYER + 0.5 * VERIFY_TOLERANCE_PX * PX;
+
+	err_clear(&e);
+	map_of(&map);
+	memset(r, 0, sizeof *r);
+	REQUIRE_OK(hl_repair_build(m, 8, 12, &map, 1, NULL, NULL, LAYER, PX, PX, reach, 1, r, &e),
+		   &e);
+	for (int k = 0; k < r->n; k++)
+		for (size_t i = 0; i < r->layer[k].n; i++) {
+			double u = r->layer[k].px[i].x + 0.5, v = r->layer[k].px[i].y + 0.5;
+			double x = (u - map.b[0]) * PX, y = (v - map.b[1]) * PX;
+			CHECK(x > 0 && x < SIDE && y > 0 && y < SIDE);
+			CHECK((k + 0.5) * LAYER > 2 - LAYER); /* not below the void */
+		}
+}
+
+static void test_flat_roof_mended(void)
+{
+	struct mesh m;
+	struct hl_repair r;
+	struct verify_report drawn, mended;
+	/* the volume between the 50 and the 45 degree hip roofs over the
+	 * 6 mm square (frusta up to the top square) */
+	double t50 = tan(50 * M_PI / 180), between, sd, sm;
+
+	part(&m, 50);
+	between = (36 + 6 * 2 * TOP + 4 * TOP * TOP) / 3.0 * (3 - TOP) * (1 - 1 / t50);
+	mend(&m, &r);
+	check_stack(&m, NULL, &drawn, &sd);
+	check_stack(&m, &r, &mended, &sm);
+	printf("roof 50 deg: drawn %lld px over (excess %.3f px), mended %lld px over (excess %.3f "
+	       "px), %lld pixels on %d layers, %.3f mm3 (the images: %.3f mm3 more solid; void "
+	       "%.3f -> %.3f mm3 at the threshold; a 45 degree roof would cost %.3f mm3), %d "
+	       "left\n",
+	       drawn.interior_overhang_px, drawn.slope_excess_px, mended.interior_overhang_px,
+	       mended.slope_excess_px, r.pixels, r.layers, r.mm3, sm - sd,
+	       drawn.enclosed_void_mm3, mended.enclosed_void_mm3, between, r.layers_left);
+	CHECK(drawn.interior_overhang_px > 0);
+	CHECK(drawn.slope_excess_px > VERIFY_TOLERANCE_PX);
+	CHECK_EQ_INT(mended.interior_overhang_px, 0);
+	CHECK(mended.slope_excess_px <= VERIFY_TOLERANCE_PX);
+	CHECK_EQ_INT(mended.islands, 0);
+	CHECK_EQ_INT(r.layers_left, 0);
+	/* the ledger is what the images hold: their solid grew by its mm3 */
+	CHECK(r.mm3 >= between);
+	CHECK_NEAR(sm - sd, r.mm3, 1e-6 * r.mm3);
+	/* a safety net, not a design: against a roof too flat everywhere the
+	 * mended front stands where the first layer read over left it, so
+	 * most of the roof and the walls under it fill (docs/hollow.md), but
+	 * the void stays */
+	CHECK(mended.enclosed_void_mm3 > 0.25 * drawn.enclosed_void_mm3);
+	verify_report_fini(&drawn);
+	verify_report_fini(&mended);
+	hl_repair_fini(&r);
+	mem_free(m.v);
+	mem_free(m.tri);
+}
+
+static void test_steep_roof_kept(void)
+{
+	struct mesh m;
+	struct hl_repair r;
+	struct verify_report drawn, mended;
+	double sd, sm;
+
+	part(&m, 40);
+	mend(&m, &r);
+	check_stack(&m, NULL, &drawn, &sd);
+	check_stack(&m, &r, &mended, &sm);
+	printf("roof 40 deg: drawn %lld px over (excess %.3f px), mended %lld pixels, %.4f mm3\n",
+	       drawn.interior_overhang_px, drawn.slope_excess_px, r.pixels, r.mm3);
+	CHECK_EQ_INT(drawn.interior_overhang_px, 0);
+	CHECK_EQ_INT(mended.interior_overhang_px, 0);
+	CHECK(r.mm3 < 0.01);
+	CHECK_NEAR(sm, sd, 0.01);
+	verify_report_fini(&drawn);
+	verify_report_fini(&mended);
+	hl_repair_fini(&r);
+	mem_free(m.v);
+	mem_free(m.tri);
+}
+
+int main(void)
+{
+	RUN(test_flat_roof_mended);
+	RUN(test_steep_roof_kept);
+	return harness_report();
+}
