@@ -23,7 +23,14 @@ ball's centre):
 Self-check: with one void only, the void is the cone from the ball's top down to
 the equator plus the lower half ball, pi r^3 (checked within 0.1 %).
 
-Prints one line per birth distance: reduction (void / ball volume), voids.
+Prints one line per birth distance: reduction (void / ball volume), voids; then
+the same at the rate binary pixels allow.  With h tan(alpha) between 1 and
+sqrt(2) pixels (SL1: 0.05 mm layers, 0.047 mm pixels, alpha 45: 1.064 px) a
+solid pixel of layer k + 1 needs a solid pixel of layer k among itself and its
+four neighbours, so V(k) can be at most V(k + 1) grown by that cross: a void
+grown from a point is a diamond gaining one pixel a layer at its corners, whose
+area is that of a disc gaining sqrt(2 / pi) = 0.798 px a layer.  The model run
+at that equal-area rate estimates what any binary layout keeps.
 `hollow_axisym.py --write-ball PATH [R]` writes instead the ball the bench
 hollows for comparison (tests/support/meshgen.py write_ball_stl: closed,
 9,024 triangles, radius R mm, 25 by default).
@@ -36,11 +43,14 @@ sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."
 from meshgen import write_ball_stl  # noqa: E402
 
 
-def layout(R, t, w, alpha_deg, lone, dz=0.01, births=True, z0=None, on_layer=None):
+def layout(R, t, w, alpha_deg, lone, dz=0.01, births=True, z0=None, on_layer=None,
+           grow_mm_per_mm=None):
     """Run the model from z0 (r by default) down in steps of dz; on_layer(z,
-    voids) sees every step's annuli after growth, walls and births."""
+    voids) sees every step's annuli after growth, walls and births.
+    grow_mm_per_mm: the fronts' horizontal advance per mm of height
+    (tan(alpha) by default); walls keep alpha's width either way."""
     r = R - t
-    dd = dz * math.tan(math.radians(alpha_deg))
+    dd = dz * (math.tan(math.radians(alpha_deg)) if grow_mm_per_mm is None else grow_mm_per_mm)
     wall = w / math.cos(math.radians(alpha_deg))
     voids = []  # [a, b]
     vol = 0.0
@@ -99,6 +109,12 @@ def main():
     for lone in (0.5, 1.5, 3.0, 4.5, 6.0):
         red, n = layout(R, t, w, alpha, lone)
         print("axisym round growth, births beyond %.1f mm: %.2f %% in %d voids" % (lone, 100 * red, n))
+    pixel_mm, layer_mm = 0.047, 0.05  # the SL1's
+    rate = math.sqrt(2 / math.pi) * pixel_mm / layer_mm
+    red, n = layout(R, t, w, alpha, 3.0, grow_mm_per_mm=rate)
+    print("axisym at binary pixels' rate (SL1 pitch: diamonds, equal-area %.3f mm a layer, "
+          "%.1f deg), births beyond 3.0 mm: %.2f %% in %d voids"
+          % (rate * layer_mm, math.degrees(math.atan(rate)), 100 * red, n))
     return 0
 
 
