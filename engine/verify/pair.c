@@ -58,7 +58,7 @@ int verify_far_pixels(const struct raster *below, const struct raster *above, do
 {
 	struct pair_scratch s;
 	struct raster b, a;
-	double pmin = fmin(px_mm, py_mm), hd = 0.5 * hypot(px_mm, py_mm);
+	double pmin = fmin(px_mm, py_mm), hd = 0.5 * hypot(px_mm, py_mm); /* for the box's pad */
 	int x0 = INT32_MAX, y0 = INT32_MAX, x1 = -1, y1 = -1, pad, rc = 0;
 	size_t np;
 
@@ -133,7 +133,7 @@ int verify_far_pixels(const struct raster *below, const struct raster *above, do
 		for (int y = 0; y < a.h && !rc; y++)
 			for (int x = 0; x < a.w && !rc; x++) {
 				size_t i = (size_t)y * (size_t)a.w + (size_t)x;
-				double u = INFINITY, lo, far;
+				double u = INFINITY, far;
 				if (a.px[i] == 0 || b.px[i] == 255)
 					continue;
 				if (s.near[i] >= 0)
@@ -142,14 +142,8 @@ int verify_far_pixels(const struct raster *below, const struct raster *above, do
 								s.near[i] / b.w + y0);
 				if (u <= reach_mm)
 					continue;
-				lo = sqrt(s.d2_any[i]) - (a.px[i] >= 128 ? hd : 2 * hd);
-				if (lo > reach_mm) {
-					far = lo;
-				} else {
-					double wmm = fmin(u, sqrt(s.d2_any[i]) + 2 * hd) + 2 * hd;
-					far = verify_subpx_far_mm(&bi, &ai, x + x0, y + y0,
-								  (int)ceil(wmm / pmin));
-				}
+				far = verify_subpx_far_bounded_mm(&bi, &ai, x + x0, y + y0, a.px[i], u,
+								  sqrt(s.d2_any[i]), reach_mm);
 				if (far > reach_mm)
 					rc = fn(ctx, x + x0, y + y0, far);
 			}

@@ -531,3 +531,17 @@ double verify_subpx_far_mm(const struct verify_subpx_img *below,
 		}
 	return far;
 }
+
+double verify_subpx_far_bounded_mm(const struct verify_subpx_img *below,
+				   const struct verify_subpx_img *above, int x, int y, int gray,
+				   double u_mm, double any_mm, double reach_mm)
+{
+	double hd = 0.5 * hypot(above->px_mm, above->py_mm);
+	double lo = any_mm - (gray >= 128 ? hd : 2 * hd), wmm;
+
+	if (lo > reach_mm)
+		return lo; /* a lower bound: beyond the reach anyway */
+	wmm = fmin(u_mm, any_mm + 2 * hd) + 2 * hd;
+	return verify_subpx_far_mm(below, above, x, y,
+				   (int)ceil(wmm / fmin(above->px_mm, above->py_mm)));
+}

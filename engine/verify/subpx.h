@@ -131,4 +131,16 @@ double verify_subpx_region_dist(const struct verify_subpx_region *r, double x_mm
 double verify_subpx_far_mm(const struct verify_subpx_img *below,
 			   const struct verify_subpx_img *above, int x, int y, int win_px);
 
+/* The reading of verify_subpx_far_mm for pixel (x, y) of above (gray
+ * its gray) where it matters, given u_mm, an upper bound on it (the
+ * caller skips the pixel when that is within its slope), and any_mm, the
+ * centre distance to the nearest pixel of below with any solid: a lower
+ * bound (any_mm less half a pixel diagonal, a whole one for a pixel
+ * under half solid) when that is beyond reach_mm already, else the
+ * measurement on the window those two bounds give.  verify.c's overhang
+ * test and verify_far_pixels (pair.c) share it. */
+double verify_subpx_far_bounded_mm(const struct verify_subpx_img *below,
+				   const struct verify_subpx_img *above, int x, int y, int gray,
+				   double u_mm, double any_mm, double reach_mm);
+
 #endif

@@ -132,8 +132,7 @@ int verify_overhangs(struct verify *v, int layer, struct err *e)
 {
 	struct crop *c = v->cur, *pc = v->prev;
 	size_t np = pc->w ? (size_t)(v->nuf - v->prev_first) : 0;
-	double pmin = fmin(v->p.pixel_x_mm, v->p.pixel_y_mm);
-	double hd = 0.5 * hypot(v->p.pixel_x_mm, v->p.pixel_y_mm), pa = v->p.pixel_x_mm * v->p.pixel_y_mm;
+	double pa = v->p.pixel_x_mm * v->p.pixel_y_mm;
 	double ext2 = v->ext_reach_mm * v->ext_reach_mm;
 	struct verify_subpx_img below = {pc->gray, pc->x0, pc->y0, pc->w, pc->h, v->p.pixel_x_mm,
 					 v->p.pixel_y_mm, 0, &pc->fits};
@@ -153,7 +152,7 @@ int verify_overhangs(struct verify *v, int layer, struct err *e)
 			size_t i = (size_t)y * (size_t)c->w + (size_t)x, pi;
 			int gx = x + c->x0, gy = y + c->y0, gb;
 			uint32_t id;
-			double u, lo, far;
+			double u, far;
 			if (c->gray[i] == 0)
 				continue;
 			verify_crop_solid(pc, gx, gy, &pi);
@@ -192,14 +191,8 @@ int verify_overhangs(struct verify *v, int layer, struct err *e)
 					return e ? e->code : ERR_NOMEM;
 				pc->any_ok = 1;
 			}
-			lo = sqrt(pc->any_d2[pi]) - (c->gray[i] >= 128 ? hd : 2 * hd);
-			if (lo > v->reach_mm) {
-				far = lo; /* a lower bound: beyond the reach anyway */
-			} else {
-				double wmm = fmin(u, sqrt(pc->any_d2[pi]) + 2 * hd) + 2 * hd;
-				far = verify_subpx_far_mm(&below, &above, gx, gy,
-							  (int)ceil(wmm / pmin));
-			}
+			far = verify_subpx_far_bounded_mm(&below, &above, gx, gy, c->gray[i], u,
+							  sqrt(pc->any_d2[pi]), v->reach_mm);
 			if (far - v->slope_mm > v->aggx[id - v->prev_first])
 				v->aggx[id - v->prev_first] = far - v->slope_mm;
 			if (far > v->reach_mm)
