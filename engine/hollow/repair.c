@@ -155,15 +155,16 @@ static int inside_draw(struct inside *in, struct err *e)
 	return rc;
 }
 
-/* Mend layer k (cur, drawn) under layer k + 1 (above, final): first the
+/* Mend layer k (cur, drawn; crop pixel (0, 0) is image pixel (ox, oy))
+ * under layer k + 1 (above, final): first the
  * islands the mending of above made (hold_islands), then passes of
  * verify_far_pixels, raising each pixel read over, or when that was not
  * enough its neighbours, to above's gray where the part is wholly solid.
  * *left: 1 when a pixel still reads over. */
 static int mend_layer(struct raster *cur, const struct raster *above,
-		      const struct raster *above_drawn, struct inside *in, int32_t *lab,
-		      double px_mm, double py_mm, double reach_mm, int threads, int *left,
-		      struct err *e)
+		      const struct raster *above_drawn, int ox, int oy, struct inside *in,
+		      int32_t *lab, double px_mm, double py_mm, double reach_mm, int threads,
+		      int *left, struct err *e)
 {
 	struct over o = {NULL, 0, 0, cur->w};
 	const uint8_t *inside;
@@ -180,7 +181,8 @@ static int mend_layer(struct raster *cur, const struct raster *above,
 		size_t mine = 0;
 		int raised = 0;
 		o.n = 0;
-		rc = verify_far_pixels(cur, above, px_mm, py_mm, reach_mm, threads, note_over, &o, e);
+		rc = verify_far_pixels(cur, above, ox, oy, px_mm, py_mm, reach_mm, threads, note_over,
+				       &o, e);
 		if (rc == ERR_NOMEM)
 			rc = ERR_SET(e, ERR_NOMEM, "hollow: out of memory (mending layers)");
 		if (!rc && o.n > 0)
@@ -307,8 +309,8 @@ int hl_repair_build(const struct mesh *res, size_t part_nv, size_t part_nt,
 			struct inside in = {sp, &m, antialias, 0, z, &reg, inside};
 			m.b[0] -= x0;
 			m.b[1] -= y0;
-			rc = mend_layer(cur, above, above_orig, &in, lab, px_mm, py_mm, reach_mm,
-					threads, &left, e);
+			rc = mend_layer(cur, above, above_orig, x0, y0, &in, lab, px_mm, py_mm,
+					reach_mm, threads, &left, e);
 			if (rc)
 				break;
 		}

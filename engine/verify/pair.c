@@ -52,8 +52,8 @@ static size_t grey_count(const struct raster *r)
 	return n;
 }
 
-int verify_far_pixels(const struct raster *below, const struct raster *above, double px_mm,
-		      double py_mm, double reach_mm, int threads,
+int verify_far_pixels(const struct raster *below, const struct raster *above, int ox, int oy,
+		      double px_mm, double py_mm, double reach_mm, int threads,
 		      int (*fn)(void *ctx, int x, int y, double far_mm), void *ctx, struct err *e)
 {
 	struct pair_scratch s;
@@ -127,9 +127,13 @@ int verify_far_pixels(const struct raster *below, const struct raster *above, do
 	if (rc)
 		goto out;
 	{
-		/* the box's pixel (0, 0) is pixel (x0, y0) of the images */
-		struct verify_subpx_img bi = {b.px, x0, y0, b.w, b.h, px_mm, py_mm, 0, &s.fb};
-		struct verify_subpx_img ai = {a.px, x0, y0, a.w, a.h, px_mm, py_mm, 0, &s.fa};
+		/* the box's pixel (0, 0) is pixel (x0, y0) of the crops, (ox + x0,
+		 * oy + y0) of the layer images: the model reads in the images'
+		 * coordinates, as verify_layer does, so that a crop reads each
+		 * pixel to the bit as the whole image does */
+		int ix = ox + x0, iy = oy + y0;
+		struct verify_subpx_img bi = {b.px, ix, iy, b.w, b.h, px_mm, py_mm, 0, &s.fb};
+		struct verify_subpx_img ai = {a.px, ix, iy, a.w, a.h, px_mm, py_mm, 0, &s.fa};
 		for (int y = 0; y < a.h && !rc; y++)
 			for (int x = 0; x < a.w && !rc; x++) {
 				size_t i = (size_t)y * (size_t)a.w + (size_t)x;
@@ -138,11 +142,11 @@ int verify_far_pixels(const struct raster *below, const struct raster *above, do
 					continue;
 				if (s.near[i] >= 0)
 					u = sqrt(s.d2_solid[i]) +
-					    verify_subpx_gap_mm(&bi, s.near[i] % b.w + x0,
-								s.near[i] / b.w + y0);
+					    verify_subpx_gap_mm(&bi, s.near[i] % b.w + ix,
+								s.near[i] / b.w + iy);
 				if (u <= reach_mm)
 					continue;
-				far = verify_subpx_far_bounded_mm(&bi, &ai, x + x0, y + y0, a.px[i], u,
+				far = verify_subpx_far_bounded_mm(&bi, &ai, x + ix, y + iy, a.px[i], u,
 								  sqrt(s.d2_any[i]), reach_mm);
 				if (far > reach_mm)
 					rc = fn(ctx, x + x0, y + y0, far);

@@ -151,19 +151,23 @@ int verify_layer_ref(struct verify *v, const struct raster *r, const struct rast
 		     struct err *e);
 
 /* The overhang reading of verify_layer for one pair of images, pixel by
- * pixel: below (layer k) and above (layer k + 1), images of one size,
- * pitches px_mm (columns) and py_mm (rows).  For every pixel
+ * pixel: below (layer k) and above (layer k + 1), crops of one size of
+ * the layer images, their pixel (0, 0) the images' pixel (ox, oy) (the
+ * model reads in image coordinates, as verify_layer does, so a crop
+ * reads each pixel as the whole image does), pitches px_mm (columns) and
+ * py_mm (rows).  For every pixel
  * of above with some solid over a pixel of below that is not whole
  * solid, the largest distance (mm) from a point of its solid to below's
  * solid, each read at sub-pixel accuracy (docs/verify.md "Sub-pixel
  * overhangs"; pixels beyond the images are empty); fn(ctx, x, y, far_mm)
- * is called, row by row, for each pixel where that exceeds reach_mm (a
- * lower bound where it is far beyond; INFINITY with no solid in reach).
+ * is called (x, y: crop pixels), row by row, for each pixel where that
+ * exceeds reach_mm (a lower bound where it is far beyond; INFINITY with
+ * no solid in reach).
  * A nonzero return of fn stops the scan and is returned.  Unlike
  * verify_layer this does not tell enclosed voids from the outside.
  * threads: as verify_params.  0, ERR_PARAM (sizes), ERR_NOMEM or fn's. */
-int verify_far_pixels(const struct raster *below, const struct raster *above, double px_mm,
-		      double py_mm, double reach_mm, int threads,
+int verify_far_pixels(const struct raster *below, const struct raster *above, int ox, int oy,
+		      double px_mm, double py_mm, double reach_mm, int threads,
 		      int (*fn)(void *ctx, int x, int y, double far_mm), void *ctx, struct err *e);
 
 /* Close the stack (the space above the last layer is outside) and fill

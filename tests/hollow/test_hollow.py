@@ -337,13 +337,11 @@ class HollowTest(unittest.TestCase):
             self.assertGreater(h["solver_work"], budget / 2)
             self.assertGreater(h["solver_iterations"], 0)
             self.assertLess(h["solver_iterations"], free["solver_iterations"])
-            # support-free on the polygons the layers are drawn from (the
-            # capped optima fail their check and the voids keep their
-            # start: the pixel model reads those at up to 0.75 px,
-            # docs/hollow.md known limit 2)
-            ps = h["polygon_slopes"]
-            self.assertGreater(ps["layers_checked"], 0, ps)
-            self.assertEqual(ps["excess_mm2"], 0.0, ps)
+            # support-free on the polygons the layers are drawn from and
+            # on the layers (the capped optima fail their check and the
+            # voids keep their start, which the pixel model read at up to
+            # 0.75 px before the mending, docs/hollow.md known limit 2)
+            optimised_slopes_ok(self, h, 0.5)
             self.assertEqual(h["verify"]["islands"], 0)
         for k in ("solver_work", "solver_iterations", "voids", "voids_fallback",
                   "optimised_volume_mm3", "volume_reduction"):

@@ -257,7 +257,7 @@ static void far_pair(double d_px, int stop_at, struct far_seen *f)
 			    (uint8_t)lround(255 * clip_area(i, j, ha, 5));
 		}
 	err_clear(&e);
-	rc = verify_far_pixels(below, above, PX, PX, LAYER, 1, far_seen, f, &e);
+	rc = verify_far_pixels(below, above, 0, 0, PX, PX, LAYER, 1, far_seen, f, &e);
 	CHECK_EQ_INT(rc, stop_at ? 7 : 0);
 	raster_free(below);
 	raster_free(above);
