@@ -244,33 +244,29 @@ int hl_repair_build(const struct mesh *res, size_t part_nv, size_t part_nt,
 	struct raster *cur = NULL, *above = NULL, *orig = NULL, *above_orig = NULL, *inside = NULL;
 	int32_t *lab = NULL;
 	struct paths reg;
-	double umin = INFINITY, umax = -INFINITY, vmin = INFINITY, vmax = -INFINITY;
-	double zmin = INFINITY, zmax = -INFINITY, ztop = -INFINITY, t0 = progress_now_s();
+	struct box3 bp = box3_empty(), bv = box3_empty(); /* the part's, the voids' */
+	struct hl_fill box;
+	double gpx, gpy, t0 = progress_now_s();
 	int x0, y0, w, h, k0, k1, n, pad, rc = 0, have_above = 0;
 
 	hl_repair_fini(r);
 	if (res->nv <= part_nv || !(layer_mm > 0))
 		return 0;
 	for (size_t i = 0; i < res->nv; i++)
-		ztop = fmax(ztop, res->v[i].z);
-	for (size_t i = part_nv; i < res->nv; i++) {
-		double u, v;
-		raster_map_apply(map, res->v[i].x, res->v[i].y, &u, &v);
-		umin = fmin(umin, u);
-		umax = fmax(umax, u);
-		vmin = fmin(vmin, v);
-		vmax = fmax(vmax, v);
-		zmin = fmin(zmin, res->v[i].z);
-		zmax = fmax(zmax, res->v[i].z);
-	}
-	n = (int)ceil(ztop / layer_mm - 1e-9);
-	pad = (int)ceil(reach_mm / fmin(px_mm, py_mm)) + 3;
-	x0 = (int)floor(umin) - pad;
-	y0 = (int)floor(vmin) - pad;
-	w = (int)ceil(umax) + pad - x0;
-	h = (int)ceil(vmax) + pad - y0;
-	k0 = (int)floor(zmin / layer_mm) - 1;
-	k1 = (int)ceil(zmax / layer_mm) + 1;
+		box3_add(i < part_nv ? &bp : &bv, res->v[i]);
+	/* the voids' image box (the fill's grid of them), grown by the reach */
+	memset(&box, 0, sizeof box);
+	rc = hl_fill_grid(res->v + part_nv, res->nv - part_nv, map, &box, &gpx, &gpy, e);
+	if (rc)
+		return rc;
+	pad = (int)ceil(reach_mm / fmin(px_mm, py_mm)) + 1;
+	x0 = box.u0 - pad;
+	y0 = box.v0 - pad;
+	w = box.w + 2 * pad;
+	h = box.h + 2 * pad;
+	n = (int)ceil(fmax(bp.hi.z, bv.hi.z) / layer_mm - 1e-9);
+	k0 = (int)floor(bv.lo.z / layer_mm) - 1;
+	k1 = (int)ceil(bv.hi.z / layer_mm) + 1;
 	k0 = k0 < 0 ? 0 : k0;
 	k1 = k1 >= n ? n - 1 : k1;
 	if (n < 1 || k1 < k0)
