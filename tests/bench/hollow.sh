@@ -73,6 +73,10 @@ extra += "  slope excess %s px (tolerance %.1f)" % (num(h["verify"]["slope_exces
 if h.get("smooth_passes") or h.get("opt_layer_min_mm"):
     extra += "  slices %d (thinnest %.2f mm) interior islands %d" % (
         h["slices"], h["opt_layer_min_used_mm"], h["verify"]["islands_interior"])
+if h.get("mended", {}).get("pixels"):
+    extra += "  mended %.3f mm3 (%d px on %d layers, %d left, %.1f s)" % (
+        h["mended"]["mm3"], h["mended"]["pixels"], h["mended"]["layers"],
+        h["mended"]["layers_left"], h["mended"]["seconds"])
 if h["polygon_slopes"]["layers_checked"]:
     extra += "  polygons: excess %.4f mm2 on %d layers" % (h["polygon_slopes"]["excess_mm2"],
                                                         h["polygon_slopes"]["layers_over"])

@@ -86,7 +86,7 @@ class HollowMeshTest(unittest.TestCase):
             # 23 px read over before the mending (0.43 px), 0.44 mm3 of gray
             # added by it (8,855 pixels); polygons: 0.0011 mm2 on 2 layers
             # (void tops)
-            optimised_slopes_ok(self, h, 1.0, max_polygon_mm2=0.003)
+            optimised_slopes_ok(self, h, max_polygon_mm2=0.003)
             self.assertGreaterEqual(v["min_wall_mm"], 1.0 - 0.06, v)
             check_between(self, v, required=False)
             self.assertEqual(v["specks"], 0, v)
