@@ -385,7 +385,7 @@ static int hollow_prepare(const struct engine_ctx *ctx, const void *params, void
 	if (!rc && s->map && s->out.voids_optimised > 0) {
 		struct verify_params vp;
 		verify_params_of(s, &vp);
-		rc = hl_repair_build(s->out.mesh, s->part_nv, s->part_nt, s->map, s->antialias,
+		rc = hl_repair_build(s->out.mesh, s->slicer, s->part_nv, s->part_nt, s->map, s->antialias,
 				     &s->out.fill, &s->frag, s->layer_mm, vp.pixel_x_mm,
 				     vp.pixel_y_mm, hollow_mend_reach_mm(&vp), vp.threads, &s->repair,
 				     e);

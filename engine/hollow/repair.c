@@ -234,13 +234,13 @@ static int mend_layer(struct raster *cur, const struct raster *above,
 	return rc;
 }
 
-int hl_repair_build(const struct mesh *res, size_t part_nv, size_t part_nt,
-		    const struct raster_map *map, int antialias, const struct hl_fill *fill,
+int hl_repair_build(const struct mesh *res, struct slicer *res_slicer, size_t part_nv,
+		    size_t part_nt, const struct raster_map *map, int antialias, const struct hl_fill *fill,
 		    const struct hl_fill *frag, double layer_mm, double px_mm, double py_mm,
 		    double reach_mm, int threads, struct hl_repair *r, struct err *e)
 {
 	struct mesh part = {res->v, res->tri, part_nv, part_nt};
-	struct slicer *sl = NULL, *sp = NULL;
+	struct slicer *sp = NULL;
 	struct raster *cur = NULL, *above = NULL, *orig = NULL, *above_orig = NULL, *inside = NULL;
 	int32_t *lab = NULL;
 	struct paths reg;
@@ -288,16 +288,14 @@ int hl_repair_build(const struct mesh *res, size_t part_nv, size_t part_nt,
 	}
 	r->n = n;
 	r->layer_mm = layer_mm;
-	rc = slice_new(res, &sl, e);
-	if (!rc)
-		rc = slice_new(&part, &sp, e);
+	rc = slice_new(&part, &sp, e);
 	for (int k = k1; !rc && k >= k0; k--) {
 		double z = (k + 0.5) * layer_mm;
 		struct raster_map m = *map;
 		int left = 0;
 		size_t cnt = 0;
 		raster_clear(cur);
-		if ((rc = slice_at(sl, z, &reg, NULL, e)) != 0 ||
+		if ((rc = slice_at(res_slicer, z, &reg, NULL, e)) != 0 ||
 		    (rc = hl_layer_draw(&reg, map, antialias, fill, frag, z, x0, y0, cur, e)) != 0)
 			break;
 		memcpy(orig->px, cur->px, (size_t)w * (size_t)h);
@@ -346,7 +344,6 @@ int hl_repair_build(const struct mesh *res, size_t part_nv, size_t part_nt,
 	}
 out:
 	r->seconds = progress_now_s() - t0;
-	slice_free(sl);
 	slice_free(sp);
 	raster_free(cur);
 	raster_free(above);

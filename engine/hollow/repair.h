@@ -16,6 +16,7 @@
 
 struct err;
 struct mesh;
+struct slicer;
 
 /* Draw print layer z_mm's image into r, whose pixel (0, 0) is pixel
  * (x0, y0) of map's images: region (the hollowed part's section, nm)
@@ -49,7 +50,8 @@ struct hl_repair {
 void hl_repair_fini(struct hl_repair *r);
 
 /* Mend the layers of res (the part: its first part_nv vertices and
- * part_nt triangles, then the optimised voids' surfaces) drawn as
+ * part_nt triangles, then the optimised voids' surfaces; res_slicer, the
+ * caller's, slices it) drawn as
  * hl_layer_draw does through map with antialias, with fill and frag (may
  * be NULL), print layers of layer_mm.  Top down over the layers the voids
  * span (and one more each way), on the image box of their surfaces grown
@@ -63,8 +65,8 @@ void hl_repair_fini(struct hl_repair *r);
  * Only solid is added, and only inside the part.  r (zeroed or finished)
  * receives the mended pixels per layer.  0, ERR_NOMEM, ERR_LIMIT (a box
  * over 2^28 pixels) or a slicer error. */
-int hl_repair_build(const struct mesh *res, size_t part_nv, size_t part_nt,
-		    const struct raster_map *map, int antialias, const struct hl_fill *fill,
+int hl_repair_build(const struct mesh *res, struct slicer *res_slicer, size_t part_nv,
+		    size_t part_nt, const struct raster_map *map, int antialias, const struct hl_fill *fill,
 		    const struct hl_fill *frag, double layer_mm, double px_mm, double py_mm,
 		    double reach_mm, int threads, struct hl_repair *r, struct err *e);
 

@@ -127,14 +127,18 @@ static void check_stack(const struct mesh *m, const struct hl_repair *r,
 static void mend(const struct mesh *m, struct hl_repair *r)
 {
 	struct raster_map map;
+	struct slicer *sl = NULL;
 	struct err e;
 	double reach = LAYER + 0.5 * VERIFY_TOLERANCE_PX * PX;
 
 	err_clear(&e);
 	map_of(&map);
 	memset(r, 0, sizeof *r);
-	REQUIRE_OK(hl_repair_build(m, 8, 12, &map, 1, NULL, NULL, LAYER, PX, PX, reach, 1, r, &e),
+	REQUIRE_OK(slice_new(m, &sl, &e), &e);
+	REQUIRE_OK(hl_repair_build(m, sl, 8, 12, &map, 1, NULL, NULL, LAYER, PX, PX, reach, 1, r,
+				   &e),
 		   &e);
+	slice_free(sl);
 	for (int k = 0; k < r->n; k++)
 		for (size_t i = 0; i < r->layer[k].n; i++) {
 			double u = r->layer[k].px[i].x + 0.5, v = r->layer[k].px[i].y + 0.5;
