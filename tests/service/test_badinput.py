@@ -3,7 +3,7 @@ malformed JSON, wrong types, unknown engine/parameters, oversize uploads
 (413 before the body is read), wrong checksums, broken meshes from
 ../shared/meshes/broken/, path characters in ids, unknown routes and
 methods, slowloris connections (408 at the head deadline), 1,000 concurrent
-status reads."""
+status reads; refused and abandoned uploads leave no temp file."""
 import glob
 import hashlib
 import os
@@ -126,6 +126,64 @@ def test_oversize_upload_early():
     check(got.startswith(b"HTTP/1.1 413"), "chunked 413: %r" % got[:100])
 
 
+def upload_temps():
+    """The upload temp files in the store's tmp/ (api/meshes.c: tmp/up-*)."""
+    return sorted(glob.glob(os.path.join(srv.data, "tmp", "up-*")))
+
+
+def wait_no_upload_temps(what):
+    deadline = time.time() + 10
+    while upload_temps() and time.time() < deadline:
+        time.sleep(0.1)
+    check(not upload_temps(), "%s left upload temp files: %s" % (what, upload_temps()))
+
+
+def test_refused_uploads_leave_no_temp():
+    """Every refused or abandoned upload removes its temp file: the body
+    stored up to the limit and then refused (chunked 413), a checksum
+    mismatch, a broken mesh, a client gone half-way through its body."""
+    check(os.path.isdir(os.path.join(srv.data, "tmp")), "the store's tmp/ exists")
+    # the check itself sees a temp file (it would fail on a leak)
+    leak = os.path.join(srv.data, "tmp", "up-testleak")
+    open(leak, "wb").close()
+    check(upload_temps() == [leak], "a planted temp file is seen: %s" % upload_temps())
+    os.unlink(leak)
+    # chunked, past the 1 MB limit: written to tmp/ up to it, then refused
+    s = socket.create_connection(("127.0.0.1", srv.port), timeout=10)
+    s.sendall(("POST /v1/meshes?format=stl HTTP/1.1\r\nHost: x\r\nAuthorization: Bearer %s\r\n"
+               "Content-Type: model/stl\r\nTransfer-Encoding: chunked\r\n\r\n" % S["key"]).encode())
+    got = b""
+    try:
+        for _ in range(32):
+            s.sendall(b"%x\r\n%s\r\n" % (65536, b"y" * 65536))
+        s.sendall(b"0\r\n\r\n")
+        got = s.recv(65536)
+    except (BrokenPipeError, ConnectionResetError):
+        pass
+    s.close()
+    check(got.startswith(b"HTTP/1.1 413") or got == b"", "chunked 413: %r" % got[:100])
+    wait_no_upload_temps("a chunked upload over the limit")
+    with open(FEMUR, "rb") as f:
+        data = f.read()
+    srv.request("POST", "/v1/meshes?format=off&sha256=" + "0" * 64, data,
+                {"Content-Type": "application/octet-stream"}, S["key"]).problem(422)
+    wait_no_upload_temps("a checksum mismatch")
+    srv.request("POST", "/v1/meshes?format=stl", b"solid x\nfacet normal 0 0 1\nendsolid x\n",
+                {"Content-Type": "model/stl"}, S["key"]).problem(422, "invalid-mesh")
+    wait_no_upload_temps("a broken mesh")
+    # a client that goes away after a tenth of its declared body
+    s = socket.create_connection(("127.0.0.1", srv.port), timeout=10)
+    s.sendall(("POST /v1/meshes?format=off HTTP/1.1\r\nHost: x\r\nAuthorization: Bearer %s\r\n"
+               "Content-Type: application/octet-stream\r\nContent-Length: %d\r\n\r\n" %
+               (S["key"], len(data))).encode())
+    s.sendall(data[:len(data) // 10])
+    time.sleep(0.3)
+    check(upload_temps() != [], "the half-sent upload is being written to tmp/")
+    s.close()
+    wait_no_upload_temps("a client gone half-way")
+    check(srv.request("GET", "/livez").status == 200, "alive after the refused uploads")
+
+
 def test_checksum_and_types():
     with open(FEMUR, "rb") as f:
         data = f.read()
@@ -231,7 +289,8 @@ def teardown():
 if __name__ == "__main__":
     try:
         setup()
-        run([test_json_errors, test_oversize_upload_early, test_checksum_and_types,
+        run([test_json_errors, test_oversize_upload_early, test_refused_uploads_leave_no_temp,
+             test_checksum_and_types,
              test_broken_meshes, test_ids_and_routes, test_slowloris, test_concurrent_status,
              teardown])
     finally:
