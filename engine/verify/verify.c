@@ -48,6 +48,7 @@
 #include "engine/core/mem.h"
 #include "engine/core/metrics.h"
 #include "engine/geom/edt.h"
+#include "engine/geom/label.h"
 #include "engine/verify/between.h"
 #include "engine/verify/contact.h"
 #include "engine/verify/fins.h"
@@ -317,55 +318,50 @@ int verify_push(struct verify *v, size_t n, int val)
 }
 
 /* Label void components (8-connected) of the current crop; see the head
- * comment for why 8 and not 4. */
+ * comment for why 8 and not 4.  The components get union-find ids from
+ * v->nuf on, in raster order of their first pixel (label.h); one that
+ * touches the crop's border is joined to the outside.  Scratch: v->seed
+ * (the void mask). */
 static int label_voids(struct verify *v, uint32_t *ncomp)
 {
 	struct crop *c = v->cur;
 	int w = c->w, h = c->h;
-	uint32_t first = (uint32_t)v->nuf, n = 0;
+	size_t np = (size_t)w * (size_t)h;
+	uint32_t first = (uint32_t)v->nuf, id;
+	int32_t n = 0, *lab = (int32_t *)c->lab;
+	struct err e;
 
-	for (size_t i = 0; i < (size_t)w * (size_t)h; i++)
-		c->lab[i] = 0;
-	for (int y = 0; y < h; y++)
-		for (int x = 0; x < w; x++) {
-			size_t i = (size_t)y * (size_t)w + (size_t)x, sp = 0;
-			uint32_t id;
-			int touch = 0;
-			if (c->solid[i] || c->lab[i])
-				continue;
-			if (uf_new(v, &id) || verify_push(v, sp++, (int)i))
-				return ERR_NOMEM;
-			c->lab[i] = id;
-			while (sp) {
-				int q = v->stack[--sp], qx = q % w, qy = q / w;
-				static const int dx[8] = {1, -1, 0, 0, 1, 1, -1, -1};
-				static const int dy[8] = {0, 0, 1, -1, 1, -1, 1, -1};
-				if (qx == 0 || qy == 0 || qx == w - 1 || qy == h - 1)
-					touch = 1;
-				for (int k = 0; k < 8; k++) {
-					int nx = qx + dx[k], ny = qy + dy[k];
-					size_t j;
-					if (nx < 0 || ny < 0 || nx >= w || ny >= h)
-						continue;
-					j = (size_t)ny * (size_t)w + (size_t)nx;
-					if (c->solid[j] || c->lab[j])
-						continue;
-					c->lab[j] = id;
-					if (verify_push(v, sp++, (int)j))
-						return ERR_NOMEM;
-				}
-			}
-			/* keeps the flags of the components labelled so far
-			 * (grow_bytes would drop them) */
-			if (mem_grow((void **)&v->enc, &v->enc_cap, n + 1, 1))
-				return ERR_NOMEM;
-			v->enc[n] = !touch;
-			if (touch)
-				uf_union(v, id, VX_OUT);
-			n++;
+	if (verify_grow_bytes((void **)&v->seed, &v->scratch_cap, np))
+		return ERR_NOMEM;
+	for (size_t i = 0; i < np; i++)
+		v->seed[i] = !c->solid[i];
+	err_clear(&e);
+	if (label_components8(v->seed, w, h, lab, &n, &e))
+		return ERR_NOMEM;
+	/* keeps the flags of the components labelled so far (grow_bytes
+	 * would drop them) */
+	if (n > 0 && mem_grow((void **)&v->enc, &v->enc_cap, (size_t)n, 1))
+		return ERR_NOMEM;
+	for (int32_t l = 0; l < n; l++) {
+		if (uf_new(v, &id))
+			return ERR_NOMEM;
+		v->enc[l] = 1;
+	}
+	for (int y = 0; y < h; y++) {
+		int step = y == 0 || y == h - 1 ? 1 : (w > 1 ? w - 1 : 1);
+		for (int x = 0; x < w; x += step) {
+			int32_t l = lab[(size_t)y * (size_t)w + (size_t)x];
+			if (l > 0)
+				v->enc[l - 1] = 0;
 		}
+	}
+	for (size_t i = 0; i < np; i++)
+		c->lab[i] = lab[i] > 0 ? first + (uint32_t)(lab[i] - 1) : 0;
+	for (int32_t l = 0; l < n; l++)
+		if (!v->enc[l])
+			uf_union(v, first + (uint32_t)l, VX_OUT);
 	v->cur_first = first;
-	*ncomp = n;
+	*ncomp = (uint32_t)n;
 	return 0;
 }
 
@@ -443,6 +439,49 @@ static int row_first_at_least(const uint8_t *row, int w, int thr)
 		for (int end = x + 8 < w ? x + 8 : w; x < end; x++)
 			if (row[x] >= thr)
 				return x;
+	}
+}
+
+/* Join each void pixel of crop c (this layer) with what lies under it
+ * in crop pc (the previous layer): its void component, or the outside
+ * where pc has no pixel there; and each void pixel of pc outside c with
+ * the outside (it sits under this layer's outside). */
+static void link_layers(struct verify *v, const struct crop *c, const struct crop *pc)
+{
+	uint32_t la = 0, lb = 0;
+
+	for (int y = 0; y < c->h; y++) {
+		int py = y + c->y0 - pc->y0, rowin = pc->w > 0 && py >= 0 && py < pc->h;
+		for (int x = 0; x < c->w; x++) {
+			size_t i = (size_t)y * (size_t)c->w + (size_t)x;
+			int px = x + c->x0 - pc->x0;
+			uint32_t b = VX_OUT;
+			if (c->solid[i])
+				continue;
+			if (rowin && px >= 0 && px < pc->w) {
+				size_t pi = (size_t)py * (size_t)pc->w + (size_t)px;
+				if (pc->solid[pi])
+					continue;
+				b = pc->lab[pi];
+			}
+			if (c->lab[i] == la && b == lb)
+				continue;
+			la = c->lab[i];
+			lb = b;
+			uf_union(v, la, lb);
+		}
+	}
+	la = 0;
+	for (int y = 0; y < pc->h; y++) {
+		int cy = y + pc->y0 - c->y0, rowin = c->w > 0 && cy >= 0 && cy < c->h;
+		for (int x = 0; x < pc->w; x++) {
+			size_t i = (size_t)y * (size_t)pc->w + (size_t)x;
+			int cx = x + pc->x0 - c->x0;
+			if (pc->solid[i] || (rowin && cx >= 0 && cx < c->w) || pc->lab[i] == la)
+				continue;
+			la = pc->lab[i];
+			uf_union(v, la, VX_OUT);
+		}
 	}
 }
 
@@ -554,29 +593,11 @@ int verify_layer_ref(struct verify *v, const struct raster *r, const struct rast
 		if (label_voids(v, &ncomp))
 			goto nomem;
 	}
-	/* 2. vertical links (the plate closes the bottom of layer 0) */
-	if (layer > 0) {
-		for (int y = 0; y < c->h; y++)
-			for (int x = 0; x < c->w; x++) {
-				size_t i = (size_t)y * (size_t)c->w + (size_t)x, pi;
-				if (c->solid[i])
-					continue;
-				if (verify_crop_solid(pc, x + c->x0, y + c->y0, &pi))
-					continue;
-				uf_union(v, c->lab[i], pi == SIZE_MAX ? VX_OUT : pc->lab[pi]);
-			}
-		/* previous void outside this crop sits under this layer's outside */
-		for (int y = 0; y < pc->h; y++)
-			for (int x = 0; x < pc->w; x++) {
-				size_t i = (size_t)y * (size_t)pc->w + (size_t)x, ci;
-				int gx = x + pc->x0, gy = y + pc->y0;
-				if (pc->solid[i])
-					continue;
-				verify_crop_solid(c, gx, gy, &ci);
-				if (ci == SIZE_MAX)
-					uf_union(v, pc->lab[i], VX_OUT);
-			}
-	}
+	/* 2. vertical links (the plate closes the bottom of layer 0); a pair
+	 * of labels joined already (the pixel before in the row) is skipped:
+	 * union is idempotent */
+	if (layer > 0)
+		link_layers(v, c, pc);
 	/* 3. overhangs of this layer over the previous one, per void component */
 	if (layer > 0 && c->w && verify_overhangs(v, layer, e))
 		goto fail;
