@@ -2,8 +2,9 @@
  *
  * Two-pass labelling with union-find (path halving), O(w h).  8-connected:
  * pixels meeting at a corner belong together, as resin cured in one layer
- * does.  Used by the hollow engine's top-down fill and the hybrid engine's
- * transient layers (paper 003, section 6).
+ * does.  Used by the verifier (void components), the hollow engine's
+ * top-down fill and the hybrid engine's transient layers (paper 003,
+ * section 6).
  */
 #ifndef INFILLD_GEOM_LABEL_H
 #define INFILLD_GEOM_LABEL_H
