@@ -7,6 +7,7 @@
 #include "engine/core/err.h"
 #include "engine/core/mem.h"
 #include "engine/geom/edt.h"
+#include "engine/geom/label.h"
 #include "engine/verify/subpx.h"
 #include "engine/verify/verify_int.h"
 
@@ -22,77 +23,82 @@ int verify_prev_enclosed(const struct verify *v, uint32_t id)
  * resin is attached, and pixels meeting at a corner cure together; with
  * 4-connectivity every stair-step pixel of a rasterised slope with no
  * solid beneath would read as a floating part. */
+/* verify_islands' flags per solid component */
+#define ISL_SUPPORTED 1u /* a pixel over the previous layer's solid */
+#define ISL_INNER 2u     /* a pixel over a void the previous layer encloses */
+#define ISL_OWN 4u       /* a pixel near an island of the reference stack */
+
 int verify_islands(struct verify *v, int layer)
 {
 	struct crop *c = v->cur;
 	int w = c->w, h = c->h, tol = (int)ceil(v->p.tolerance_px);
-	uint8_t *seen;
+	size_t np = (size_t)w * (size_t)h;
+	int32_t n = 0;
+	double pa = v->p.pixel_x_mm * v->p.pixel_y_mm;
+	struct err e;
 
 	if (layer == 0)
 		return 0;
-	if (verify_grow_bytes((void **)&v->seed, &v->scratch_cap, (size_t)w * (size_t)h))
+	if (verify_grow_bytes((void **)&v->isl_lab, &v->isl_lab_cap, np * sizeof *v->isl_lab))
 		return ERR_NOMEM;
-	seen = v->seed;
-	memset(seen, 0, (size_t)w * (size_t)h);
-	for (int y = 0; y < h; y++)
+	err_clear(&e);
+	if (label_components8(c->solid, w, h, v->isl_lab, &n, &e))
+		return ERR_NOMEM;
+	if (n == 0)
+		return 0;
+	if (verify_grow_bytes((void **)&v->isl_area, &v->isl_area_cap,
+			      (size_t)(n + 1) * sizeof *v->isl_area) ||
+	    verify_grow_bytes((void **)&v->isl_flag, &v->isl_flag_cap, (size_t)(n + 1)))
+		return ERR_NOMEM;
+	memset(v->isl_area, 0, (size_t)(n + 1) * sizeof *v->isl_area);
+	memset(v->isl_flag, 0, (size_t)(n + 1));
+	/* the flags other than ISL_SUPPORTED only count on components that
+	 * end unsupported, whose pixels are all read: a supported component
+	 * stops paying for them at its first supported pixel */
+	for (int y = 0; y < h; y++) {
+		int gy = y + c->y0;
 		for (int x = 0; x < w; x++) {
-			size_t i = (size_t)y * (size_t)w + (size_t)x, sp = 0, area = 0;
-			int supported = 0, own = 0; /* own: touches an island of the reference */
-			int inner = 0; /* over a void the previous layer encloses */
-			if (!c->solid[i] || seen[i])
+			size_t i = (size_t)y * (size_t)w + (size_t)x, pi;
+			int32_t l = v->isl_lab[i];
+			uint8_t *f = &v->isl_flag[l];
+			if (l == 0)
 				continue;
-			seen[i] = 1;
-			if (verify_push(v, sp++, (int)i))
-				return ERR_NOMEM;
-			while (sp) {
-				int q = v->stack[--sp], qx = q % w, qy = q / w;
-				size_t pi;
-				area++;
-				if (!supported && verify_crop_solid(v->prev, qx + c->x0, qy + c->y0, &pi))
-					supported = 1;
-				if (!supported && !inner && pi != SIZE_MAX &&
-				    verify_prev_enclosed(v, v->prev->lab[pi]))
-					inner = 1;
-				/* checked only while unsupported: a supported component
-				 * (nearly all) stops paying for it at its first such pixel */
-				if (!supported && !own && v->r.has_reference &&
-				    verify_contact_near(&v->ref, qx + c->x0, qy + c->y0, tol))
-					own = 1;
-				for (int dy = -1; dy <= 1; dy++)
-					for (int dx = -1; dx <= 1; dx++) {
-						int nx = qx + dx, ny = qy + dy;
-						size_t j;
-						if (nx < 0 || ny < 0 || nx >= w || ny >= h)
-							continue;
-						j = (size_t)ny * (size_t)w + (size_t)nx;
-						if (!c->solid[j] || seen[j])
-							continue;
-						seen[j] = 1;
-						if (verify_push(v, sp++, (int)j))
-							return ERR_NOMEM;
-					}
+			v->isl_area[l]++;
+			if (*f & ISL_SUPPORTED)
+				continue;
+			if (verify_crop_solid(v->prev, x + c->x0, gy, &pi)) {
+				*f |= ISL_SUPPORTED;
+				continue;
 			}
-			if (!supported) {
-				v->r.islands++;
-				v->r.island_mm2 += (double)area * v->p.pixel_x_mm * v->p.pixel_y_mm;
-				if (v->r.first_island_layer < 0)
-					v->r.first_island_layer = layer;
-				if (inner) {
-					v->r.islands_interior++;
-					v->r.island_interior_mm2 +=
-						(double)area * v->p.pixel_x_mm * v->p.pixel_y_mm;
-					if (v->r.first_interior_island_layer < 0)
-						v->r.first_interior_island_layer = layer;
-				}
-				if (v->r.has_reference && !own) {
-					v->r.islands_added++;
-					v->r.island_added_mm2 +=
-						(double)area * v->p.pixel_x_mm * v->p.pixel_y_mm;
-					if (v->r.first_added_island_layer < 0)
-						v->r.first_added_island_layer = layer;
-				}
-			}
+			if (!(*f & ISL_INNER) && pi != SIZE_MAX &&
+			    verify_prev_enclosed(v, v->prev->lab[pi]))
+				*f |= ISL_INNER;
+			if (!(*f & ISL_OWN) && v->r.has_reference &&
+			    verify_contact_near(&v->ref, x + c->x0, gy, tol))
+				*f |= ISL_OWN;
 		}
+	}
+	for (int32_t l = 1; l <= n; l++) {
+		double a_mm2 = (double)v->isl_area[l] * pa;
+		if (v->isl_flag[l] & ISL_SUPPORTED)
+			continue;
+		v->r.islands++;
+		v->r.island_mm2 += a_mm2;
+		if (v->r.first_island_layer < 0)
+			v->r.first_island_layer = layer;
+		if (v->isl_flag[l] & ISL_INNER) {
+			v->r.islands_interior++;
+			v->r.island_interior_mm2 += a_mm2;
+			if (v->r.first_interior_island_layer < 0)
+				v->r.first_interior_island_layer = layer;
+		}
+		if (v->r.has_reference && !(v->isl_flag[l] & ISL_OWN)) {
+			v->r.islands_added++;
+			v->r.island_added_mm2 += a_mm2;
+			if (v->r.first_added_island_layer < 0)
+				v->r.first_added_island_layer = layer;
+		}
+	}
 	return 0;
 }
 

@@ -101,6 +101,9 @@ void verify_free(struct verify *v)
 	mem_free(v->prev_enc);
 	mem_free(v->agg);
 	mem_free(v->stack);
+	mem_free(v->isl_lab);
+	mem_free(v->isl_area);
+	mem_free(v->isl_flag);
 	mem_free(v->seed);
 	mem_free(v->ext_d2);
 	mem_free(v->cnt);

@@ -79,6 +79,12 @@ struct verify {
 	size_t aggx_cap;
 	int *stack;
 	size_t stack_cap;
+	int32_t *isl_lab;     /* verify_islands: labels of the crop's solid components */
+	size_t isl_lab_cap;
+	size_t *isl_area;     /* verify_islands: per solid component, pixels */
+	size_t isl_area_cap;
+	uint8_t *isl_flag;    /* verify_islands: per solid component, ISL_* bits */
+	size_t isl_flag_cap;
 	uint8_t *seed;
 	float *ext_d2;
 	size_t ext_cap;
