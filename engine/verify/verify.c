@@ -100,7 +100,6 @@ void verify_free(struct verify *v)
 	mem_free(v->enc);
 	mem_free(v->prev_enc);
 	mem_free(v->agg);
-	mem_free(v->stack);
 	mem_free(v->isl_lab);
 	mem_free(v->isl_area);
 	mem_free(v->isl_flag);
@@ -306,18 +305,6 @@ int verify_crop_solid(const struct crop *c, int x, int y, size_t *idx)
 	}
 	*idx = (size_t)cy * (size_t)c->w + (size_t)cx;
 	return c->solid[*idx];
-}
-
-int verify_push(struct verify *v, size_t n, int val)
-{
-	if (n >= v->stack_cap) {
-		void *arr = v->stack;
-		if (mem_grow(&arr, &v->stack_cap, n + 1, sizeof *v->stack))
-			return ERR_NOMEM;
-		v->stack = arr;
-	}
-	v->stack[n] = val;
-	return 0;
 }
 
 /* Label void components (8-connected) of the current crop; see the head

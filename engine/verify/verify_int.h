@@ -77,8 +77,6 @@ struct verify {
 	size_t agg_cap;
 	double *aggx;         /* per-component scratch: largest slope excess (mm) */
 	size_t aggx_cap;
-	int *stack;
-	size_t stack_cap;
 	int32_t *isl_lab;     /* verify_islands: labels of the crop's solid components */
 	size_t isl_lab_cap;
 	size_t *isl_area;     /* verify_islands: per solid component, pixels */
@@ -108,7 +106,6 @@ int verify_grow_bytes(void **p, size_t *cap, size_t need);
 /* Solid state of image pixel (x, y) in crop c: 1 solid, 0 void (outside
  * the crop is void; *idx = SIZE_MAX there). */
 int verify_crop_solid(const struct crop *c, int x, int y, size_t *idx);
-int verify_push(struct verify *v, size_t n, int val);
 /* Is component id (of the previous layer) 2D-enclosed there? */
 int verify_prev_enclosed(const struct verify *v, uint32_t id);
 /* 3. overhangs of the current layer over the previous one (support.c) */
