@@ -35,12 +35,24 @@ static uint32_t win_void(const struct win *c, int x, int y)
 }
 
 /* The enclosed component at one end of a run of at most max_px solid
- * pixels through (x, y) whose two ends are enclosed void; 0 if none. */
+ * pixels through (x, y) whose two ends are enclosed void; 0 if none.
+ * Such a run has an end within (max_px + 1) / 2 pixels of (x, y) on one
+ * side, so a pixel with solid that far in all 8 directions, inside the
+ * window, is in none (the test most solid pixels take). */
 static uint32_t fin_end(const struct win *c, const uint8_t *enc, uint32_t first, int max_px,
 			int x, int y)
 {
 	static const int dir[4][2] = {{1, 0}, {0, 1}, {1, 1}, {1, -1}};
+	int r = (max_px + 1) / 2, deep = x >= r && y >= r && x < c->w - r && y < c->h - r;
 
+	for (int q = 0; q < 4 && deep; q++)
+		for (int t = 1; t <= r && deep; t++)
+			deep = c->solid[(size_t)(y + t * dir[q][1]) * (size_t)c->w +
+					(size_t)(x + t * dir[q][0])] &&
+			       c->solid[(size_t)(y - t * dir[q][1]) * (size_t)c->w +
+					(size_t)(x - t * dir[q][0])];
+	if (deep)
+		return 0;
 	for (int q = 0; q < 4; q++) {
 		int dx = dir[q][0], dy = dir[q][1], b = 1, f = 1;
 		uint32_t la, lb;
