@@ -177,7 +177,9 @@ def test_refused_uploads_leave_no_temp():
                "Content-Type: application/octet-stream\r\nContent-Length: %d\r\n\r\n" %
                (S["key"], len(data))).encode())
     s.sendall(data[:len(data) // 10])
-    time.sleep(0.3)
+    deadline = time.time() + 10
+    while not upload_temps() and time.time() < deadline:
+        time.sleep(0.05)
     check(upload_temps() != [], "the half-sent upload is being written to tmp/")
     s.close()
     wait_no_upload_temps("a client gone half-way")
