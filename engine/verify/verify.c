@@ -328,8 +328,8 @@ static int label_voids(struct verify *v, uint32_t *ncomp)
 	err_clear(&e);
 	if (label_components8(v->seed, w, h, lab, &n, &e))
 		return ERR_NOMEM;
-	/* keeps the flags of the components labelled so far (grow_bytes
-	 * would drop them) */
+	/* one 2D-enclosed flag per component: set, then cleared below for
+	 * the components on the crop's border */
 	if (n > 0 && mem_grow((void **)&v->enc, &v->enc_cap, (size_t)n, 1))
 		return ERR_NOMEM;
 	for (int32_t l = 0; l < n; l++) {
