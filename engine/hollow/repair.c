@@ -8,6 +8,7 @@
 #include "engine/hollow/repair.h"
 
 #include <math.h>
+#include <stdlib.h>
 #include <string.h>
 
 #include "engine/core/err.h"
@@ -161,6 +162,88 @@ static int inside_draw(struct inside *in, struct err *e)
  * verify_far_pixels, raising each pixel read over, or when that was not
  * enough its neighbours, to above's gray where the part is wholly solid.
  * *left: 1 when a pixel still reads over. */
+/* Copy the box [x0, x1] x [y0, y1] of src into dst (sized to it). */
+static void copy_box(const struct raster *src, int x0, int y0, int x1, int y1, struct raster *dst)
+{
+	for (int y = y0; y <= y1; y++)
+		memcpy(dst->px + (size_t)(y - y0) * dst->stride, src->px + (size_t)y * src->stride + x0,
+		       (size_t)(x1 - x0 + 1));
+}
+
+static int cmp_i32(const void *a, const void *b)
+{
+	int32_t x = *(const int32_t *)a, y = *(const int32_t *)b;
+
+	return (x > y) - (x < y);
+}
+
+/* The pixels of above that read over cur (o->at: crop indices, row by
+ * row, as one read of the whole crop gives them).  reread (nonzero after
+ * a raise): only the box [bx0, bx1] x [by0, by1] of the raised pixels,
+ * grown by infl pixels (no reading farther from a raise can change), is
+ * read again, on a crop grown by infl more (so the box reads each pixel
+ * as the whole crop does); prev (nprev) are the last read's pixels, and
+ * those outside the box still read over. */
+static int read_over(const struct raster *cur, const struct raster *above, int ox, int oy,
+		     double px_mm, double py_mm, double reach_mm, int threads, int reread, int bx0,
+		     int by0, int bx1, int by1, int infl, const int32_t *prev, size_t nprev,
+		     struct over *o, struct err *e)
+{
+	int w = cur->w, h = cur->h, ix0, iy0, ix1, iy1, sx0, sy0, sx1, sy1, rc;
+	struct raster *cb = NULL, *ab = NULL;
+	size_t keep = 0;
+
+	o->n = 0;
+	o->w = w;
+	if (!reread)
+		return verify_far_pixels(cur, above, ox, oy, px_mm, py_mm, reach_mm, threads,
+					 note_over, o, e);
+	ix0 = bx0 - infl < 0 ? 0 : bx0 - infl;
+	iy0 = by0 - infl < 0 ? 0 : by0 - infl;
+	ix1 = bx1 + infl >= w ? w - 1 : bx1 + infl;
+	iy1 = by1 + infl >= h ? h - 1 : by1 + infl;
+	sx0 = ix0 - infl < 0 ? 0 : ix0 - infl;
+	sy0 = iy0 - infl < 0 ? 0 : iy0 - infl;
+	sx1 = ix1 + infl >= w ? w - 1 : ix1 + infl;
+	sy1 = iy1 + infl >= h ? h - 1 : iy1 + infl;
+	cb = raster_new(sx1 - sx0 + 1, sy1 - sy0 + 1);
+	ab = raster_new(sx1 - sx0 + 1, sy1 - sy0 + 1);
+	if (!cb || !ab) {
+		raster_free(cb);
+		raster_free(ab);
+		return ERR_NOMEM;
+	}
+	copy_box(cur, sx0, sy0, sx1, sy1, cb);
+	copy_box(above, sx0, sy0, sx1, sy1, ab);
+	o->w = cb->w;
+	rc = verify_far_pixels(cb, ab, ox + sx0, oy + sy0, px_mm, py_mm, reach_mm, threads,
+			       note_over, o, e);
+	raster_free(cb);
+	raster_free(ab);
+	if (rc)
+		return rc;
+	/* to crop indices, those inside the box only */
+	for (size_t i = 0; i < o->n; i++) {
+		int x = o->at[i] % o->w + sx0, y = o->at[i] / o->w + sy0;
+		if (x >= ix0 && x <= ix1 && y >= iy0 && y <= iy1)
+			o->at[keep++] = y * w + x;
+	}
+	o->n = keep;
+	o->w = w;
+	for (size_t i = 0; i < nprev; i++) {
+		int x = prev[i] % w, y = prev[i] / w;
+		void *arr = o->at;
+		if (x >= ix0 && x <= ix1 && y >= iy0 && y <= iy1)
+			continue;
+		if (mem_grow(&arr, &o->cap, o->n + 1, sizeof *o->at))
+			return ERR_NOMEM;
+		o->at = arr;
+		o->at[o->n++] = prev[i];
+	}
+	qsort(o->at, o->n, sizeof *o->at, cmp_i32);
+	return 0;
+}
+
 static int mend_layer(struct raster *cur, const struct raster *above,
 		      const struct raster *above_drawn, int ox, int oy, struct inside *in,
 		      int32_t *lab, double px_mm, double py_mm, double reach_mm, int threads,
@@ -168,7 +251,11 @@ static int mend_layer(struct raster *cur, const struct raster *above,
 {
 	struct over o = {NULL, 0, 0, cur->w};
 	const uint8_t *inside;
-	int rc = 0;
+	int32_t *prev = NULL;
+	size_t nprev = 0, prev_cap = 0;
+	/* how far a pixel's reading reaches (verify_far_pixels' own pad) */
+	int infl = (int)ceil((reach_mm + 3 * hypot(px_mm, py_mm)) / fmin(px_mm, py_mm)) + 3;
+	int rc = 0, bx0 = 0, by0 = 0, bx1 = -1, by1 = -1;
 
 	*left = 0;
 	/* islands only where above was mended */
@@ -180,9 +267,8 @@ static int mend_layer(struct raster *cur, const struct raster *above,
 	for (int pass = 0; pass <= HL_REPAIR_PASSES; pass++) {
 		size_t mine = 0;
 		int raised = 0;
-		o.n = 0;
-		rc = verify_far_pixels(cur, above, ox, oy, px_mm, py_mm, reach_mm, threads, note_over,
-				       &o, e);
+		rc = read_over(cur, above, ox, oy, px_mm, py_mm, reach_mm, threads, pass > 0, bx0,
+			       by0, bx1, by1, infl, prev, nprev, &o, e);
 		if (rc == ERR_NOMEM)
 			rc = ERR_SET(e, ERR_NOMEM, "hollow: out of memory (mending layers)");
 		if (!rc && o.n > 0)
@@ -201,6 +287,9 @@ static int mend_layer(struct raster *cur, const struct raster *above,
 			*left = 1;
 			break;
 		}
+		bx0 = cur->w;
+		by0 = cur->h;
+		bx1 = by1 = -1;
 		for (size_t i = 0; i < mine; i++) {
 			int x = o.at[i] % cur->w, y = o.at[i] / cur->w;
 			size_t c = (size_t)o.at[i];
@@ -210,6 +299,10 @@ static int mend_layer(struct raster *cur, const struct raster *above,
 			if (above->px[c] > cur->px[c]) {
 				cur->px[c] = above->px[c];
 				raised = 1;
+				bx0 = x < bx0 ? x : bx0;
+				by0 = y < by0 ? y : by0;
+				bx1 = x > bx1 ? x : bx1;
+				by1 = y > by1 ? y : by1;
 				continue;
 			}
 			for (int dy = -1; dy <= 1; dy++)
@@ -222,6 +315,10 @@ static int mend_layer(struct raster *cur, const struct raster *above,
 					if (inside[j] == 255 && above->px[j] > cur->px[j]) {
 						cur->px[j] = above->px[j];
 						raised = 1;
+						bx0 = u < bx0 ? u : bx0;
+						by0 = v < by0 ? v : by0;
+						bx1 = u > bx1 ? u : bx1;
+						by1 = v > by1 ? v : by1;
 					}
 				}
 		}
@@ -229,8 +326,21 @@ static int mend_layer(struct raster *cur, const struct raster *above,
 			*left = 1; /* what reads over has above's gray all round */
 			break;
 		}
+		/* the pixels read over this pass (the outside's dropped: they
+		 * are dropped again every pass) */
+		{
+			void *arr = prev;
+			if (mem_grow(&arr, &prev_cap, mine, sizeof *prev)) {
+				rc = ERR_SET(e, ERR_NOMEM, "hollow: out of memory (mending layers)");
+				break;
+			}
+			prev = arr;
+			memcpy(prev, o.at, mine * sizeof *prev);
+			nprev = mine;
+		}
 	}
 	mem_free(o.at);
+	mem_free(prev);
 	return rc;
 }
 
