@@ -59,7 +59,8 @@ void hl_repair_fini(struct hl_repair *r);
  * from layer k's solid (verify_far_pixels, pitches px_mm, py_mm), the
  * pixel of layer k under it takes layer k + 1's gray there, or when it
  * has that already its eight neighbours take theirs, where the part is
- * wholly solid, up to HL_REPAIR_PASSES times a layer; islands the
+ * wholly solid, up to HL_REPAIR_PASSES times a layer (each pass after
+ * the first reading only what its raises can change); islands the
  * mending made in layer k + 1 get its gray under them; the gray added
  * to layer k is checked against layer k - 1 in its turn.
  * Only solid is added, and only inside the part.  r (zeroed or finished)
