@@ -156,12 +156,6 @@ static int inside_draw(struct inside *in, struct err *e)
 	return rc;
 }
 
-/* Mend layer k (cur, drawn; crop pixel (0, 0) is image pixel (ox, oy))
- * under layer k + 1 (above, final): first the
- * islands the mending of above made (hold_islands), then passes of
- * verify_far_pixels, raising each pixel read over, or when that was not
- * enough its neighbours, to above's gray where the part is wholly solid.
- * *left: 1 when a pixel still reads over. */
 /* Copy the box [x0, x1] x [y0, y1] of src into dst (sized to it). */
 static void copy_box(const struct raster *src, int x0, int y0, int x1, int y1, struct raster *dst)
 {
@@ -244,6 +238,12 @@ static int read_over(const struct raster *cur, const struct raster *above, int o
 	return 0;
 }
 
+/* Mend layer k (cur, drawn; crop pixel (0, 0) is image pixel (ox, oy))
+ * under layer k + 1 (above, final): first the
+ * islands the mending of above made (hold_islands), then passes of
+ * verify_far_pixels, raising each pixel read over, or when that was not
+ * enough its neighbours, to above's gray where the part is wholly solid.
+ * *left: 1 when a pixel still reads over. */
 static int mend_layer(struct raster *cur, const struct raster *above,
 		      const struct raster *above_drawn, int ox, int oy, struct inside *in,
 		      int32_t *lab, double px_mm, double py_mm, double reach_mm, int threads,

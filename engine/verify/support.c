@@ -18,16 +18,16 @@ int verify_prev_enclosed(const struct verify *v, uint32_t id)
 	       v->prev_enc[id - v->prev_first];
 }
 
-/* Islands: solid components (8-connected) without solid beneath.  Not
- * the dual of the 8-connected voids on purpose: this asks whether cured
- * resin is attached, and pixels meeting at a corner cure together; with
- * 4-connectivity every stair-step pixel of a rasterised slope with no
- * solid beneath would read as a floating part. */
 /* verify_islands' flags per solid component */
 #define ISL_SUPPORTED 1u /* a pixel over the previous layer's solid */
 #define ISL_INNER 2u     /* a pixel over a void the previous layer encloses */
 #define ISL_OWN 4u       /* a pixel near an island of the reference stack */
 
+/* Islands: solid components (8-connected) without solid beneath.  Not
+ * the dual of the 8-connected voids on purpose: this asks whether cured
+ * resin is attached, and pixels meeting at a corner cure together; with
+ * 4-connectivity every stair-step pixel of a rasterised slope with no
+ * solid beneath would read as a floating part. */
 int verify_islands(struct verify *v, int layer)
 {
 	struct crop *c = v->cur;
