@@ -4,6 +4,7 @@
  * output".
  */
 #include "engine/hollow/hmesh.h"
+#include "engine/hollow/repair.h"
 
 #include <math.h>
 #include <string.h>
@@ -22,6 +23,7 @@
 
 struct hm_src {
 	const struct hl_fill *fill, *frag;
+	const struct hl_repair *mend; /* NULL: none */
 	const struct hl_fill *grid;   /* the grid the masks are drawn on */
 	double layer_mm;
 	struct slicer *part, *res;    /* NULL without optimised voids */
@@ -56,8 +58,6 @@ static int hm_layer(void *ctx, int k, uint8_t *mask, struct err *e)
 	int rc;
 
 	memset(mask, 0, (size_t)g->w * (size_t)g->h);
-	if ((l = hl_fill_at(s->fill, z)) != NULL)
-		paint_runs(g, s->fill, l, mask, 1);
 	if (s->part) {
 		/* the optimised voids: pixel centres inside the part, not in res
 		 * (the layer output reads them at the verifier's threshold) */
@@ -77,14 +77,26 @@ static int hm_layer(void *ctx, int k, uint8_t *mask, struct err *e)
 					m[x] = 1;
 		}
 	}
+	/* in hl_layer_draw's order: beads solid, fill void, then the mended
+	 * pixels (raised solid or carved void) */
 	if (s->frag && (l = hl_fill_at(s->frag, z)) != NULL)
 		paint_runs(g, s->frag, l, mask, 0);
+	if ((l = hl_fill_at(s->fill, z)) != NULL)
+		paint_runs(g, s->fill, l, mask, 1);
+	if (s->mend && s->mend->layer && k < s->mend->n) {
+		for (size_t i = 0; i < s->mend->layer[k].n; i++) {
+			const struct hl_mend *q = &s->mend->layer[k].px[i];
+			int x = q->x - g->u0, y = q->y - g->v0;
+			if (x >= 0 && y >= 0 && x < g->w && y < g->h)
+				mask[(size_t)y * (size_t)g->w + (size_t)x] = q->g < VERIFY_THRESHOLD;
+		}
+	}
 	return 0;
 }
 
 int hl_mesh_build(const struct mesh *res, size_t part_nv, size_t part_nt,
 		  const struct hl_fill *fill, const struct hl_fill *frag,
-		  const struct raster_map *map, double layer_mm, struct mesh **out,
+		  const struct hl_repair *mend, const struct raster_map *map, double layer_mm, struct mesh **out,
 		  size_t *void_triangles, struct err *e)
 {
 	struct mesh part = {res->v, res->tri, part_nv, part_nt};
@@ -103,6 +115,7 @@ int hl_mesh_build(const struct mesh *res, size_t part_nv, size_t part_nt,
 	paths_init(&s.region);
 	s.fill = fill;
 	s.frag = frag && frag->voids ? frag : NULL;
+	s.mend = mend && mend->pixels > 0 ? mend : NULL;
 	s.layer_mm = layer_mm;
 	/* the grid: the fill's, or one over the part on map */
 	if (fill->w > 0 && fill->h > 0) {

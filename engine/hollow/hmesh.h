@@ -9,23 +9,27 @@
 
 #include "engine/hollow/fill/fill.h"
 
+struct hl_repair;
 struct mesh;
 struct err;
 
 /* What the layers print, as one closed mesh.  res: the part (its first
  * part_nv vertices and part_nt triangles) followed by the optimised voids'
  * surfaces; fill: the top-down fill's void pixels, frag: beads painted
- * solid (both may be empty; the pixels of fill->map, or of map when fill
- * has no grid); layer_mm: print layers, layer k = slab [k, k + 1]
- * layer_mm.  Layer k's void is fill's pixels, plus the pixels whose
- * centres the part covers and res does not (the optimised voids), less
- * frag's; its surface (engine/mesh/layers.h: stepped at the pixel and the
- * layer, closed, every edge in two faces) is appended turned inward to the
- * part's surface.  *out: a new mesh, caller frees; *void_triangles its
- * share.  0, ERR_NOMEM, ERR_LIMIT or a slicer error. */
+ * solid, mend: pixels mended or carved (repair.h, on the drawing without
+ * grey); any may be empty, mend NULL; all on the pixels of fill->map, or
+ * of map when fill has no grid.  layer_mm: print layers, layer k = slab
+ * [k, k + 1] layer_mm.  Layer k's void is what hl_layer_draw draws at
+ * pixel centres: the pixels whose centres the part covers and res does not
+ * (the optimised voids), less frag's, plus fill's, then mend's set (void
+ * where its gray is under VERIFY_THRESHOLD).  Its surface
+ * (engine/mesh/layers.h: stepped at the pixel and the layer, closed, every
+ * edge in two faces) is appended turned inward to the part's surface.
+ * *out: a new mesh, caller frees; *void_triangles its share.  0,
+ * ERR_NOMEM, ERR_LIMIT or a slicer error. */
 int hl_mesh_build(const struct mesh *res, size_t part_nv, size_t part_nt,
 		  const struct hl_fill *fill, const struct hl_fill *frag,
-		  const struct raster_map *map, double layer_mm, struct mesh **out,
-		  size_t *void_triangles, struct err *e);
+		  const struct hl_repair *mend, const struct raster_map *map, double layer_mm,
+		  struct mesh **out, size_t *void_triangles, struct err *e);
 
 #endif

@@ -1,9 +1,11 @@
 /* repair.c - the optimised voids' layer images mended to the verifier's
  * sub-pixel reading (repair.h).  Their polygons keep the support rule
  * (slopes.c), but drawn with grey edges a corner or a collapsed ceiling
- * can read a few tenths of a pixel beyond it (docs/hollow.md "Mended
- * images"); this adds the few grey levels of solid under such pixels,
- * top down, so that what is written is what the check passes.
+ * can read a few tenths of a pixel beyond it, and drawn at pixel centres
+ * (a mesh output's stepped voids) up to half a pixel (docs/hollow.md
+ * "Mended images"); this adds the few grey levels of solid under such
+ * pixels, top down, or takes such pixels of solid away, bottom up, so
+ * that what is written is what the check passes.
  */
 #include "engine/hollow/repair.h"
 
@@ -19,30 +21,68 @@
 #include "engine/slice/slice.h"
 #include "engine/verify/verify.h"
 
-int hl_layer_draw(const struct paths *region, const struct raster_map *map, int antialias,
-		  const struct hl_fill *fill, const struct hl_fill *frag, double z_mm, int x0,
-		  int y0, struct raster *r, struct err *e)
+/* Paint frag's pixels of layer z_mm solid and fill's void into r (pixel
+ * (0, 0) is image pixel (x0, y0)); either may be NULL. */
+static void paint_fill(const struct hl_fill *fill, const struct hl_fill *frag, double z_mm,
+		       int x0, int y0, struct raster *r)
 {
-	struct raster_map m = *map;
 	const struct hl_fill_layer *l;
-	int rc;
 
-	m.b[0] -= x0;
-	m.b[1] -= y0;
-	rc = slice_rasterize(region, &m, antialias, r, e);
-	if (!rc && frag && (l = hl_fill_at(frag, z_mm)) != NULL) {
+	if (frag && (l = hl_fill_at(frag, z_mm)) != NULL) {
 		struct hl_fill f = *frag; /* its pixels, shifted to r's origin */
 		f.u0 -= x0;
 		f.v0 -= y0;
 		hl_fill_paint(&f, l, r, 255);
 	}
-	if (!rc && fill && (l = hl_fill_at(fill, z_mm)) != NULL) {
+	if (fill && (l = hl_fill_at(fill, z_mm)) != NULL) {
 		struct hl_fill f = *fill;
 		f.u0 -= x0;
 		f.v0 -= y0;
 		hl_fill_paint(&f, l, r, 0);
 	}
+}
+
+int hl_layer_draw(const struct paths *region, const struct raster_map *map, int antialias,
+		  const struct hl_fill *fill, const struct hl_fill *frag, double z_mm, int x0,
+		  int y0, struct raster *r, struct err *e)
+{
+	struct raster_map m = *map;
+	int rc;
+
+	m.b[0] -= x0;
+	m.b[1] -= y0;
+	rc = slice_rasterize(region, &m, antialias, r, e);
+	if (!rc)
+		paint_fill(fill, frag, z_mm, x0, y0, r);
 	return rc;
+}
+
+int hl_layer_draw_stepped(const struct paths *region, const struct paths *part,
+			  const struct raster_map *map, const struct hl_fill *fill,
+			  const struct hl_fill *frag, double z_mm, int x0, int y0, struct raster *r,
+			  struct raster *part_img, struct err *e)
+{
+	struct raster_map m = *map;
+	int rc;
+
+	m.b[0] -= x0;
+	m.b[1] -= y0;
+	rc = slice_rasterize(part, &m, 1, part_img, e);
+	if (!rc)
+		rc = slice_rasterize(region, &m, 0, r, e);
+	if (rc)
+		return rc;
+	/* the outline grey, as the part's own surface slices; inside it the
+	 * voids' pixels (which keep wall_mm from it) */
+	for (int y = 0; y < r->h; y++) {
+		uint8_t *d = r->px + (size_t)y * r->stride;
+		const uint8_t *p = part_img->px + (size_t)y * part_img->stride;
+		for (int x = 0; x < r->w; x++)
+			if (p[x] != 255)
+				d[x] = p[x];
+	}
+	paint_fill(fill, frag, z_mm, x0, y0, r);
+	return 0;
 }
 
 void hl_repair_fini(struct hl_repair *r)
@@ -68,8 +108,7 @@ void hl_repair_apply(const struct hl_repair *rp, double z_mm, struct raster *r)
 		if (q->x < 0 || q->y < 0 || q->x >= r->w || q->y >= r->h)
 			continue;
 		p = r->px + (size_t)q->y * r->stride + (size_t)q->x;
-		if (q->g > *p)
-			*p = q->g;
+		*p = q->g;
 	}
 }
 
@@ -344,20 +383,128 @@ static int mend_layer(struct raster *cur, const struct raster *above,
 	return rc;
 }
 
+/* near (w h): set to 1 where a void pixel of the drawn layer (drawn
+ * below VERIFY_THRESHOLD where the part, inside, is wholly solid: the
+ * optimised voids and the fill) lies within d pixels (the square of side
+ * 2 d + 1); other pixels keep their value.  tmp: w h scratch.  Two passes
+ * of a running count. */
+static void near_void(const struct raster *drawn, const struct raster *inside, int d,
+		      uint8_t *near, int32_t *tmp)
+{
+	int w = drawn->w, h = drawn->h;
+
+	for (int y = 0; y < h; y++) {
+		const uint8_t *g = drawn->px + (size_t)y * drawn->stride;
+		const uint8_t *in = inside->px + (size_t)y * inside->stride;
+		int32_t *t = tmp + (size_t)y * (size_t)w;
+		int c = 0;
+		/* c: void pixels in [x - d, x + d] of the row */
+		for (int x = 0; x < d && x < w; x++)
+			c += g[x] < VERIFY_THRESHOLD && in[x] == 255;
+		for (int x = 0; x < w; x++) {
+			if (x + d < w)
+				c += g[x + d] < VERIFY_THRESHOLD && in[x + d] == 255;
+			if (x - d - 1 >= 0)
+				c -= g[x - d - 1] < VERIFY_THRESHOLD && in[x - d - 1] == 255;
+			t[x] = c;
+		}
+	}
+	for (int x = 0; x < w; x++) {
+		int32_t c = 0;
+		for (int y = 0; y < d && y < h; y++)
+			c += tmp[(size_t)y * (size_t)w + (size_t)x] > 0;
+		for (int y = 0; y < h; y++) {
+			if (y + d < h)
+				c += tmp[(size_t)(y + d) * (size_t)w + (size_t)x] > 0;
+			if (y - d - 1 >= 0)
+				c -= tmp[(size_t)(y - d - 1) * (size_t)w + (size_t)x] > 0;
+			if (c > 0)
+				near[(size_t)y * (size_t)w + (size_t)x] = 1;
+		}
+	}
+}
+
+/* Carve layer k + 1 (cur, drawn; crop pixel (0, 0) is image pixel (ox,
+ * oy)) over layer k (below, final; inside, inside_below: the part at
+ * layers k + 1 and k): passes of verify_far_pixels clear each pixel of cur
+ * read over where the part is wholly solid at both layers (so what it
+ * hangs over is the voids', not the outside, and no cut opens the part's
+ * surface) and near is set (within HL_CARVE_NEAR_PX of the layer's drawn
+ * void: the walls round the design keep all but that), until none reads
+ * over or HL_REPAIR_PASSES passes.  Solid
+ * taken from over a void asks nothing of the layer below; the layer above
+ * is read against it in its turn.  *left: 1 when a pixel still reads
+ * over. */
+static int carve_layer(struct raster *cur, const struct raster *below, int ox, int oy,
+		       const struct raster *inside, const struct raster *inside_below,
+		       const uint8_t *near, double px_mm, double py_mm, double reach_mm, int threads,
+		       int *left, struct err *e)
+{
+	struct over o = {NULL, 0, 0, cur->w};
+	int infl = (int)ceil((reach_mm + 3 * hypot(px_mm, py_mm)) / fmin(px_mm, py_mm)) + 3;
+	int rc = 0, bx0 = 0, by0 = 0, bx1 = -1, by1 = -1;
+
+	*left = 0;
+	for (int pass = 0; pass <= HL_REPAIR_PASSES; pass++) {
+		size_t mine = 0;
+		/* after a pass, only the box the carving can change (what read
+		 * over outside it and was not carved is not the voids') */
+		rc = read_over(below, cur, ox, oy, px_mm, py_mm, reach_mm, threads, pass > 0, bx0,
+			       by0, bx1, by1, infl, NULL, 0, &o, e);
+		if (rc == ERR_NOMEM)
+			rc = ERR_SET(e, ERR_NOMEM, "hollow: out of memory (carving layers)");
+		if (rc || o.n == 0)
+			break;
+		for (size_t i = 0; i < o.n; i++) {
+			size_t c = (size_t)o.at[i];
+			if (inside->px[c] != 255 || inside_below->px[c] != 255)
+				continue; /* the part's own overhang, not the voids' */
+			if (!near[c]) {
+				*left = 1; /* the voids', but too far from the design */
+				continue;
+			}
+			if (cur->px[c] > 0)
+				o.at[mine++] = o.at[i];
+		}
+		if (mine == 0)
+			break;
+		if (pass == HL_REPAIR_PASSES) {
+			*left = 1;
+			break;
+		}
+		bx0 = cur->w;
+		by0 = cur->h;
+		bx1 = by1 = -1;
+		for (size_t i = 0; i < mine; i++) {
+			int x = o.at[i] % cur->w, y = o.at[i] / cur->w;
+			cur->px[o.at[i]] = 0;
+			bx0 = x < bx0 ? x : bx0;
+			by0 = y < by0 ? y : by0;
+			bx1 = x > bx1 ? x : bx1;
+			by1 = y > by1 ? y : by1;
+		}
+	}
+	mem_free(o.at);
+	return rc;
+}
+
 int hl_repair_build(const struct mesh *res, struct slicer *res_slicer, size_t part_nv,
 		    size_t part_nt, const struct raster_map *map, int antialias, const struct hl_fill *fill,
 		    const struct hl_fill *frag, double layer_mm, double px_mm, double py_mm,
-		    double reach_mm, int threads, struct hl_repair *r, struct err *e)
+		    double reach_mm, int carve, int threads, struct hl_repair *r, struct err *e)
 {
 	struct mesh part = {res->v, res->tri, part_nv, part_nt};
 	struct slicer *sp = NULL;
-	struct raster *cur = NULL, *above = NULL, *orig = NULL, *above_orig = NULL, *inside = NULL;
+	struct raster *cur = NULL, *last = NULL, *orig = NULL, *last_orig = NULL, *inside = NULL;
+	struct raster *last_part = NULL; /* carving: the part at the layer below */
+	uint8_t *near = NULL;            /* carving: where it may take solid */
+	struct paths preg;               /* carving: the part's section */
 	int32_t *lab = NULL;
 	struct paths reg;
 	struct box3 bp = box3_empty(), bv = box3_empty(); /* the part's, the voids' */
 	struct hl_fill box;
 	double gpx, gpy, t0 = progress_now_s();
-	int x0, y0, w, h, k0, k1, n, pad, rc = 0, have_above = 0;
+	int x0, y0, w, h, k0, k1, n, pad, rc = 0, have_last = 0;
 
 	hl_repair_fini(r);
 	if (res->nv <= part_nv || !(layer_mm > 0))
@@ -385,35 +532,63 @@ int hl_repair_build(const struct mesh *res, struct slicer *res_slicer, size_t pa
 		return ERR_SET(e, ERR_LIMIT, "hollow: the optimised voids span %d x %d pixels, too "
 				  "many to mend", w, h);
 	paths_init(&reg);
+	paths_init(&preg);
 	r->layer = mem_calloc((size_t)n, sizeof *r->layer);
 	cur = raster_new(w, h);
-	above = raster_new(w, h);
+	last = raster_new(w, h);
 	orig = raster_new(w, h);
-	above_orig = raster_new(w, h);
+	last_orig = raster_new(w, h);
 	inside = raster_new(w, h);
+	last_part = carve ? raster_new(w, h) : NULL;
+	near = carve ? mem_alloc((size_t)w * (size_t)h) : NULL;
 	lab = mem_alloc((size_t)w * (size_t)h * sizeof *lab);
-	if (!r->layer || !cur || !above || !orig || !above_orig || !inside || !lab) {
+	if (!r->layer || !cur || !last || !orig || !last_orig || !inside || !lab ||
+	    (carve && (!last_part || !near))) {
 		rc = ERR_SET(e, ERR_NOMEM, "hollow: out of memory (mending layers)");
 		goto out;
 	}
 	r->n = n;
 	r->layer_mm = layer_mm;
 	rc = slice_new(&part, &sp, e);
-	for (int k = k1; !rc && k >= k0; k--) {
+	/* mending: top down, each layer under its mended one; carving: bottom
+	 * up, each layer over its carved one (last: the layer done before,
+	 * last_orig its drawing) */
+	for (int step = 0; !rc && step <= k1 - k0; step++) {
+		int k = carve ? k0 + step : k1 - step;
 		double z = (k + 0.5) * layer_mm;
 		struct raster_map m = *map;
 		int left = 0;
 		size_t cnt = 0;
 		raster_clear(cur);
-		if ((rc = slice_at(res_slicer, z, &reg, NULL, e)) != 0 ||
-		    (rc = hl_layer_draw(&reg, map, antialias, fill, frag, z, x0, y0, cur, e)) != 0)
+		if ((rc = slice_at(res_slicer, z, &reg, NULL, e)) != 0)
 			break;
+		if (carve) {
+			/* inside: this layer's part, kept as the next one's below */
+			raster_clear(inside);
+			if ((rc = slice_at(sp, z, &preg, NULL, e)) != 0 ||
+			    (rc = hl_layer_draw_stepped(&reg, &preg, map, fill, frag, z, x0, y0, cur,
+							inside, e)) != 0)
+				break;
+		} else if ((rc = hl_layer_draw(&reg, map, antialias, fill, frag, z, x0, y0, cur,
+					       e)) != 0) {
+			break;
+		}
 		memcpy(orig->px, cur->px, (size_t)w * (size_t)h);
-		if (have_above) {
+		if (have_last && carve) {
+			/* near the voids drawn in this layer or the one below (a
+			 * collapsed top may rise a layer, no more) */
+			memset(near, 0, (size_t)w * (size_t)h);
+			near_void(cur, inside, HL_CARVE_NEAR_PX, near, lab);
+			near_void(last_orig, last_part, HL_CARVE_NEAR_PX, near, lab);
+			rc = carve_layer(cur, last, x0, y0, inside, last_part, near, px_mm, py_mm,
+					 reach_mm, threads, &left, e);
+			if (rc)
+				break;
+		} else if (have_last) {
 			struct inside in = {sp, &m, antialias, 0, z, &reg, inside};
 			m.b[0] -= x0;
 			m.b[1] -= y0;
-			rc = mend_layer(cur, above, above_orig, x0, y0, &in, lab, px_mm, py_mm,
+			rc = mend_layer(cur, last, last_orig, x0, y0, &in, lab, px_mm, py_mm,
 					reach_mm, threads, &left, e);
 			if (rc)
 				break;
@@ -429,8 +604,8 @@ int hl_repair_build(const struct mesh *res, struct slicer *res_slicer, size_t pa
 			r->layer[k].px = q;
 			for (size_t i = 0; i < (size_t)w * (size_t)h; i++)
 				if (cur->px[i] != orig->px[i]) {
-					r->mm3 += (cur->px[i] - orig->px[i]) / 255.0 * px_mm * py_mm *
-						  layer_mm;
+					r->mm3 += ((double)cur->px[i] - orig->px[i]) / 255.0 * px_mm *
+						  py_mm * layer_mm;
 					q->x = x0 + (int32_t)(i % (size_t)w);
 					q->y = y0 + (int32_t)(i / (size_t)w);
 					q->g = cur->px[i];
@@ -442,26 +617,35 @@ int hl_repair_build(const struct mesh *res, struct slicer *res_slicer, size_t pa
 		}
 		r->layers_left += left;
 		{
-			/* cur, mended, is the next layer's above; orig its drawing */
-			struct raster *t = above;
-			above = cur;
+			/* cur, mended or carved, is the next layer's last */
+			struct raster *t = last;
+			if (carve) {
+				t = last_part;
+				last_part = inside;
+				inside = t;
+				t = last;
+			}
+			last = cur;
 			cur = t;
-			t = above_orig;
-			above_orig = orig;
+			t = last_orig;
+			last_orig = orig;
 			orig = t;
 		}
-		have_above = 1;
+		have_last = 1;
 	}
 out:
 	r->seconds = progress_now_s() - t0;
 	slice_free(sp);
 	raster_free(cur);
-	raster_free(above);
+	raster_free(last);
 	raster_free(orig);
-	raster_free(above_orig);
+	raster_free(last_orig);
 	raster_free(inside);
+	raster_free(last_part);
+	mem_free(near);
 	mem_free(lab);
 	paths_fini(&reg);
+	paths_fini(&preg);
 	if (rc)
 		hl_repair_fini(r);
 	return rc;

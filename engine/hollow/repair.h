@@ -27,10 +27,27 @@ int hl_layer_draw(const struct paths *region, const struct raster_map *map, int 
 		  const struct hl_fill *fill, const struct hl_fill *frag, double z_mm, int x0,
 		  int y0, struct raster *r, struct err *e);
 
+/* The same layer as a mesh output with stepped voids (hmesh.h) slices
+ * again: part (the part's own section, nm) drawn with grey edges into
+ * part_img, and where that is wholly solid (255), region at pixel centres
+ * (0 or 255); then frag and fill as hl_layer_draw paints them.  r and
+ * part_img: the same size, cleared by the caller; part_img keeps the
+ * part's drawing.  0, ERR_NOMEM or a rasteriser error. */
+int hl_layer_draw_stepped(const struct paths *region, const struct paths *part,
+			  const struct raster_map *map, const struct hl_fill *fill,
+			  const struct hl_fill *frag, double z_mm, int x0, int y0, struct raster *r,
+			  struct raster *part_img, struct err *e);
+
 /* Passes of the mending a layer gets at most. */
 #define HL_REPAIR_PASSES 8
 
-/* One mended pixel: image pixel (x, y) drawn with gray g. */
+/* Carving (hl_repair_build, carve 1) takes only pixels within this many
+ * pixels (Chebyshev) of the layer's drawn void: the part's walls round
+ * the design lose at most that. */
+#define HL_CARVE_NEAR_PX 2
+
+/* One mended pixel: image pixel (x, y) drawn with gray g (raised by the
+ * mending, 0 where carved). */
 struct hl_mend {
 	int32_t x, y;
 	uint8_t g;
@@ -41,7 +58,8 @@ struct hl_repair {
 	int n;
 	double layer_mm;
 	long long pixels;  /* mended pixels, all layers */
-	double mm3;        /* solid they add: gray added / 255 x pixel x layer */
+	double mm3;        /* solid they add: gray added / 255 x pixel x layer
+			    * (negative when carved) */
 	int layers;        /* layers with a mended pixel */
 	int layers_left;   /* layers where a pixel still reads over after the passes */
 	double seconds;
@@ -51,28 +69,38 @@ void hl_repair_fini(struct hl_repair *r);
 
 /* Mend the layers of res (the part: its first part_nv vertices and
  * part_nt triangles, then the optimised voids' surfaces; res_slicer, the
- * caller's, slices it) drawn as
- * hl_layer_draw does through map with antialias, with fill and frag (may
- * be NULL), print layers of layer_mm.  Top down over the layers the voids
- * span (and one more each way), on the image box of their surfaces grown
- * by the reach: where a pixel of layer k + 1 reads farther than reach_mm
- * from layer k's solid (verify_far_pixels, pitches px_mm, py_mm), the
- * pixel of layer k under it takes layer k + 1's gray there, or when it
- * has that already its eight neighbours take theirs, where the part is
- * wholly solid, up to HL_REPAIR_PASSES times a layer (each pass after
- * the first reading only what its raises can change); islands the
- * mending made in layer k + 1 get its gray under them; the gray added
- * to layer k is checked against layer k - 1 in its turn.
- * Only solid is added, and only inside the part.  r (zeroed or finished)
- * receives the mended pixels per layer.  0, ERR_NOMEM, ERR_LIMIT (a box
- * over 2^28 pixels) or a slicer error. */
+ * caller's, slices it) drawn as hl_layer_draw does through map with
+ * antialias, with fill and frag (may be NULL), print layers of layer_mm,
+ * over the layers the voids span (and one more each way), on the image
+ * box of their surfaces grown by the reach.  A pixel of layer k + 1 that
+ * reads farther than reach_mm from layer k's solid (verify_far_pixels,
+ * pitches px_mm, py_mm) is over.
+ * - carve 0 (grey edges), top down: the pixel of layer k under an over
+ *   pixel takes layer k + 1's gray there, or when it has that already its
+ *   eight neighbours take theirs, where the part is wholly solid, up to
+ *   HL_REPAIR_PASSES times a layer (each pass after the first reading
+ *   only what its raises can change); islands the mending made in layer
+ *   k + 1 get its gray under them; the gray added to layer k is checked
+ *   against layer k - 1 in its turn.  Only solid is added.
+ * - carve 1 (a mesh's stepped voids: layers drawn by
+ *   hl_layer_draw_stepped, antialias unused), bottom up: an over pixel of
+ *   layer k + 1 is cleared where the part at layers k and k + 1 is wholly
+ *   solid (what it hangs over is a void, and no cut opens the part's
+ *   surface) and within HL_CARVE_NEAR_PX of the layer's drawn void, up to
+ *   HL_REPAIR_PASSES passes a layer; layer
+ *   k + 2 is read against the carved layer in its turn.  Only solid over
+ *   the voids is taken.
+ * Only pixels inside the part change.  r (zeroed or finished) receives
+ * the changed pixels per layer.  0, ERR_NOMEM, ERR_LIMIT (a box over
+ * 2^28 pixels) or a slicer error. */
 int hl_repair_build(const struct mesh *res, struct slicer *res_slicer, size_t part_nv,
 		    size_t part_nt, const struct raster_map *map, int antialias, const struct hl_fill *fill,
 		    const struct hl_fill *frag, double layer_mm, double px_mm, double py_mm,
-		    double reach_mm, int threads, struct hl_repair *r, struct err *e);
+		    double reach_mm, int carve, int threads, struct hl_repair *r, struct err *e);
 
 /* Draw the mended pixels of the print layer at mid-plane z_mm into r, an
- * image of the map r was built on (pixels outside r skipped). */
+ * image of the map r was built on, drawn by hl_layer_draw (each pixel set
+ * to its gray; pixels outside r skipped). */
 void hl_repair_apply(const struct hl_repair *rp, double z_mm, struct raster *r);
 
 #endif

@@ -6,7 +6,9 @@ float32 coordinates: every edge in exactly two triangles, traversed once
 each way; V - E + F even), whose volume equals the SL1 output's material
 within 1 %, and which, sliced again with `--engine solid`, gives layers that
 `infilld verify --strict` passes against the plain part.  A small cube keeps
-it fast; the camel's figures are in tests/bench/hollow.sh.
+it fast; the camel's figures are in tests/bench/hollow.sh.  The optimiser's
+voids alone (fill=false) go into the mesh stepped and carved; the engine's
+own check then reads what the mesh slices to, to the bit.
 Standalone: python3 tests/hollow/test_hollow_mesh.py
 """
 import collections
@@ -177,6 +179,55 @@ class HollowMeshTest(unittest.TestCase):
         write_stl(path, p2, t2)
         bad, _, _ = check_manifold(*read_stl(path))
         self.assertIn("edge not in two triangles", bad)
+
+
+class HollowMeshOptimisedTest(unittest.TestCase):
+    """The optimiser's voids alone (fill=false) in a mesh: stepped at the
+    printer's pixel centres and carved where they read over (docs/hollow.md
+    "Mended images"), so the engine's check reads the very layers the mesh
+    slices to again, and those pass."""
+
+    @classmethod
+    def setUpClass(cls):
+        cls.tmp = tempfile.TemporaryDirectory()
+        t = cls.tmp.name
+        cls.stl = os.path.join(t, "opt.stl")
+        run("run", CUBE, "-o", cls.stl, "--engine", "hollow", "--set", "height_mm=8",
+            "--set", "fill=false", "--threads", "2", "--quiet", "--metrics",
+            os.path.join(t, "opt.json"))
+        with open(os.path.join(t, "opt.json")) as f:
+            cls.m = json.load(f)
+
+    @classmethod
+    def tearDownClass(cls):
+        cls.tmp.cleanup()
+
+    def test_carved_mesh_reslices_to_the_checked_layers(self):
+        h = self.m["hollow"]
+        self.assertFalse(h["fill_applied"])
+        self.assertGreaterEqual(h["voids_optimised"], 1)
+        # carved: solid taken, none added, nothing left over
+        self.assertGreater(h["mended"]["pixels"], 0)
+        self.assertLess(h["mended"]["mm3"], 0)
+        self.assertEqual(h["mended"]["layers_left"], 0)
+        bad, _, vol = check_manifold(*read_stl(self.stl))
+        self.assertEqual(bad, {})
+        self.assertAlmostEqual(vol, self.m["material_volume_mm3"], delta=1e-3 * vol)
+        t = self.tmp.name
+        re = os.path.join(t, "re.sl1")
+        solid = os.path.join(t, "solid.sl1")
+        run("run", self.stl, "-o", re, "--engine", "solid", "--threads", "2", "--quiet")
+        run("run", CUBE, "-o", solid, "--engine", "solid", "--set", "height_mm=8",
+            "--threads", "2", "--quiet")
+        rep = json.loads(run("verify", re, "--solid", solid, "--strict"))
+        self.assertEqual(rep["interior_overhang_px"], 0, rep)
+        self.assertLessEqual(rep["slope_excess_px"], rep["tolerance_px"])
+        self.assertEqual(rep["islands_added"], 0)
+        # the engine checked these very pixels: its report is the reslice's
+        own = h["verify"]
+        for k in ("slope_excess_px", "enclosed_void_mm3", "fin_px", "min_wall_mm", "islands"):
+            self.assertEqual(own[k], rep[k], k)
+        self.assertGreater(rep["enclosed_void_mm3"], 0)
 
 
 if __name__ == "__main__":
