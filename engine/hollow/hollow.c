@@ -349,9 +349,6 @@ static int hollow_prepare(const struct engine_ctx *ctx, const void *params, void
 	c->opt.wall_next_mm = p->wall_next_mm;
 	c->opt.stack_layer_mm = p->stack_layer_mm > 0 ? p->stack_layer_mm : fmin(ctx->layer_mm, 0.1);
 	c->opt.opt_layer_mm = fmax(p->opt_layer_mm, c->opt.stack_layer_mm);
-	c->opt.pixel_mm = p->pixel_mm > 0 ? p->pixel_mm
-			  : ctx->map     ? sqrt(raster_map_pixel_area_mm2(ctx->map))
-					 : HOLLOW_VERIFY_PIXEL_MM;
 	c->opt.alpha_rad = s->alpha_deg * M_PI / 180;
 	c->opt.margin_rad = p->margin_deg * M_PI / 180;
 	if (c->opt.margin_rad >= 0.5 * c->opt.alpha_rad)
@@ -389,6 +386,11 @@ static int hollow_prepare(const struct engine_ctx *ctx, const void *params, void
 	else
 		own_map_of(ctx->mesh, &c->fill_map);
 	c->fill_map_set = 1;
+	/* the optimiser's erosion grid: the pixels the layers are read on (a
+	 * mesh for a resin printer: that printer's, as its SL1 job's) */
+	c->opt.pixel_mm = p->pixel_mm > 0 ? p->pixel_mm
+			  : s->map || s->own_is_printer ? sqrt(raster_map_pixel_area_mm2(&c->fill_map))
+							: HOLLOW_VERIFY_PIXEL_MM;
 	rc = hl_run(ctx->mesh, c, ctx->progress, &s->out, e);
 	if (!rc)
 		rc = min_wall_3d(ctx->mesh, s->out.mesh, &s->min_wall_3d_mm, e);
