@@ -155,29 +155,41 @@ if [ -z "${HOLLOW_MODELS:-}" ]; then
 	run_one ChineseDragon-10kv.off z 45 lightweight 8 false 55.5 adaptive opt_layer_min_mm=0.25 \
 		opt_layer_mm=1.0 || status=1
 fi
-# the mesh output (-o part.stl): the default pipeline's camel as a closed mesh,
-# its volume against the SL1's material, size, time; sliced again with
-# --engine solid and checked by infilld verify --strict against the plain part
-mesh_one() { # name up
-	local name=$1 up=$2 out="$TMP/${1}_mesh" rc
+# the mesh output (-o part.stl): the camel as a closed mesh (the default
+# pipeline, and the optimiser alone: its voids stepped and carved), its volume
+# against the SL1 row's material, size, time; sliced again with --engine solid
+# and checked by infilld verify --strict against the plain part
+mesh_one() { # name up [fill]
+	local name=$1 up=$2 fill=${3:-true} out="$TMP/${1}_mesh" rc layers_json
+	layers_json="$TMP/${name}_a45_lightweight_r8_h50.json"
+	if [ "$fill" != true ]; then
+		out="${out}_nofill"
+		layers_json="$TMP/${name}_a45_lightweight_r8_h50_nofill.json"
+	fi
 	/usr/bin/time -f '%e %M' -o "$out.time" timeout -k 30 "$CAP_S" "$BIN" run \
 		"$SHARED/meshes/$name.off" -o "$out.stl" --engine hollow --set height_mm=50 \
-		--set up="$up" --threads 2 --quiet --metrics "$out.json" || { echo "$name mesh: run failed"; return 1; }
+		--set up="$up" --set rounds=8 --set fill="$fill" --set wall_mm=1.0 \
+		--set wall_next_mm=0.8 --threads 2 --quiet --metrics "$out.json" ||
+		{ echo "$name mesh: run failed"; return 1; }
 	"$BIN" run "$out.stl" -o "$out.re.sl1" --engine solid --threads 2 --quiet &&
 		"$BIN" run "$SHARED/meshes/$name.off" -o "$out.solid.sl1" --engine solid \
 			--set height_mm=50 --set up="$up" --threads 2 --quiet &&
 		"$BIN" verify "$out.re.sl1" --solid "$out.solid.sl1" --strict > "$out.verify.json"
 	rc=$?
-	python3 - "$out.json" "$out.time" "$out.stl" "$out.verify.json" "$TMP/${name}_a45_lightweight_r8_h50.json" "$name" "$rc" <<'PY'
+	python3 - "$out.json" "$out.time" "$out.stl" "$out.verify.json" "$layers_json" "$name" "$rc" "$fill" <<'PY'
 import json, os, sys
 m = json.load(open(sys.argv[1])); wall, rss = open(sys.argv[2]).read().split()[-2:]
 v = json.load(open(sys.argv[4])) if os.path.getsize(sys.argv[4]) else {}
 layers = json.load(open(sys.argv[5]))["material_volume_mm3"] if os.path.exists(sys.argv[5]) else float("nan")
-print("%-10s mesh: %.1f mm3 vs layers %.1f mm3 (%+.3f %%)  %d triangles (voids %d)  watertight %s  %.0f MB  %.1f s (mesh %.1f s)  resliced: overhang %s mm2, verify --strict rc %s"
-      % (sys.argv[6], m["material_volume_mm3"], layers, 100 * (m["material_volume_mm3"] / layers - 1),
-         m["result_mesh"]["triangles"], m["hollow"]["mesh"]["void_triangles"], m["result_mesh"]["watertight"],
-         os.path.getsize(sys.argv[3]) / 1e6, float(wall), m["hollow"]["mesh"]["seconds"],
-         v.get("interior_overhang_mm2"), sys.argv[7]))
+h = m["hollow"]
+print("%-10s mesh fill=%-5s: %.2f %% hollowed, %.1f mm3 vs layers %.1f mm3 (%+.3f %%)  %d triangles (voids %d)  watertight %s  %.0f MB  %.1f s (mesh %.1f s)  carved %d px (%.2f mm3, %d layers left)  resliced: overhang %s px (%.3f px excess), islands added %s, verify --strict rc %s"
+      % (sys.argv[6], sys.argv[8], 100 * h["volume_reduction"], m["material_volume_mm3"], layers,
+         100 * (m["material_volume_mm3"] / layers - 1),
+         m["result_mesh"]["triangles"], h["mesh"]["void_triangles"], m["result_mesh"]["watertight"],
+         os.path.getsize(sys.argv[3]) / 1e6, float(wall), h["mesh"]["seconds"],
+         h["mended"]["pixels"], abs(h["mended"]["mm3"]), h["mended"]["layers_left"],
+         v.get("interior_overhang_px"), v.get("slope_excess_px", float("nan")), v.get("islands_added"),
+         sys.argv[7]))
 PY
 	rm -f "$out.stl" "$out.re.sl1" "$out.solid.sl1"
 	[ "$rc" -eq 0 ]
@@ -185,6 +197,7 @@ PY
 if [ -z "${HOLLOW_MODELS:-}" ] || [[ " $HOLLOW_MODELS " == *" camel:"* ]]; then
 	echo "mesh output (-o part.stl), resliced with --engine solid:"
 	mesh_one camel y || status=1
+	mesh_one camel y false || status=1
 fi
 # a bulky part: what the fill's growth costs against round growth, on a ball
 # (tests/bench/hollow_axisym.py: the same top-down greedy with round fronts,
