@@ -292,8 +292,7 @@ static int mend_layer(struct raster *cur, const struct raster *above,
 	const uint8_t *inside;
 	int32_t *prev = NULL;
 	size_t nprev = 0, prev_cap = 0;
-	/* how far a pixel's reading reaches (verify_far_pixels' own pad) */
-	int infl = (int)ceil((reach_mm + 3 * hypot(px_mm, py_mm)) / fmin(px_mm, py_mm)) + 3;
+	int infl = verify_far_pad_px(reach_mm, px_mm, py_mm); /* a reading's reach */
 	int rc = 0, bx0 = 0, by0 = 0, bx1 = -1, by1 = -1;
 
 	*left = 0;
@@ -441,7 +440,7 @@ static int carve_layer(struct raster *cur, const struct raster *below, int ox, i
 		       int *left, struct err *e)
 {
 	struct over o = {NULL, 0, 0, cur->w};
-	int infl = (int)ceil((reach_mm + 3 * hypot(px_mm, py_mm)) / fmin(px_mm, py_mm)) + 3;
+	int infl = verify_far_pad_px(reach_mm, px_mm, py_mm);
 	int rc = 0, bx0 = 0, by0 = 0, bx1 = -1, by1 = -1;
 
 	*left = 0;

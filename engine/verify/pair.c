@@ -52,13 +52,20 @@ static size_t grey_count(const struct raster *r)
 	return n;
 }
 
+int verify_far_pad_px(double reach_mm, double px_mm, double py_mm)
+{
+	/* the window of verify_subpx_far_mm, at most (reach + 6 hd) / pmin
+	 * with hd the half diagonal, and the 5 x 5 neighbourhood of each
+	 * pixel in it */
+	return (int)ceil((reach_mm + 3 * hypot(px_mm, py_mm)) / fmin(px_mm, py_mm)) + 3;
+}
+
 int verify_far_pixels(const struct raster *below, const struct raster *above, int ox, int oy,
 		      double px_mm, double py_mm, double reach_mm, int threads,
 		      int (*fn)(void *ctx, int x, int y, double far_mm), void *ctx, struct err *e)
 {
 	struct pair_scratch s;
 	struct raster b, a;
-	double pmin = fmin(px_mm, py_mm), hd = 0.5 * hypot(px_mm, py_mm); /* for the box's pad */
 	int x0 = INT32_MAX, y0 = INT32_MAX, x1 = -1, y1 = -1, pad, rc = 0;
 	size_t np;
 
@@ -79,11 +86,9 @@ int verify_far_pixels(const struct raster *below, const struct raster *above, in
 	if (x1 < 0)
 		return 0;
 	/* their box, grown past every pixel of below that a reading within
-	 * the reach looks at (the window of verify_subpx_far_mm, at most
-	 * (reach + 6 hd) / pmin, and the 5 x 5 neighbourhood of each pixel in
-	 * it): a pixel read over for want of solid beyond the box reads over
-	 * with it too */
-	pad = (int)ceil((reach_mm + 6 * hd) / pmin) + 3;
+	 * the reach looks at: a pixel read over for want of solid beyond the
+	 * box reads over with it too */
+	pad = verify_far_pad_px(reach_mm, px_mm, py_mm);
 	x0 = x0 - pad < 0 ? 0 : x0 - pad;
 	y0 = y0 - pad < 0 ? 0 : y0 - pad;
 	x1 = x1 + pad >= above->w ? above->w - 1 : x1 + pad;

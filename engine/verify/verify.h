@@ -170,6 +170,11 @@ int verify_far_pixels(const struct raster *below, const struct raster *above, in
 		      double px_mm, double py_mm, double reach_mm, int threads,
 		      int (*fn)(void *ctx, int x, int y, double far_mm), void *ctx, struct err *e);
 
+/* How far (pixels, either axis) verify_far_pixels' reading of one pixel
+ * looks at below for the given reach and pitches: a pixel of below
+ * farther than this from every pixel of above changes no reading. */
+int verify_far_pad_px(double reach_mm, double px_mm, double py_mm);
+
 /* Close the stack (the space above the last layer is outside) and fill
  * *out (replaced; caller frees with verify_report_fini).  The check can
  * not be fed afterwards. */
