@@ -195,14 +195,6 @@ static int inside_draw(struct inside *in, struct err *e)
 	return rc;
 }
 
-/* Copy the box [x0, x1] x [y0, y1] of src into dst (sized to it). */
-static void copy_box(const struct raster *src, int x0, int y0, int x1, int y1, struct raster *dst)
-{
-	for (int y = y0; y <= y1; y++)
-		memcpy(dst->px + (size_t)(y - y0) * dst->stride, src->px + (size_t)y * src->stride + x0,
-		       (size_t)(x1 - x0 + 1));
-}
-
 static int cmp_i32(const void *a, const void *b)
 {
 	int32_t x = *(const int32_t *)a, y = *(const int32_t *)b;
@@ -212,61 +204,35 @@ static int cmp_i32(const void *a, const void *b)
 
 /* The pixels of above that read over cur (o->at: crop indices, row by
  * row, as one read of the whole crop gives them).  reread (nonzero after
- * a raise): only the box [bx0, bx1] x [by0, by1] of the raised pixels,
- * grown by infl pixels (no reading farther from a raise can change), is
- * read again, on a crop grown by infl more (so the box reads each pixel
- * as the whole crop does); prev (nprev) are the last read's pixels, and
- * those outside the box still read over. */
+ * a change): only the box [bx0, bx1] x [by0, by1] of the changed pixels,
+ * grown by infl pixels (no reading farther from a change can change), is
+ * read again (verify_far_pixels_in: each pixel as the whole crop reads
+ * it); prev (nprev) are the last read's pixels, and those outside the box
+ * still read over. */
 static int read_over(const struct raster *cur, const struct raster *above, int ox, int oy,
 		     double px_mm, double py_mm, double reach_mm, int threads, int reread, int bx0,
 		     int by0, int bx1, int by1, int infl, const int32_t *prev, size_t nprev,
 		     struct over *o, struct err *e)
 {
-	int w = cur->w, h = cur->h, ix0, iy0, ix1, iy1, sx0, sy0, sx1, sy1, rc;
-	struct raster *cb = NULL, *ab = NULL;
-	size_t keep = 0;
+	int w = cur->w, rc;
 
 	o->n = 0;
 	o->w = w;
 	if (!reread)
 		return verify_far_pixels(cur, above, ox, oy, px_mm, py_mm, reach_mm, threads,
 					 note_over, o, e);
-	ix0 = bx0 - infl < 0 ? 0 : bx0 - infl;
-	iy0 = by0 - infl < 0 ? 0 : by0 - infl;
-	ix1 = bx1 + infl >= w ? w - 1 : bx1 + infl;
-	iy1 = by1 + infl >= h ? h - 1 : by1 + infl;
-	sx0 = ix0 - infl < 0 ? 0 : ix0 - infl;
-	sy0 = iy0 - infl < 0 ? 0 : iy0 - infl;
-	sx1 = ix1 + infl >= w ? w - 1 : ix1 + infl;
-	sy1 = iy1 + infl >= h ? h - 1 : iy1 + infl;
-	cb = raster_new(sx1 - sx0 + 1, sy1 - sy0 + 1);
-	ab = raster_new(sx1 - sx0 + 1, sy1 - sy0 + 1);
-	if (!cb || !ab) {
-		raster_free(cb);
-		raster_free(ab);
-		return ERR_NOMEM;
-	}
-	copy_box(cur, sx0, sy0, sx1, sy1, cb);
-	copy_box(above, sx0, sy0, sx1, sy1, ab);
-	o->w = cb->w;
-	rc = verify_far_pixels(cb, ab, ox + sx0, oy + sy0, px_mm, py_mm, reach_mm, threads,
-			       note_over, o, e);
-	raster_free(cb);
-	raster_free(ab);
+	bx0 -= infl;
+	by0 -= infl;
+	bx1 += infl;
+	by1 += infl;
+	rc = verify_far_pixels_in(cur, above, ox, oy, px_mm, py_mm, reach_mm, threads, bx0, by0,
+				  bx1, by1, note_over, o, e);
 	if (rc)
 		return rc;
-	/* to crop indices, those inside the box only */
-	for (size_t i = 0; i < o->n; i++) {
-		int x = o->at[i] % o->w + sx0, y = o->at[i] / o->w + sy0;
-		if (x >= ix0 && x <= ix1 && y >= iy0 && y <= iy1)
-			o->at[keep++] = y * w + x;
-	}
-	o->n = keep;
-	o->w = w;
 	for (size_t i = 0; i < nprev; i++) {
 		int x = prev[i] % w, y = prev[i] / w;
 		void *arr = o->at;
-		if (x >= ix0 && x <= ix1 && y >= iy0 && y <= iy1)
+		if (x >= bx0 && x <= bx1 && y >= by0 && y <= by1)
 			continue;
 		if (mem_grow(&arr, &o->cap, o->n + 1, sizeof *o->at))
 			return ERR_NOMEM;

@@ -64,6 +64,16 @@ int verify_far_pixels(const struct raster *below, const struct raster *above, in
 		      double px_mm, double py_mm, double reach_mm, int threads,
 		      int (*fn)(void *ctx, int x, int y, double far_mm), void *ctx, struct err *e)
 {
+	return verify_far_pixels_in(below, above, ox, oy, px_mm, py_mm, reach_mm, threads, 0, 0,
+				    above->w - 1, above->h - 1, fn, ctx, e);
+}
+
+int verify_far_pixels_in(const struct raster *below, const struct raster *above, int ox, int oy,
+			 double px_mm, double py_mm, double reach_mm, int threads, int bx0,
+			 int by0, int bx1, int by1,
+			 int (*fn)(void *ctx, int x, int y, double far_mm), void *ctx,
+			 struct err *e)
+{
 	struct pair_scratch s;
 	struct raster b, a;
 	int x0 = INT32_MAX, y0 = INT32_MAX, x1 = -1, y1 = -1, pad, rc = 0;
@@ -71,11 +81,16 @@ int verify_far_pixels(const struct raster *below, const struct raster *above, in
 
 	if (below->w != above->w || below->h != above->h)
 		return ERR_SET(e, ERR_PARAM, "verify: a pair of layers of different sizes");
-	/* the pixels that can read over: some solid over a pixel not whole */
-	for (int y = 0; y < above->h; y++) {
+	/* the pixels of the box that can read over: some solid over a pixel
+	 * not whole */
+	bx0 = bx0 < 0 ? 0 : bx0;
+	by0 = by0 < 0 ? 0 : by0;
+	bx1 = bx1 >= above->w ? above->w - 1 : bx1;
+	by1 = by1 >= above->h ? above->h - 1 : by1;
+	for (int y = by0; y <= by1; y++) {
 		const uint8_t *ra = above->px + (size_t)y * above->stride;
 		const uint8_t *rb = below->px + (size_t)y * below->stride;
-		for (int x = 0; x < above->w; x++)
+		for (int x = bx0; x <= bx1; x++)
 			if (ra[x] && rb[x] != 255) {
 				x0 = x < x0 ? x : x0;
 				x1 = x > x1 ? x : x1;
@@ -143,7 +158,8 @@ int verify_far_pixels(const struct raster *below, const struct raster *above, in
 			for (int x = 0; x < a.w && !rc; x++) {
 				size_t i = (size_t)y * (size_t)a.w + (size_t)x;
 				double u = INFINITY, far;
-				if (a.px[i] == 0 || b.px[i] == 255)
+				if (a.px[i] == 0 || b.px[i] == 255 || x + x0 < bx0 || x + x0 > bx1 ||
+				    y + y0 < by0 || y + y0 > by1)
 					continue;
 				if (s.near[i] >= 0)
 					u = sqrt(s.d2_solid[i]) +

@@ -169,6 +169,13 @@ int verify_layer_ref(struct verify *v, const struct raster *r, const struct rast
 int verify_far_pixels(const struct raster *below, const struct raster *above, int ox, int oy,
 		      double px_mm, double py_mm, double reach_mm, int threads,
 		      int (*fn)(void *ctx, int x, int y, double far_mm), void *ctx, struct err *e);
+/* The same for the pixels of above in the crop box [bx0, bx1] x [by0, by1]
+ * only (clipped to the crops), each read as in the whole crops. */
+int verify_far_pixels_in(const struct raster *below, const struct raster *above, int ox, int oy,
+			 double px_mm, double py_mm, double reach_mm, int threads, int bx0,
+			 int by0, int bx1, int by1,
+			 int (*fn)(void *ctx, int x, int y, double far_mm), void *ctx,
+			 struct err *e);
 
 /* How far (pixels, either axis) verify_far_pixels' reading of one pixel
  * looks at below for the given reach and pitches: a pixel of below
