@@ -96,8 +96,8 @@ static int hm_layer(void *ctx, int k, uint8_t *mask, struct err *e)
 
 int hl_mesh_build(const struct mesh *res, size_t part_nv, size_t part_nt,
 		  const struct hl_fill *fill, const struct hl_fill *frag,
-		  const struct hl_repair *mend, const struct raster_map *map, double layer_mm, struct mesh **out,
-		  size_t *void_triangles, struct err *e)
+		  const struct hl_repair *mend, const struct raster_map *map, double layer_mm,
+		  struct mesh **out, size_t *void_triangles, struct err *e)
 {
 	struct mesh part = {res->v, res->tri, part_nv, part_nt};
 	struct mesh *surf = NULL, *m = NULL;

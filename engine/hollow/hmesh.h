@@ -16,11 +16,12 @@ struct err;
 /* What the layers print, as one closed mesh.  res: the part (its first
  * part_nv vertices and part_nt triangles) followed by the optimised voids'
  * surfaces; fill: the top-down fill's void pixels, frag: beads painted
- * solid, mend: pixels mended or carved (repair.h, on the drawing without
- * grey); any may be empty, mend NULL; all on the pixels of fill->map, or
- * of map when fill has no grid.  layer_mm: print layers, layer k = slab
- * [k, k + 1] layer_mm.  Layer k's void is what hl_layer_draw draws at
- * pixel centres: the pixels whose centres the part covers and res does not
+ * solid, mend: pixels carved (repair.h, carve 1: drawn by
+ * hl_layer_draw_stepped; a mending of grey images does not belong here);
+ * any may be empty, mend NULL; all on the pixels of fill->map, or of map
+ * when fill has no grid.  layer_mm: print layers, layer k = slab
+ * [k, k + 1] layer_mm.  Layer k's void is what hl_layer_draw_stepped and
+ * the carving draw: the pixels whose centres the part covers and res does not
  * (the optimised voids), less frag's, plus fill's, then mend's set (void
  * where its gray is under VERIFY_THRESHOLD).  Its surface
  * (engine/mesh/layers.h: stepped at the pixel and the layer, closed, every

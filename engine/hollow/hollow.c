@@ -421,8 +421,8 @@ static int hollow_prepare(const struct engine_ctx *ctx, const void *params, void
 		verify_params_of(s, &vp);
 		if (s->map || carve_stepped(s, &vp))
 			rc = hl_repair_build(s->out.mesh, s->slicer, s->part_nv, s->part_nt,
-					     s->map ? s->map : &s->own_map, s->antialias,
-					     &s->out.fill, &s->frag, s->layer_mm, vp.pixel_x_mm,
+					     s->map ? s->map : &s->own_map,
+					     s->map || s->own_is_printer ? s->antialias : 1, &s->out.fill, &s->frag, s->layer_mm, vp.pixel_x_mm,
 					     vp.pixel_y_mm, hollow_mend_reach_mm(&vp), !s->map,
 					     vp.threads, &s->repair, e);
 	}
@@ -474,6 +474,7 @@ static int hollow_layer(void *state, struct layer *ly, struct err *e)
 			rc = slice_at(s->part_slicer, ly->z_mm, &s->part_region, NULL, e);
 			if (!rc)
 				rc = hl_layer_draw_stepped(&ly->region, &s->part_region, &s->own_map,
+							   s->own_is_printer ? s->antialias : 1,
 							   fill ? &s->out.fill : NULL,
 							   frag ? &s->frag : NULL, ly->z_mm, 0, 0,
 							   s->own, s->part_img, e);

@@ -58,22 +58,24 @@ int hl_layer_draw(const struct paths *region, const struct raster_map *map, int 
 }
 
 int hl_layer_draw_stepped(const struct paths *region, const struct paths *part,
-			  const struct raster_map *map, const struct hl_fill *fill,
+			  const struct raster_map *map, int antialias, const struct hl_fill *fill,
 			  const struct hl_fill *frag, double z_mm, int x0, int y0, struct raster *r,
 			  struct raster *part_img, struct err *e)
 {
 	struct raster_map m = *map;
 	int rc;
 
+	if (r->w != part_img->w || r->h != part_img->h)
+		return ERR_SET(e, ERR_PARAM, "hollow: a layer and its part drawn at different sizes");
 	m.b[0] -= x0;
 	m.b[1] -= y0;
-	rc = slice_rasterize(part, &m, 1, part_img, e);
+	rc = slice_rasterize(part, &m, antialias, part_img, e);
 	if (!rc)
 		rc = slice_rasterize(region, &m, 0, r, e);
 	if (rc)
 		return rc;
-	/* the outline grey, as the part's own surface slices; inside it the
-	 * voids' pixels (which keep wall_mm from it) */
+	/* the outline as the part's own surface slices; inside it the voids'
+	 * pixels (which keep wall_mm from it) */
 	for (int y = 0; y < r->h; y++) {
 		uint8_t *d = r->px + (size_t)y * r->stride;
 		const uint8_t *p = part_img->px + (size_t)y * part_img->stride;
@@ -394,9 +396,9 @@ static void near_void(const struct raster *drawn, const struct raster *inside, i
  * layers k + 1 and k): passes of verify_far_pixels clear each pixel of cur
  * read over where the part is wholly solid at both layers (so what it
  * hangs over is the voids', not the outside, and no cut opens the part's
- * surface) and near is set (within HL_CARVE_NEAR_PX of the layer's drawn
- * void: the walls round the design keep all but that), until none reads
- * over or HL_REPAIR_PASSES passes.  Solid
+ * surface) and near is set (within HL_CARVE_NEAR_PX of a void drawn in
+ * layer k + 1 or k: the walls round the design keep all but that), until
+ * none reads over or HL_REPAIR_PASSES passes.  Solid
  * taken from over a void asks nothing of the layer below; the layer above
  * is read against it in its turn.  *left: 1 when a pixel still reads
  * over. */
@@ -428,8 +430,7 @@ static int carve_layer(struct raster *cur, const struct raster *below, int ox, i
 				*left = 1; /* the voids', but too far from the design */
 				continue;
 			}
-			if (cur->px[c] > 0)
-				o.at[mine++] = o.at[i];
+			o.at[mine++] = o.at[i]; /* solid: verify_far_pixels reads no other */
 		}
 		if (mine == 0)
 			break;
@@ -531,8 +532,8 @@ int hl_repair_build(const struct mesh *res, struct slicer *res_slicer, size_t pa
 			/* inside: this layer's part, kept as the next one's below */
 			raster_clear(inside);
 			if ((rc = slice_at(sp, z, &preg, NULL, e)) != 0 ||
-			    (rc = hl_layer_draw_stepped(&reg, &preg, map, fill, frag, z, x0, y0, cur,
-							inside, e)) != 0)
+			    (rc = hl_layer_draw_stepped(&reg, &preg, map, antialias, fill, frag, z, x0,
+							y0, cur, inside, e)) != 0)
 				break;
 		} else if ((rc = hl_layer_draw(&reg, map, antialias, fill, frag, z, x0, y0, cur,
 					       e)) != 0) {

@@ -28,13 +28,14 @@ int hl_layer_draw(const struct paths *region, const struct raster_map *map, int 
 		  int y0, struct raster *r, struct err *e);
 
 /* The same layer as a mesh output with stepped voids (hmesh.h) slices
- * again: part (the part's own section, nm) drawn with grey edges into
- * part_img, and where that is wholly solid (255), region at pixel centres
- * (0 or 255); then frag and fill as hl_layer_draw paints them.  r and
- * part_img: the same size, cleared by the caller; part_img keeps the
- * part's drawing.  0, ERR_NOMEM or a rasteriser error. */
+ * again: part (the part's own section) drawn into part_img with antialias
+ * (the printer's: the mesh's outer surface is the input's), and where that
+ * is wholly solid (255), region at pixel centres (0 or 255); then frag and
+ * fill as hl_layer_draw paints them.  r and part_img: the same size
+ * (ERR_PARAM otherwise), cleared by the caller; part_img keeps the part's
+ * drawing.  0, ERR_PARAM, ERR_NOMEM or a rasteriser error. */
 int hl_layer_draw_stepped(const struct paths *region, const struct paths *part,
-			  const struct raster_map *map, const struct hl_fill *fill,
+			  const struct raster_map *map, int antialias, const struct hl_fill *fill,
 			  const struct hl_fill *frag, double z_mm, int x0, int y0, struct raster *r,
 			  struct raster *part_img, struct err *e);
 
@@ -42,8 +43,9 @@ int hl_layer_draw_stepped(const struct paths *region, const struct paths *part,
 #define HL_REPAIR_PASSES 8
 
 /* Carving (hl_repair_build, carve 1) takes only pixels within this many
- * pixels (Chebyshev) of the layer's drawn void: the part's walls round
- * the design lose at most that. */
+ * pixels (Chebyshev) of a void drawn in the layer or the one under it:
+ * the part's walls round the design lose at most that in the plane, and
+ * a void's top rises at most a layer. */
 #define HL_CARVE_NEAR_PX 2
 
 /* One mended pixel: image pixel (x, y) drawn with gray g (raised by the
@@ -86,8 +88,11 @@ void hl_repair_fini(struct hl_repair *r);
  *   hl_layer_draw_stepped, antialias unused), bottom up: an over pixel of
  *   layer k + 1 is cleared where the part at layers k and k + 1 is wholly
  *   solid (what it hangs over is a void, and no cut opens the part's
- *   surface) and within HL_CARVE_NEAR_PX of the layer's drawn void, up to
- *   HL_REPAIR_PASSES passes a layer; layer
+ *   surface) and within HL_CARVE_NEAR_PX of a void drawn in layer k + 1
+ *   or k, up to HL_REPAIR_PASSES passes a layer, over the layers the voids
+ *   span and one more each way (a void of the fill's may ask a cut of the
+ *   layer above those, which is then not read again: the caller's check
+ *   reads it); layer
  *   k + 2 is read against the carved layer in its turn.  Only solid over
  *   the voids is taken.
  * Only pixels inside the part change.  r (zeroed or finished) receives
@@ -99,8 +104,9 @@ int hl_repair_build(const struct mesh *res, struct slicer *res_slicer, size_t pa
 		    double reach_mm, int carve, int threads, struct hl_repair *r, struct err *e);
 
 /* Draw the mended pixels of the print layer at mid-plane z_mm into r, an
- * image of the map r was built on, drawn by hl_layer_draw (each pixel set
- * to its gray; pixels outside r skipped). */
+ * image of the map r was built on, drawn as r was built (hl_layer_draw, or
+ * hl_layer_draw_stepped when carved; each pixel set to its gray; pixels
+ * outside r skipped). */
 void hl_repair_apply(const struct hl_repair *rp, double z_mm, struct raster *r);
 
 #endif

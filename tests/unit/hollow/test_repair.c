@@ -120,7 +120,7 @@ static void check_stack_as(const struct mesh *m, int stepped, const struct hl_re
 		if (stepped) {
 			raster_clear(cimg);
 			REQUIRE_OK(slice_at(sc, z, &creg, NULL, &e), &e);
-			REQUIRE_OK(hl_layer_draw_stepped(&reg, &creg, &map, NULL, NULL, z, 0, 0, img,
+			REQUIRE_OK(hl_layer_draw_stepped(&reg, &creg, &map, 1, NULL, NULL, z, 0, 0, img,
 							 cimg, &e),
 				   &e);
 		} else {
@@ -333,7 +333,7 @@ static void test_stepped_roof_carved(void)
 	hl_repair_fini(&r);
 }
 
-/* The limit: pixel steps recede 1 px a layer at most (two read 1.5 px,
+/* The limit: pixel steps recede 1 px a layer at most (two read 2 px,
  * over the 0.05 mm slope plus 0.2 px), so a long roof exactly at the rule
  * (1.06 px a layer) falls 0.06 px a layer behind; carving stays within
  * HL_CARVE_NEAR_PX of the design, so near the top some pixels are left
