@@ -197,6 +197,24 @@ static int inside_draw(struct inside *in, struct err *e)
 	return rc;
 }
 
+/* A box of crop pixels, [x0, x1] x [y0, y1]; empty while x1 < x0. */
+struct pxbox {
+	int x0, y0, x1, y1;
+};
+
+static struct pxbox pxbox_empty(void)
+{
+	return (struct pxbox){INT32_MAX, INT32_MAX, -1, -1};
+}
+
+static void pxbox_add(struct pxbox *b, int x, int y)
+{
+	b->x0 = x < b->x0 ? x : b->x0;
+	b->y0 = y < b->y0 ? y : b->y0;
+	b->x1 = x > b->x1 ? x : b->x1;
+	b->y1 = y > b->y1 ? y : b->y1;
+}
+
 static int cmp_i32(const void *a, const void *b)
 {
 	int32_t x = *(const int32_t *)a, y = *(const int32_t *)b;
@@ -206,27 +224,23 @@ static int cmp_i32(const void *a, const void *b)
 
 /* The pixels of above that read over cur (o->at: crop indices, row by
  * row, as one read of the whole crop gives them).  reread (nonzero after
- * a change): only the box [bx0, bx1] x [by0, by1] of the changed pixels,
- * grown by infl pixels (no reading farther from a change can change), is
+ * a change): only the box ch of the changed pixels, grown by infl pixels (no reading farther from a change can change), is
  * read again (verify_far_pixels_in: each pixel as the whole crop reads
  * it); prev (nprev) are the last read's pixels, and those outside the box
  * still read over. */
 static int read_over(const struct raster *cur, const struct raster *above, int ox, int oy,
-		     double px_mm, double py_mm, double reach_mm, int threads, int reread, int bx0,
-		     int by0, int bx1, int by1, int infl, const int32_t *prev, size_t nprev,
-		     struct over *o, struct err *e)
+		     double px_mm, double py_mm, double reach_mm, int threads, int reread,
+		     struct pxbox ch, int infl, const int32_t *prev, size_t nprev, struct over *o,
+		     struct err *e)
 {
-	int w = cur->w, rc;
+	int w = cur->w, rc, bx0 = ch.x0 - infl, by0 = ch.y0 - infl, bx1 = ch.x1 + infl,
+	    by1 = ch.y1 + infl;
 
 	o->n = 0;
 	o->w = w;
 	if (!reread)
 		return verify_far_pixels(cur, above, ox, oy, px_mm, py_mm, reach_mm, threads,
 					 note_over, o, e);
-	bx0 -= infl;
-	by0 -= infl;
-	bx1 += infl;
-	by1 += infl;
 	rc = verify_far_pixels_in(cur, above, ox, oy, px_mm, py_mm, reach_mm, threads, bx0, by0,
 				  bx1, by1, note_over, o, e);
 	if (rc)
@@ -261,7 +275,8 @@ static int mend_layer(struct raster *cur, const struct raster *above,
 	int32_t *prev = NULL;
 	size_t nprev = 0, prev_cap = 0;
 	int infl = verify_far_pad_px(reach_mm, px_mm, py_mm); /* a reading's reach */
-	int rc = 0, bx0 = 0, by0 = 0, bx1 = -1, by1 = -1;
+	struct pxbox ch = pxbox_empty(); /* the pixels the last pass raised */
+	int rc = 0;
 
 	*left = 0;
 	/* islands only where above was mended */
@@ -273,8 +288,8 @@ static int mend_layer(struct raster *cur, const struct raster *above,
 	for (int pass = 0; pass <= HL_REPAIR_PASSES; pass++) {
 		size_t mine = 0;
 		int raised = 0;
-		rc = read_over(cur, above, ox, oy, px_mm, py_mm, reach_mm, threads, pass > 0, bx0,
-			       by0, bx1, by1, infl, prev, nprev, &o, e);
+		rc = read_over(cur, above, ox, oy, px_mm, py_mm, reach_mm, threads, pass > 0, ch,
+			       infl, prev, nprev, &o, e);
 		if (rc == ERR_NOMEM)
 			rc = ERR_SET(e, ERR_NOMEM, "hollow: out of memory (mending layers)");
 		if (!rc && o.n > 0)
@@ -293,9 +308,7 @@ static int mend_layer(struct raster *cur, const struct raster *above,
 			*left = 1;
 			break;
 		}
-		bx0 = cur->w;
-		by0 = cur->h;
-		bx1 = by1 = -1;
+		ch = pxbox_empty();
 		for (size_t i = 0; i < mine; i++) {
 			int x = o.at[i] % cur->w, y = o.at[i] / cur->w;
 			size_t c = (size_t)o.at[i];
@@ -305,10 +318,7 @@ static int mend_layer(struct raster *cur, const struct raster *above,
 			if (above->px[c] > cur->px[c]) {
 				cur->px[c] = above->px[c];
 				raised = 1;
-				bx0 = x < bx0 ? x : bx0;
-				by0 = y < by0 ? y : by0;
-				bx1 = x > bx1 ? x : bx1;
-				by1 = y > by1 ? y : by1;
+				pxbox_add(&ch, x, y);
 				continue;
 			}
 			for (int dy = -1; dy <= 1; dy++)
@@ -321,10 +331,7 @@ static int mend_layer(struct raster *cur, const struct raster *above,
 					if (inside[j] == 255 && above->px[j] > cur->px[j]) {
 						cur->px[j] = above->px[j];
 						raised = 1;
-						bx0 = u < bx0 ? u : bx0;
-						by0 = v < by0 ? v : by0;
-						bx1 = u > bx1 ? u : bx1;
-						by1 = v > by1 ? v : by1;
+						pxbox_add(&ch, u, v);
 					}
 				}
 		}
@@ -409,15 +416,16 @@ static int carve_layer(struct raster *cur, const struct raster *below, int ox, i
 {
 	struct over o = {NULL, 0, 0, cur->w};
 	int infl = verify_far_pad_px(reach_mm, px_mm, py_mm);
-	int rc = 0, bx0 = 0, by0 = 0, bx1 = -1, by1 = -1;
+	struct pxbox ch = pxbox_empty(); /* the pixels the last pass cleared */
+	int rc = 0;
 
 	*left = 0;
 	for (int pass = 0; pass <= HL_REPAIR_PASSES; pass++) {
 		size_t mine = 0;
 		/* after a pass, only the box the carving can change (what read
 		 * over outside it and was not carved is not the voids') */
-		rc = read_over(below, cur, ox, oy, px_mm, py_mm, reach_mm, threads, pass > 0, bx0,
-			       by0, bx1, by1, infl, NULL, 0, &o, e);
+		rc = read_over(below, cur, ox, oy, px_mm, py_mm, reach_mm, threads, pass > 0, ch,
+			       infl, NULL, 0, &o, e);
 		if (rc == ERR_NOMEM)
 			rc = ERR_SET(e, ERR_NOMEM, "hollow: out of memory (carving layers)");
 		if (rc || o.n == 0)
@@ -438,16 +446,10 @@ static int carve_layer(struct raster *cur, const struct raster *below, int ox, i
 			*left = 1;
 			break;
 		}
-		bx0 = cur->w;
-		by0 = cur->h;
-		bx1 = by1 = -1;
+		ch = pxbox_empty();
 		for (size_t i = 0; i < mine; i++) {
-			int x = o.at[i] % cur->w, y = o.at[i] / cur->w;
 			cur->px[o.at[i]] = 0;
-			bx0 = x < bx0 ? x : bx0;
-			by0 = y < by0 ? y : by0;
-			bx1 = x > bx1 ? x : bx1;
-			by1 = y > by1 ? y : by1;
+			pxbox_add(&ch, o.at[i] % cur->w, o.at[i] / cur->w);
 		}
 	}
 	mem_free(o.at);

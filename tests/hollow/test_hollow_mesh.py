@@ -95,6 +95,27 @@ def check_manifold(pts, tris):
     return dict(bad), euler, vol
 
 
+def hollow_cube(out, *settings):
+    """Hollow the 8 mm cube into out (its format by the extension) with
+    --set settings; its metrics."""
+    run("run", CUBE, "-o", out, "--engine", "hollow", "--set", "height_mm=8",
+        *[a for kv in settings for a in ("--set", kv)], "--threads", "2", "--quiet",
+        "--metrics", out + ".json")
+    with open(out + ".json") as f:
+        return json.load(f)
+
+
+def reslice_verify(tmp, stl):
+    """stl sliced again with --engine solid, and infilld verify --strict's
+    report of it against the plain 8 mm cube (raises when it fails)."""
+    re = os.path.join(tmp, "re.sl1")
+    solid = os.path.join(tmp, "solid.sl1")
+    run("run", stl, "-o", re, "--engine", "solid", "--threads", "2", "--quiet")
+    run("run", CUBE, "-o", solid, "--engine", "solid", "--set", "height_mm=8",
+        "--threads", "2", "--quiet")
+    return json.loads(run("verify", re, "--solid", solid, "--strict"))
+
+
 def write_stl(path, pts, tris):
     with open(path, "wb") as f:
         f.write(b"\0" * 80 + struct.pack("<I", len(tris)))
@@ -106,16 +127,10 @@ class HollowMeshTest(unittest.TestCase):
     @classmethod
     def setUpClass(cls):
         cls.tmp = tempfile.TemporaryDirectory()
-        t = cls.tmp.name
-        common = ["--engine", "hollow", "--set", "height_mm=8", "--threads", "2", "--quiet"]
-        cls.stl = os.path.join(t, "part.stl")
-        run("run", CUBE, "-o", cls.stl, *common, "--metrics", os.path.join(t, "stl.json"))
-        cls.sl1 = os.path.join(t, "part.sl1")
-        run("run", CUBE, "-o", cls.sl1, *common, "--metrics", os.path.join(t, "sl1.json"))
-        with open(os.path.join(t, "stl.json")) as f:
-            cls.m_stl = json.load(f)
-        with open(os.path.join(t, "sl1.json")) as f:
-            cls.m_sl1 = json.load(f)
+        cls.stl = os.path.join(cls.tmp.name, "part.stl")
+        cls.m_stl = hollow_cube(cls.stl)
+        cls.sl1 = os.path.join(cls.tmp.name, "part.sl1")
+        cls.m_sl1 = hollow_cube(cls.sl1)
 
     @classmethod
     def tearDownClass(cls):
@@ -145,13 +160,7 @@ class HollowMeshTest(unittest.TestCase):
         self.assertLess(vol, 0.8 * self.m_sl1["part_volume_mm3"])
 
     def test_resliced_layers_pass_the_verifier(self):
-        t = self.tmp.name
-        re = os.path.join(t, "re.sl1")
-        solid = os.path.join(t, "solid.sl1")
-        run("run", self.stl, "-o", re, "--engine", "solid", "--threads", "2", "--quiet")
-        run("run", CUBE, "-o", solid, "--engine", "solid", "--set", "height_mm=8",
-            "--threads", "2", "--quiet")
-        rep = json.loads(run("verify", re, "--solid", solid, "--strict"))
+        rep = reslice_verify(self.tmp.name, self.stl)
         self.assertEqual(rep["interior_overhang_mm2"], 0.0, rep)
         # the resliced layers hold the same voids as the hollow SL1
         own = json.loads(run("verify", self.sl1))
@@ -190,13 +199,8 @@ class HollowMeshOptimisedTest(unittest.TestCase):
     @classmethod
     def setUpClass(cls):
         cls.tmp = tempfile.TemporaryDirectory()
-        t = cls.tmp.name
-        cls.stl = os.path.join(t, "opt.stl")
-        run("run", CUBE, "-o", cls.stl, "--engine", "hollow", "--set", "height_mm=8",
-            "--set", "fill=false", "--threads", "2", "--quiet", "--metrics",
-            os.path.join(t, "opt.json"))
-        with open(os.path.join(t, "opt.json")) as f:
-            cls.m = json.load(f)
+        cls.stl = os.path.join(cls.tmp.name, "opt.stl")
+        cls.m = hollow_cube(cls.stl, "fill=false")
 
     @classmethod
     def tearDownClass(cls):
@@ -213,13 +217,7 @@ class HollowMeshOptimisedTest(unittest.TestCase):
         bad, _, vol = check_manifold(*read_stl(self.stl))
         self.assertEqual(bad, {})
         self.assertAlmostEqual(vol, self.m["material_volume_mm3"], delta=1e-3 * vol)
-        t = self.tmp.name
-        re = os.path.join(t, "re.sl1")
-        solid = os.path.join(t, "solid.sl1")
-        run("run", self.stl, "-o", re, "--engine", "solid", "--threads", "2", "--quiet")
-        run("run", CUBE, "-o", solid, "--engine", "solid", "--set", "height_mm=8",
-            "--threads", "2", "--quiet")
-        rep = json.loads(run("verify", re, "--solid", solid, "--strict"))
+        rep = reslice_verify(self.tmp.name, self.stl)
         self.assertEqual(rep["interior_overhang_px"], 0, rep)
         self.assertLessEqual(rep["slope_excess_px"], rep["tolerance_px"])
         self.assertEqual(rep["islands_added"], 0)
