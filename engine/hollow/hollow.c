@@ -260,16 +260,22 @@ static double hollow_mend_reach_mm(const struct verify_params *vp)
 	       0.5 * VERIFY_TOLERANCE_PX * fmax(vp->pixel_x_mm, vp->pixel_y_mm);
 }
 
-/* Nonzero when s's stepped layers are carved (repair.h): only where the
- * slope is at least a pixel a layer.  Pixel steps recede a whole pixel a
- * layer; on a gentler slope a carved pixel asks the layer above for more
- * than the design recedes, and carving runs away (the 8 mm cube at alpha
- * 30: 1.1 mm3 of void carved to 18.6, 12,832 px left over), while the
- * stepped layers read within the rule without it (0 px over there). */
+/* Nonzero when the slope allows at least a pixel a layer.  A mesh output's
+ * stepped voids recede by whole pixels: a roof steps at least one a layer,
+ * read as 1 px, so on a gentler slope the optimised voids' roofs read over
+ * at every step (the 12 mm cube at alpha 30: 57,481 px), and carving runs
+ * away (a carved pixel asks the layer above for more than the design
+ * recedes).  The fill designs its pixels to the rule at any slope. */
+static int steps_follow_slope(const struct verify_params *vp)
+{
+	return vp->layer_mm * tan(vp->alpha_deg * M_PI / 180) >=
+	       fmin(vp->pixel_x_mm, vp->pixel_y_mm);
+}
+
+/* Nonzero when s's stepped layers are carved (repair.h). */
 static int carve_stepped(const struct hollow_state *s, const struct verify_params *vp)
 {
-	return stepped(s) && vp->layer_mm * tan(vp->alpha_deg * M_PI / 180) >=
-				     fmin(vp->pixel_x_mm, vp->pixel_y_mm);
+	return stepped(s) && steps_follow_slope(vp);
 }
 
 static int start_verify(struct hollow_state *s, const struct mesh *m, struct err *e)
@@ -391,6 +397,25 @@ static int hollow_prepare(const struct engine_ctx *ctx, const void *params, void
 	c->opt.pixel_mm = p->pixel_mm > 0 ? p->pixel_mm
 			  : s->map || s->own_is_printer ? sqrt(raster_map_pixel_area_mm2(&c->fill_map))
 							: HOLLOW_VERIFY_PIXEL_MM;
+	/* a mesh's pixel steps cannot follow a slope under a pixel a layer:
+	 * there the fill alone, and without it an error */
+	if (s->mesh_out) {
+		struct verify_params vp;
+		verify_params_of(s, &vp);
+		if (!steps_follow_slope(&vp) && !p->fill) {
+			double pmin = fmin(vp.pixel_x_mm, vp.pixel_y_mm);
+			rc = ERR_FIELD(e, "alpha_deg",
+				       "a mesh output steps the optimiser's voids by whole pixels "
+				       "(%g mm), at least one a layer, but alpha_deg %g allows %.4f mm "
+				       "a layer: use alpha_deg >= %.1f, fill=true, or a layer output",
+				       pmin, s->alpha_deg, vp.layer_mm * tan(c->opt.alpha_rad),
+				       atan(pmin / vp.layer_mm) * 180 / M_PI);
+			hollow_release(s);
+			return rc;
+		}
+		if (!steps_follow_slope(&vp))
+			c->opt.rounds = 0; /* the fill alone */
+	}
 	rc = hl_run(ctx->mesh, c, ctx->progress, &s->out, e);
 	if (!rc)
 		rc = min_wall_3d(ctx->mesh, s->out.mesh, &s->min_wall_3d_mm, e);

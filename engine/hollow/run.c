@@ -285,7 +285,8 @@ static void empty_note(const struct hl_config *c, struct hl_outcome *o)
 			snprintf(o->note, sizeof o->note,
 				 "no support-free void: at this alpha a layer may overhang %.3f mm, less "
 				 "than the %.3f mm pixel, and the pixel fill cannot hang a pixel over a "
-				 "void; the optimiser's voids (rounds > 0) or a larger alpha can hollow it",
+				 "void; the optimiser's voids (rounds > 0, in a layer output: a mesh steps "
+				 "them by whole pixels too) or a larger alpha can hollow it",
 				 reach, pitch);
 			return;
 		}

@@ -227,6 +227,24 @@ class HollowMeshOptimisedTest(unittest.TestCase):
             self.assertEqual(own[k], rep[k], k)
         self.assertGreater(rep["enclosed_void_mm3"], 0)
 
+    def test_slope_under_a_pixel_a_layer(self):
+        # alpha 30 allows 0.029 mm a layer, under the 0.047 mm pixel a
+        # stepped roof recedes at least: the optimiser's voids cannot go
+        # into a mesh (a clear error), and the fill alone hollows nothing
+        out = os.path.join(self.tmp.name, "a30.stl")
+        p = subprocess.run([BIN, "run", CUBE, "-o", out, "--engine", "hollow",
+                            "--set", "height_mm=8", "--set", "alpha_deg=30", "--set",
+                            "fill=false", "--quiet"], capture_output=True, text=True,
+                           timeout=600)
+        self.assertNotEqual(p.returncode, 0)
+        self.assertIn("alpha_deg", p.stderr)
+        self.assertIn("whole pixels", p.stderr)
+        m = hollow_cube(out, "alpha_deg=30")
+        self.assertEqual(m["hollow"]["voids"], 0)
+        self.assertEqual(m["hollow"]["rounds"], 0)
+        self.assertIn("layer output", m["hollow"]["note"])
+        self.assertEqual(m["hollow"]["verify"]["interior_overhang_px"], 0)
+
 
 if __name__ == "__main__":
     unittest.main()
