@@ -150,7 +150,7 @@ struct hollow_state {
 	int verified;                /* rep is filled */
 	int layers_seen;
 	const struct raster_map *map; /* the driver's, when it wants pixels */
-	int antialias;
+	int antialias;               /* a resin printer's setting, else 1 */
 	/* the output is a mesh: its voids are stepped at pixel centres
 	 * (hmesh.h), so with optimised voids (stepped()) the check, the beads
 	 * and the carving read the layers it slices to again */
@@ -402,19 +402,21 @@ static int hollow_prepare(const struct engine_ctx *ctx, const void *params, void
 	if (s->mesh_out) {
 		struct verify_params vp;
 		verify_params_of(s, &vp);
-		if (!steps_follow_slope(&vp) && !p->fill) {
+		if (!steps_follow_slope(&vp)) {
 			double pmin = fmin(vp.pixel_x_mm, vp.pixel_y_mm);
-			rc = ERR_FIELD(e, "alpha_deg",
-				       "a mesh output steps the optimiser's voids by whole pixels "
-				       "(%g mm), at least one a layer, but alpha_deg %g allows %.4f mm "
-				       "a layer: use alpha_deg >= %.1f, fill=true, or a layer output",
-				       pmin, s->alpha_deg, vp.layer_mm * tan(c->opt.alpha_rad),
-				       atan(pmin / vp.layer_mm) * 180 / M_PI);
-			hollow_release(s);
-			return rc;
-		}
-		if (!steps_follow_slope(&vp))
+			if (!p->fill) {
+				rc = ERR_FIELD(e, "alpha_deg",
+					       "a mesh output steps the optimiser's voids by whole "
+					       "pixels (%g mm), at least one a layer, but alpha_deg %g "
+					       "allows %.4f mm a layer: use alpha_deg >= %.1f, "
+					       "fill=true, or a layer output",
+					       pmin, s->alpha_deg, vp.layer_mm * tan(c->opt.alpha_rad),
+					       atan(pmin / vp.layer_mm) * 180 / M_PI);
+				hollow_release(s);
+				return rc;
+			}
 			c->opt.rounds = 0; /* the fill alone */
+		}
 	}
 	rc = hl_run(ctx->mesh, c, ctx->progress, &s->out, e);
 	if (!rc)
@@ -446,10 +448,10 @@ static int hollow_prepare(const struct engine_ctx *ctx, const void *params, void
 		verify_params_of(s, &vp);
 		if (s->map || carve_stepped(s, &vp))
 			rc = hl_repair_build(s->out.mesh, s->slicer, s->part_nv, s->part_nt,
-					     s->map ? s->map : &s->own_map,
-					     s->map || s->own_is_printer ? s->antialias : 1, &s->out.fill, &s->frag, s->layer_mm, vp.pixel_x_mm,
-					     vp.pixel_y_mm, hollow_mend_reach_mm(&vp), !s->map,
-					     vp.threads, &s->repair, e);
+					     s->map ? s->map : &s->own_map, s->antialias, &s->out.fill,
+					     &s->frag, s->layer_mm, vp.pixel_x_mm, vp.pixel_y_mm,
+					     hollow_mend_reach_mm(&vp), !s->map, vp.threads, &s->repair,
+					     e);
 	}
 	if (!rc && stepped(s)) {
 		s->part_view = (struct mesh){s->out.mesh->v, s->out.mesh->tri, s->part_nv, s->part_nt};
@@ -499,8 +501,7 @@ static int hollow_layer(void *state, struct layer *ly, struct err *e)
 			rc = slice_at(s->part_slicer, ly->z_mm, &s->part_region, NULL, e);
 			if (!rc)
 				rc = hl_layer_draw_stepped(&ly->region, &s->part_region, &s->own_map,
-							   s->own_is_printer ? s->antialias : 1,
-							   fill ? &s->out.fill : NULL,
+							   s->antialias, fill ? &s->out.fill : NULL,
 							   frag ? &s->frag : NULL, ly->z_mm, 0, 0,
 							   s->own, s->part_img, e);
 			hl_repair_apply(&s->repair, ly->z_mm, s->own);
