@@ -229,8 +229,7 @@ static int cmp_i32(const void *a, const void *b)
  * it); prev (nprev) are the last read's pixels, and those outside the box
  * still read over. */
 static int read_over(const struct raster *cur, const struct raster *above, int ox, int oy,
-		     double px_mm, double py_mm, double reach_mm, int threads, int reread,
-		     struct pxbox ch, int infl, const int32_t *prev, size_t nprev, struct over *o,
+		     const struct verify_pair_read *rd, int reread, struct pxbox ch, int infl, const int32_t *prev, size_t nprev, struct over *o,
 		     struct err *e)
 {
 	int w = cur->w, rc, bx0 = ch.x0 - infl, by0 = ch.y0 - infl, bx1 = ch.x1 + infl,
@@ -239,10 +238,8 @@ static int read_over(const struct raster *cur, const struct raster *above, int o
 	o->n = 0;
 	o->w = w;
 	if (!reread)
-		return verify_far_pixels(cur, above, ox, oy, px_mm, py_mm, reach_mm, threads,
-					 note_over, o, e);
-	rc = verify_far_pixels_in(cur, above, ox, oy, px_mm, py_mm, reach_mm, threads, bx0, by0,
-				  bx1, by1, note_over, o, e);
+		return verify_far_pixels(cur, above, ox, oy, rd, note_over, o, e);
+	rc = verify_far_pixels_in(cur, above, ox, oy, rd, bx0, by0, bx1, by1, note_over, o, e);
 	if (rc)
 		return rc;
 	for (size_t i = 0; i < nprev; i++) {
@@ -267,14 +264,13 @@ static int read_over(const struct raster *cur, const struct raster *above, int o
  * *left: 1 when a pixel still reads over. */
 static int mend_layer(struct raster *cur, const struct raster *above,
 		      const struct raster *above_drawn, int ox, int oy, struct inside *in,
-		      int32_t *lab, double px_mm, double py_mm, double reach_mm, int threads,
-		      int *left, struct err *e)
+		      int32_t *lab, const struct verify_pair_read *rd, int *left, struct err *e)
 {
 	struct over o = {NULL, 0, 0, cur->w};
 	const uint8_t *inside;
 	int32_t *prev = NULL;
 	size_t nprev = 0, prev_cap = 0;
-	int infl = verify_far_pad_px(reach_mm, px_mm, py_mm); /* a reading's reach */
+	int infl = verify_far_pad_px(rd->reach_mm, rd->px_mm, rd->py_mm); /* a reading's reach */
 	struct pxbox ch = pxbox_empty(); /* the pixels the last pass raised */
 	int rc = 0;
 
@@ -288,8 +284,7 @@ static int mend_layer(struct raster *cur, const struct raster *above,
 	for (int pass = 0; pass <= HL_REPAIR_PASSES; pass++) {
 		size_t mine = 0;
 		int raised = 0;
-		rc = read_over(cur, above, ox, oy, px_mm, py_mm, reach_mm, threads, pass > 0, ch,
-			       infl, prev, nprev, &o, e);
+		rc = read_over(cur, above, ox, oy, rd, pass > 0, ch, infl, prev, nprev, &o, e);
 		if (rc == ERR_NOMEM)
 			rc = ERR_SET(e, ERR_NOMEM, "hollow: out of memory (mending layers)");
 		if (!rc && o.n > 0)
@@ -411,11 +406,11 @@ static void near_void(const struct raster *drawn, const struct raster *inside, i
  * over. */
 static int carve_layer(struct raster *cur, const struct raster *below, int ox, int oy,
 		       const struct raster *inside, const struct raster *inside_below,
-		       const uint8_t *near, double px_mm, double py_mm, double reach_mm, int threads,
-		       int *left, struct err *e)
+		       const uint8_t *near, const struct verify_pair_read *rd, int *left,
+		       struct err *e)
 {
 	struct over o = {NULL, 0, 0, cur->w};
-	int infl = verify_far_pad_px(reach_mm, px_mm, py_mm);
+	int infl = verify_far_pad_px(rd->reach_mm, rd->px_mm, rd->py_mm);
 	struct pxbox ch = pxbox_empty(); /* the pixels the last pass cleared */
 	int rc = 0;
 
@@ -424,8 +419,7 @@ static int carve_layer(struct raster *cur, const struct raster *below, int ox, i
 		size_t mine = 0;
 		/* after a pass, only the box the carving can change (what read
 		 * over outside it and was not carved is not the voids') */
-		rc = read_over(below, cur, ox, oy, px_mm, py_mm, reach_mm, threads, pass > 0, ch,
-			       infl, NULL, 0, &o, e);
+		rc = read_over(below, cur, ox, oy, rd, pass > 0, ch, infl, NULL, 0, &o, e);
 		if (rc == ERR_NOMEM)
 			rc = ERR_SET(e, ERR_NOMEM, "hollow: out of memory (carving layers)");
 		if (rc || o.n == 0)
@@ -473,6 +467,7 @@ int hl_repair_build(const struct mesh *res, struct slicer *res_slicer, size_t pa
 	struct hl_fill box;
 	double gpx, gpy, t0 = progress_now_s();
 	int x0, y0, w, h, k0, k1, n, pad, rc = 0, have_last = 0;
+	struct verify_pair_read rd = {px_mm, py_mm, reach_mm, threads, NULL};
 
 	hl_repair_fini(r);
 	if (res->nv <= part_nv || !(layer_mm > 0))
@@ -510,7 +505,8 @@ int hl_repair_build(const struct mesh *res, struct slicer *res_slicer, size_t pa
 	last_part = carve ? raster_new(w, h) : NULL;
 	near = carve ? mem_alloc((size_t)w * (size_t)h) : NULL;
 	lab = mem_alloc((size_t)w * (size_t)h * sizeof *lab);
-	if (!r->layer || !cur || !last || !orig || !last_orig || !inside || !lab ||
+	rd.memo = verify_fit_memo_new();
+	if (!r->layer || !cur || !last || !orig || !last_orig || !inside || !lab || !rd.memo ||
 	    (carve && (!last_part || !near))) {
 		rc = ERR_SET(e, ERR_NOMEM, "hollow: out of memory (mending layers)");
 		goto out;
@@ -548,16 +544,15 @@ int hl_repair_build(const struct mesh *res, struct slicer *res_slicer, size_t pa
 			memset(near, 0, (size_t)w * (size_t)h);
 			near_void(cur, inside, HL_CARVE_NEAR_PX, near, lab);
 			near_void(last_orig, last_part, HL_CARVE_NEAR_PX, near, lab);
-			rc = carve_layer(cur, last, x0, y0, inside, last_part, near, px_mm, py_mm,
-					 reach_mm, threads, &left, e);
+			rc = carve_layer(cur, last, x0, y0, inside, last_part, near, &rd, &left,
+					 e);
 			if (rc)
 				break;
 		} else if (have_last) {
 			struct inside in = {sp, &m, antialias, 0, z, &reg, inside};
 			m.b[0] -= x0;
 			m.b[1] -= y0;
-			rc = mend_layer(cur, last, last_orig, x0, y0, &in, lab, px_mm, py_mm,
-					reach_mm, threads, &left, e);
+			rc = mend_layer(cur, last, last_orig, x0, y0, &in, lab, &rd, &left, e);
 			if (rc)
 				break;
 		}
@@ -612,6 +607,7 @@ out:
 	raster_free(last_part);
 	mem_free(near);
 	mem_free(lab);
+	verify_fit_memo_free(rd.memo);
 	paths_fini(&reg);
 	paths_fini(&preg);
 	if (rc)

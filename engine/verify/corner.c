@@ -4,9 +4,13 @@
 #include "engine/verify/corner.h"
 
 #include <math.h>
+#include <pthread.h>
+#include <stdint.h>
 #include <string.h>
 
+#include "engine/core/mem.h"
 #include "engine/verify/subpx.h"
+#include "engine/verify/verify.h"
 
 #define WIN 2              /* the fit's window: (2 WIN + 1)^2 pixels */
 #define SIDE (2 * WIN + 1)
@@ -14,6 +18,10 @@
 #define CENTRE_WEIGHT 4.0  /* the pixel's own coverage counts 4 times */
 #define MAX_ITER 10
 #define NPAR 4             /* (angle, offset) per edge */
+#define KWIN (WIN + 1)     /* the neighbourhood a fit reads: (2 KWIN + 1)^2 */
+#define KSIDE (2 * KWIN + 1)
+#define KEY (KSIDE * KSIDE)
+#define MEMO_LOCKS 64
 
 /* Coverage of the unit square centred at (i, j) by n.u <= d (n unit): the
  * forward form of subpx.c's edge offset.  With a >= b the absolute
@@ -262,23 +270,90 @@ static int fit_edges(const struct edges *ed, const double *c, const double *w, d
 	return fit_phase(th, first, c, w, sse_line, k) || fit_phase(th, !first, c, w, sse_line, k);
 }
 
-void verify_corner_fit(const struct verify_subpx_img *im, int x, int y, struct verify_corner *k)
+struct memo_slot {
+	uint8_t key[KEY];
+	uint8_t used;
+	struct verify_corner k;
+};
+
+struct verify_fit_memo {
+	pthread_mutex_t lock[MEMO_LOCKS]; /* slot s under lock[s % MEMO_LOCKS] */
+	struct memo_slot *slot;           /* VERIFY_FIT_MEMO_SLOTS */
+};
+
+struct verify_fit_memo *verify_fit_memo_new(void)
+{
+	struct verify_fit_memo *m = mem_alloc(sizeof *m);
+
+	if (!m)
+		return NULL;
+	m->slot = mem_calloc(VERIFY_FIT_MEMO_SLOTS, sizeof *m->slot);
+	if (!m->slot) {
+		mem_free(m);
+		return NULL;
+	}
+	for (int i = 0; i < MEMO_LOCKS; i++)
+		pthread_mutex_init(&m->lock[i], NULL);
+	return m;
+}
+
+void verify_fit_memo_free(struct verify_fit_memo *m)
+{
+	if (!m)
+		return;
+	for (int i = 0; i < MEMO_LOCKS; i++)
+		pthread_mutex_destroy(&m->lock[i]);
+	mem_free(m->slot);
+	mem_free(m);
+}
+
+/* The neighbourhood a fit reads (pixels beyond the crop read 0) and its
+ * slot (FNV-1a). */
+static size_t memo_key(const struct verify_subpx_img *im, int x, int y, uint8_t *key)
+{
+	uint64_t h = 14695981039346656037ull;
+
+	for (int t = 0; t < KEY; t++) {
+		key[t] = (uint8_t)verify_subpx_gray(im, x + t % KSIDE - KWIN, y + t / KSIDE - KWIN);
+		h = (h ^ key[t]) * 1099511628211ull;
+	}
+	return (size_t)(h ^ (h >> 29)) & (VERIFY_FIT_MEMO_SLOTS - 1);
+}
+
+static int memo_get(struct verify_fit_memo *m, size_t at, const uint8_t *key,
+		    struct verify_corner *k)
+{
+	struct memo_slot *s = &m->slot[at];
+	int hit;
+
+	pthread_mutex_lock(&m->lock[at % MEMO_LOCKS]);
+	hit = s->used && memcmp(s->key, key, KEY) == 0;
+	if (hit)
+		*k = s->k;
+	pthread_mutex_unlock(&m->lock[at % MEMO_LOCKS]);
+	return hit;
+}
+
+static void memo_put(struct verify_fit_memo *m, size_t at, const uint8_t *key,
+		     const struct verify_corner *k)
+{
+	struct memo_slot *s = &m->slot[at];
+
+	pthread_mutex_lock(&m->lock[at % MEMO_LOCKS]);
+	memcpy(s->key, key, KEY);
+	s->used = 1;
+	s->k = *k;
+	pthread_mutex_unlock(&m->lock[at % MEMO_LOCKS]);
+}
+
+/* The fit past the gate: c the 5 x 5 coverage, (nx, ny, d) the pixel's
+ * one straight edge. */
+static void fit_window(const struct verify_subpx_img *im, int x, int y, const double *c, double nx,
+		       double ny, double d, struct verify_corner *k)
 {
 	struct edges ed;
-	double c[NWIN], w[NWIN], nx, ny, d, gate = 0, sse_line = 0, lo = -2, hi = 2, d0, d1;
+	double w[NWIN], sse_line = 0, lo = -2, hi = 2, d0, d1;
 
-	k->n = 0;
-	if (!verify_subpx_line(im, x, y, &nx, &ny, &d))
-		return;
-	for (int t = 0; t < NWIN; t++)
-		c[t] = verify_subpx_gray(im, x + t % SIDE - WIN, y + t / SIDE - WIN) / 255.0;
-	/* the one straight edge predicts the 8 neighbours: no corner */
-	for (int j = -1; j <= 1; j++)
-		for (int i = -1; i <= 1; i++)
-			gate = fmax(gate, fabs(line_area(nx, ny, d, i, j) -
-					       c[(j + WIN) * SIDE + i + WIN]));
-	if (gate <= VERIFY_CORNER_GATE)
-		return;
 	for (int t = 0; t < NWIN; t++) {
 		int i = t % SIDE - WIN, j = t / SIDE - WIN;
 		double e = line_area(nx, ny, d, i, j) - c[t];
@@ -319,4 +394,32 @@ void verify_corner_fit(const struct verify_subpx_img *im, int x, int y, struct v
 	}
 	k->d[0] = d0 + (lo + hi) / 2;
 	k->d[1] = d1 + (lo + hi) / 2;
+}
+
+void verify_corner_fit(const struct verify_subpx_img *im, int x, int y, struct verify_corner *k)
+{
+	uint8_t key[KEY];
+	double c[NWIN], nx, ny, d, gate = 0;
+	size_t at = 0;
+
+	k->n = 0;
+	if (!verify_subpx_line(im, x, y, &nx, &ny, &d))
+		return;
+	for (int t = 0; t < NWIN; t++)
+		c[t] = verify_subpx_gray(im, x + t % SIDE - WIN, y + t / SIDE - WIN) / 255.0;
+	/* the one straight edge predicts the 8 neighbours: no corner */
+	for (int j = -1; j <= 1; j++)
+		for (int i = -1; i <= 1; i++)
+			gate = fmax(gate, fabs(line_area(nx, ny, d, i, j) -
+					       c[(j + WIN) * SIDE + i + WIN]));
+	if (gate <= VERIFY_CORNER_GATE)
+		return;
+	if (im->memo) {
+		at = memo_key(im, x, y, key);
+		if (memo_get(im->memo, at, key, k))
+			return;
+	}
+	fit_window(im, x, y, c, nx, ny, d, k);
+	if (im->memo)
+		memo_put(im->memo, at, key, k);
 }

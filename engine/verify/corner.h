@@ -41,6 +41,17 @@ double verify_corner_area(const struct verify_corner *k, double i, double j);
  * (the caller keeps fits: subpx.h's verify_subpx_fits). */
 void verify_corner_fit(const struct verify_subpx_img *im, int x, int y, struct verify_corner *k);
 
+/* The fits of one check kept by neighbourhood (verify.h's struct
+ * verify_fit_memo, opaque): a fit is a function of the 7 x 7 grays
+ * around its pixel alone (its 5 x 5 window and their Sobel normals), and
+ * the same neighbourhood recurs on the next layer of a wall, in a
+ * mending's passes over one pair of layers and when the check reads what
+ * was mended.  verify_corner_fit takes it from im->memo when not NULL:
+ * VERIFY_FIT_MEMO_SLOTS slots, a neighbourhood hashed to one of them,
+ * which holds the last fit stored there (the slots are shared by threads
+ * under striped locks).  The same fits with or without it. */
+#define VERIFY_FIT_MEMO_SLOTS (1u << 16)
+
 #define VERIFY_CORNER_GATE 0.05
 #define VERIFY_CORNER_GAIN 0.25
 #define VERIFY_CORNER_FIT_TOL 0.03

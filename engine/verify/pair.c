@@ -12,6 +12,7 @@
 
 #include "engine/core/err.h"
 #include "engine/core/mem.h"
+#include "engine/core/parfor.h"
 #include "engine/geom/edt.h"
 #include "engine/geom/raster.h"
 #include "engine/verify/subpx.h"
@@ -22,9 +23,46 @@ struct pair_scratch {
 	uint8_t *seed;
 	float *d2_solid, *d2_any;
 	int32_t *near;
+	double *far; /* per box pixel: its reading (mm), -INFINITY when not read */
 	struct verify_subpx_fits fb, fa;
 	struct edt_scratch es;
 };
+
+/* One row of the box, read on any thread (parfor.h): each pixel's
+ * reading into far[], so that the caller's fn sees them in row order
+ * whatever the threads. */
+struct pair_rows {
+	const struct pair_scratch *s;
+	const struct verify_subpx_img *bi, *ai;
+	int x0, y0, bx0, by0, bx1, by1;
+	double reach_mm;
+};
+
+static void pair_row(void *ctx, size_t row, int tid)
+{
+	const struct pair_rows *r = ctx;
+	const struct pair_scratch *s = r->s;
+	const uint8_t *a = r->ai->gray, *b = r->bi->gray;
+	int w = r->ai->w, y = (int)row;
+
+	(void)tid;
+	for (int x = 0; x < w; x++) {
+		size_t i = (size_t)y * (size_t)w + (size_t)x;
+		double u = INFINITY;
+		s->far[i] = -INFINITY;
+		if (a[i] == 0 || b[i] == 255 || x + r->x0 < r->bx0 || x + r->x0 > r->bx1 ||
+		    y + r->y0 < r->by0 || y + r->y0 > r->by1)
+			continue;
+		if (s->near[i] >= 0)
+			u = sqrt(s->d2_solid[i]) +
+			    verify_subpx_gap_mm(r->bi, s->near[i] % w + r->bi->x0,
+						s->near[i] / w + r->bi->y0);
+		if (u <= r->reach_mm)
+			continue;
+		s->far[i] = verify_subpx_far_bounded_mm(r->bi, r->ai, x + r->ai->x0, y + r->ai->y0,
+							a[i], u, sqrt(s->d2_any[i]), r->reach_mm);
+	}
+}
 
 static void pair_fini(struct pair_scratch *s)
 {
@@ -34,6 +72,7 @@ static void pair_fini(struct pair_scratch *s)
 	mem_free(s->d2_solid);
 	mem_free(s->d2_any);
 	mem_free(s->near);
+	mem_free(s->far);
 	verify_subpx_fits_fini(&s->fb);
 	verify_subpx_fits_fini(&s->fa);
 	edt_scratch_fini(&s->es);
@@ -61,19 +100,20 @@ int verify_far_pad_px(double reach_mm, double px_mm, double py_mm)
 }
 
 int verify_far_pixels(const struct raster *below, const struct raster *above, int ox, int oy,
-		      double px_mm, double py_mm, double reach_mm, int threads,
+		      const struct verify_pair_read *rd,
 		      int (*fn)(void *ctx, int x, int y, double far_mm), void *ctx, struct err *e)
 {
-	return verify_far_pixels_in(below, above, ox, oy, px_mm, py_mm, reach_mm, threads, 0, 0,
-				    above->w - 1, above->h - 1, fn, ctx, e);
+	return verify_far_pixels_in(below, above, ox, oy, rd, 0, 0, above->w - 1, above->h - 1, fn,
+				    ctx, e);
 }
 
 int verify_far_pixels_in(const struct raster *below, const struct raster *above, int ox, int oy,
-			 double px_mm, double py_mm, double reach_mm, int threads, int bx0,
-			 int by0, int bx1, int by1,
+			 const struct verify_pair_read *rd, int bx0, int by0, int bx1, int by1,
 			 int (*fn)(void *ctx, int x, int y, double far_mm), void *ctx,
 			 struct err *e)
 {
+	double px_mm = rd->px_mm, py_mm = rd->py_mm, reach_mm = rd->reach_mm;
+	int threads = rd->threads;
 	struct pair_scratch s;
 	struct raster b, a;
 	int x0 = INT32_MAX, y0 = INT32_MAX, x1 = -1, y1 = -1, pad, rc = 0;
@@ -121,7 +161,9 @@ int verify_far_pixels_in(const struct raster *below, const struct raster *above,
 	s.d2_solid = mem_alloc(np * sizeof *s.d2_solid);
 	s.d2_any = mem_alloc(np * sizeof *s.d2_any);
 	s.near = mem_alloc(np * sizeof *s.near);
-	if (!s.box_below || !s.box_above || !s.seed || !s.d2_solid || !s.d2_any || !s.near) {
+	s.far = mem_alloc(np * sizeof *s.far);
+	if (!s.box_below || !s.box_above || !s.seed || !s.d2_solid || !s.d2_any || !s.near ||
+	    !s.far) {
 		rc = ERR_SET(e, ERR_NOMEM, "verify: out of memory (a pair of layers)");
 		goto out;
 	}
@@ -152,26 +194,14 @@ int verify_far_pixels_in(const struct raster *below, const struct raster *above,
 		 * coordinates, as verify_layer does, so that a crop reads each
 		 * pixel to the bit as the whole image does */
 		int ix = ox + x0, iy = oy + y0;
-		struct verify_subpx_img bi = {b.px, ix, iy, b.w, b.h, px_mm, py_mm, 0, &s.fb};
-		struct verify_subpx_img ai = {a.px, ix, iy, a.w, a.h, px_mm, py_mm, 0, &s.fa};
-		for (int y = 0; y < a.h && !rc; y++)
-			for (int x = 0; x < a.w && !rc; x++) {
-				size_t i = (size_t)y * (size_t)a.w + (size_t)x;
-				double u = INFINITY, far;
-				if (a.px[i] == 0 || b.px[i] == 255 || x + x0 < bx0 || x + x0 > bx1 ||
-				    y + y0 < by0 || y + y0 > by1)
-					continue;
-				if (s.near[i] >= 0)
-					u = sqrt(s.d2_solid[i]) +
-					    verify_subpx_gap_mm(&bi, s.near[i] % b.w + ix,
-								s.near[i] / b.w + iy);
-				if (u <= reach_mm)
-					continue;
-				far = verify_subpx_far_bounded_mm(&bi, &ai, x + ix, y + iy, a.px[i], u,
-								  sqrt(s.d2_any[i]), reach_mm);
-				if (far > reach_mm)
-					rc = fn(ctx, x + x0, y + y0, far);
-			}
+		struct verify_subpx_img bi = {b.px, ix, iy, b.w, b.h, px_mm, py_mm, 0, &s.fb, rd->memo};
+		struct verify_subpx_img ai = {a.px, ix, iy, a.w, a.h, px_mm, py_mm, 0, &s.fa, rd->memo};
+		struct pair_rows rows = {&s, &bi, &ai, x0, y0, bx0, by0, bx1, by1, reach_mm};
+		parfor_run((size_t)a.h, threads, 4, pair_row, &rows);
+		for (size_t i = 0; i < np && !rc; i++)
+			if (s.far[i] > reach_mm)
+				rc = fn(ctx, (int)(i % (size_t)a.w) + x0, (int)(i / (size_t)a.w) + y0,
+					s.far[i]);
 	}
 out:
 	pair_fini(&s);

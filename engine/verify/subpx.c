@@ -2,6 +2,7 @@
 #include "engine/verify/subpx.h"
 
 #include <math.h>
+#include <stdatomic.h>
 #include <stddef.h>
 #include <stdlib.h>
 #include <string.h>
@@ -20,16 +21,18 @@ int verify_subpx_fits_size(struct verify_subpx_fits *f, size_t pixels, size_t gr
 		if (!f->at)
 			return ERR_NOMEM;
 		for (size_t i = 0; i < pixels; i++)
-			f->at[i] = -1;
+			atomic_init(&f->at[i], -1);
 	}
 	return mem_grow((void **)&f->fit, &f->cap, grey, sizeof *f->fit);
 }
 
 void verify_subpx_fits_reset(struct verify_subpx_fits *f)
 {
-	for (size_t k = 0; k < f->n; k++)
-		f->at[f->fit[k].px] = -1;
-	f->n = 0;
+	size_t n = atomic_load(&f->n);
+
+	for (size_t k = 0; k < n && k < f->cap; k++)
+		atomic_store_explicit(&f->at[f->fit[k].px], -1, memory_order_relaxed);
+	atomic_store(&f->n, 0);
 }
 
 void verify_subpx_fits_fini(struct verify_subpx_fits *f)
@@ -40,26 +43,32 @@ void verify_subpx_fits_fini(struct verify_subpx_fits *f)
 }
 
 /* The corner fit of grey pixel (x, y), from im's fits when it holds it
- * (storing it there when made). */
+ * (storing it there when made).  Safe on several threads: a slot is
+ * filled before its index is published (release), read after (acquire);
+ * a pixel fitted by two threads at once keeps the first index stored. */
 static void corner_of(const struct verify_subpx_img *im, int x, int y, struct verify_corner *k)
 {
 	struct verify_subpx_fits *f = im->fits;
-	size_t px;
+	size_t px, slot;
+	int32_t at, none = -1;
 
 	if (!f) {
 		verify_corner_fit(im, x, y, k);
 		return;
 	}
 	px = (size_t)(y - im->y0) * (size_t)im->w + (size_t)(x - im->x0);
-	if (f->at[px] >= 0) {
-		*k = f->fit[f->at[px]].k;
+	at = atomic_load_explicit(&f->at[px], memory_order_acquire);
+	if (at >= 0) {
+		*k = f->fit[at].k;
 		return;
 	}
 	verify_corner_fit(im, x, y, k);
-	if (f->n < f->cap) {
-		f->fit[f->n].px = px;
-		f->fit[f->n].k = *k;
-		f->at[px] = (int32_t)f->n++;
+	slot = atomic_fetch_add_explicit(&f->n, 1, memory_order_relaxed);
+	if (slot < f->cap) {
+		f->fit[slot].px = px;
+		f->fit[slot].k = *k;
+		atomic_compare_exchange_strong_explicit(&f->at[px], &none, (int32_t)slot,
+							memory_order_release, memory_order_relaxed);
 	}
 }
 

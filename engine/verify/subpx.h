@@ -34,15 +34,19 @@
 
 /* The corner fits made on one layer's crop, so that a grey pixel is
  * fitted once however often it is measured (corner.h: a fit costs some
- * thousands of clipped squares). */
+ * thousands of clipped squares).  Threads may measure pixels of one crop
+ * at once (a fit is a function of the pixel's 7 x 7 neighbourhood alone:
+ * two threads that fit one pixel at once store the same fit, the second
+ * copy unused); sizing and reset are for one thread. */
 struct verify_subpx_fits {
-	int32_t *at;      /* per crop pixel: index in fit, -1 not fitted yet */
+	_Atomic int32_t *at; /* per crop pixel: index in fit, -1 not fitted yet */
 	size_t at_cap;
 	struct verify_subpx_fit {
 		size_t px;                /* crop pixel */
 		struct verify_corner k;   /* k.n == 0: no corner */
 	} *fit;
-	size_t n, cap;    /* cap >= the crop's grey pixels */
+	_Atomic size_t n; /* slots taken (may pass cap: those fits were not kept) */
+	size_t cap;       /* cap >= the crop's grey pixels */
 };
 
 /* A crop of one layer: gray[(y - y0) * w + (x - x0)] for image pixel
@@ -56,6 +60,8 @@ struct verify_subpx_img {
 	struct verify_subpx_fits *fits; /* this layer's fits (borrowed, filled
 					 * as pixels are measured); NULL:
 					 * fitted on every call */
+	struct verify_fit_memo *memo;   /* fits by neighbourhood (borrowed,
+					 * corner.h); NULL: none */
 };
 
 /* Size f for a crop of `pixels` pixels, `grey` of them grey (0 < gray <

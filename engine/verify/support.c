@@ -6,6 +6,7 @@
 
 #include "engine/core/err.h"
 #include "engine/core/mem.h"
+#include "engine/core/parfor.h"
 #include "engine/geom/edt.h"
 #include "engine/geom/label.h"
 #include "engine/verify/subpx.h"
@@ -122,6 +123,37 @@ static uint32_t void_under(const struct crop *pc, int gx, int gy)
 	return 0;
 }
 
+/* The readings of verify_overhangs, on any thread (parfor.h): stage 0
+ * the upper bounds, stage 1 the sub-pixel readings of the pixels the
+ * bound leaves open (the layers' corner fits are shared, subpx.h). */
+struct ovh_read {
+	struct verify *v;
+	const struct verify_subpx_img *below, *above;
+	int stage;
+};
+
+static void ovh_read(void *ctx, size_t k, int tid)
+{
+	const struct ovh_read *r = ctx;
+	const struct crop *c = r->v->cur, *pc = r->v->prev;
+	struct verify_ovh *o = &r->v->ovh[k];
+
+	(void)tid;
+	if (r->stage == 0) {
+		o->u_mm = INFINITY;
+		if (pc->near[o->pi] >= 0) {
+			int32_t n = pc->near[o->pi];
+			o->u_mm = sqrt(pc->d2[o->pi]) +
+				  verify_subpx_gap_mm(r->below, n % pc->w + pc->x0, n / pc->w + pc->y0);
+		}
+	} else if (o->u_mm > r->v->slope_mm) {
+		o->far_mm = verify_subpx_far_bounded_mm(
+			r->below, r->above, (int)(o->i % (size_t)c->w) + c->x0,
+			(int)(o->i / (size_t)c->w) + c->y0, c->gray[o->i], o->u_mm,
+			sqrt(pc->any_d2[o->pi]), r->v->reach_mm);
+	}
+}
+
 /* 3. Overhangs of the current layer over the previous one (head comment,
  * docs/verify.md "Sub-pixel overhangs").  Over voids already known to be
  * the outside: the pixel-centre test with one pixel of slack, an
@@ -133,17 +165,20 @@ static uint32_t void_under(const struct crop *pc, int gx, int gy)
  * the distance to any grey pixel settles gross overhangs; the rest are
  * measured (subpx.h).  A pixel overhangs when its farthest point lies
  * beyond slope + tolerance; the largest excess over the slope is
- * recorded per component. */
+ * recorded per component.  The pixels are found in one pass, read on
+ * v->p.threads threads, then summed in one pass (the same report on any
+ * number of threads). */
 int verify_overhangs(struct verify *v, int layer, struct err *e)
 {
 	struct crop *c = v->cur, *pc = v->prev;
-	size_t np = pc->w ? (size_t)(v->nuf - v->prev_first) : 0;
+	size_t np = pc->w ? (size_t)(v->nuf - v->prev_first) : 0, no = 0, open = 0;
 	double pa = v->p.pixel_x_mm * v->p.pixel_y_mm;
 	double ext2 = v->ext_reach_mm * v->ext_reach_mm;
 	struct verify_subpx_img below = {pc->gray, pc->x0, pc->y0, pc->w, pc->h, v->p.pixel_x_mm,
-					 v->p.pixel_y_mm, 0, &pc->fits};
+					 v->p.pixel_y_mm, 0, &pc->fits, v->memo};
 	struct verify_subpx_img above = {c->gray, c->x0, c->y0, c->w, c->h, v->p.pixel_x_mm,
-					 v->p.pixel_y_mm, 0, &c->fits};
+					 v->p.pixel_y_mm, 0, &c->fits, v->memo};
+	struct ovh_read rd = {v, &below, &above, 0};
 	long long out_px = 0;
 
 	if (np && (verify_grow_bytes((void **)&v->agg, &v->agg_cap, np * sizeof *v->agg) ||
@@ -158,7 +193,6 @@ int verify_overhangs(struct verify *v, int layer, struct err *e)
 			size_t i = (size_t)y * (size_t)c->w + (size_t)x, pi;
 			int gx = x + c->x0, gy = y + c->y0, gb;
 			uint32_t id;
-			double u, far;
 			if (c->gray[i] == 0)
 				continue;
 			verify_crop_solid(pc, gx, gy, &pi);
@@ -177,34 +211,41 @@ int verify_overhangs(struct verify *v, int layer, struct err *e)
 			}
 			if (id < v->prev_first)
 				continue; /* cannot happen: labels of the previous layer */
-			u = INFINITY;
-			if (pc->near[pi] >= 0) {
-				int32_t n = pc->near[pi];
-				u = sqrt(pc->d2[pi]) + verify_subpx_gap_mm(&below, n % pc->w + pc->x0,
-									   n / pc->w + pc->y0);
-			}
-			if (u <= v->slope_mm)
-				continue;
-			if (!pc->any_ok) {
-				size_t n = (size_t)pc->w * (size_t)pc->h;
-				if (verify_grow_bytes((void **)&v->seed, &v->scratch_cap, n))
-					return ERR_SET(e, ERR_NOMEM, "verify: out of memory at layer %d",
-						       layer);
-				for (size_t k = 0; k < n; k++)
-					v->seed[k] = pc->gray[k] > 0;
-				if (edt_sq(v->seed, (size_t)pc->w, pc->w, pc->h, v->p.pixel_x_mm,
-					   v->p.pixel_y_mm, pc->any_d2, &v->es, e))
-					return e ? e->code : ERR_NOMEM;
-				pc->any_ok = 1;
-			}
-			far = verify_subpx_far_bounded_mm(&below, &above, gx, gy, c->gray[i], u,
-							  sqrt(pc->any_d2[pi]), v->reach_mm);
-			if (far - v->slope_mm > v->aggx[id - v->prev_first])
-				v->aggx[id - v->prev_first] = far - v->slope_mm;
-			if (far > v->reach_mm)
-				v->agg[id - v->prev_first] += 1;
+			if (mem_grow((void **)&v->ovh, &v->ovh_cap, no + 1, sizeof *v->ovh))
+				return ERR_SET(e, ERR_NOMEM, "verify: out of memory at layer %d",
+					       layer);
+			v->ovh[no].i = i;
+			v->ovh[no].pi = pi;
+			v->ovh[no++].id = id;
 		}
 	v->r.exterior_overhang_mm2 += (double)out_px * pa;
+	parfor_run(no, v->p.threads, 64, ovh_read, &rd);
+	for (size_t k = 0; k < no; k++)
+		open += v->ovh[k].u_mm > v->slope_mm;
+	if (open && !pc->any_ok) {
+		size_t n = (size_t)pc->w * (size_t)pc->h;
+		if (verify_grow_bytes((void **)&v->seed, &v->scratch_cap, n))
+			return ERR_SET(e, ERR_NOMEM, "verify: out of memory at layer %d", layer);
+		for (size_t k = 0; k < n; k++)
+			v->seed[k] = pc->gray[k] > 0;
+		if (edt_sq(v->seed, (size_t)pc->w, pc->w, pc->h, v->p.pixel_x_mm, v->p.pixel_y_mm,
+			   pc->any_d2, &v->es, e))
+			return e ? e->code : ERR_NOMEM;
+		pc->any_ok = 1;
+	}
+	rd.stage = 1;
+	if (open)
+		parfor_run(no, v->p.threads, 16, ovh_read, &rd);
+	for (size_t k = 0; k < no; k++) {
+		const struct verify_ovh *o = &v->ovh[k];
+		size_t at = o->id - v->prev_first;
+		if (!(o->u_mm > v->slope_mm))
+			continue;
+		if (o->far_mm - v->slope_mm > v->aggx[at])
+			v->aggx[at] = o->far_mm - v->slope_mm;
+		if (o->far_mm > v->reach_mm)
+			v->agg[at] += 1;
+	}
 	for (size_t k = 0; k < np; k++) {
 		if (v->agg[k] > 0 && verify_rec_add(&v->ov, v->prev_first + (uint32_t)k, layer, v->agg[k]))
 			return ERR_SET(e, ERR_NOMEM, "verify: out of memory at layer %d", layer);
@@ -214,4 +255,3 @@ int verify_overhangs(struct verify *v, int layer, struct err *e)
 	}
 	return 0;
 }
-

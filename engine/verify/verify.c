@@ -83,6 +83,8 @@ void verify_free(struct verify *v)
 	mem_free(v->ov.v);
 	mem_free(v->ovx.v);
 	mem_free(v->aggx);
+	mem_free(v->ovh);
+	verify_fit_memo_free(v->memo);
 	mem_free(v->wall.v);
 	mem_free(v->vol.v);
 	mem_free(v->vwall.v);
@@ -166,7 +168,8 @@ int verify_new(const struct verify_params *p, struct verify **out, struct err *e
 	/* union-find: 0 unused, 1 = outside */
 	v->ufcap = 1024;
 	v->uf = mem_alloc(v->ufcap * sizeof *v->uf);
-	if (!v->uf) {
+	v->memo = verify_fit_memo_new();
+	if (!v->uf || !v->memo) {
 		verify_free(v);
 		return ERR_SET(e, ERR_NOMEM, "verify: out of memory");
 	}

@@ -44,9 +44,10 @@ struct verify_params {
 	int speck_voxels;    /* enclosed 3D void components of at most this many
 			      * voxels are specks: counted apart, kept out of the wall
 			      * minima (VERIFY_SPECK_VOXELS when 0 is given) */
-	int threads;         /* threads the distance transforms may use (0 or 1:
-			      * one; larger than EDT_LANES acts as EDT_LANES); the
-			      * report does not depend on it */
+	int threads;         /* threads the distance transforms (at most
+			      * EDT_LANES of them) and the overhang readings may
+			      * use (0 or 1: one); the report does not depend on
+			      * it */
 };
 
 /* Default speck size: a 2 x 2 x 2 voxel pocket. */
@@ -150,30 +151,45 @@ int verify_layer(struct verify *v, const struct raster *r, struct err *e);
 int verify_layer_ref(struct verify *v, const struct raster *r, const struct raster *ref,
 		     struct err *e);
 
+/* Corner fits kept by neighbourhood across calls (corner.h): a hollow
+ * engine's mending reads each pair of layers several times, and each
+ * layer as the upper and then the lower one.  One memo may serve calls on
+ * several threads at once.  NULL: out of memory. */
+struct verify_fit_memo;
+struct verify_fit_memo *verify_fit_memo_new(void);
+void verify_fit_memo_free(struct verify_fit_memo *m);
+
+/* How verify_far_pixels reads a pair of layers. */
+struct verify_pair_read {
+	double px_mm, py_mm; /* pitches along columns and rows */
+	double reach_mm;     /* a pixel reading farther is passed to fn */
+	int threads;         /* as verify_params (the pixels are read on
+			      * them, fn is called on the caller's thread) */
+	struct verify_fit_memo *memo; /* borrowed; NULL: fits made per call */
+};
+
 /* The overhang reading of verify_layer for one pair of images, pixel by
  * pixel: below (layer k) and above (layer k + 1), crops of one size of
  * the layer images, their pixel (0, 0) the images' pixel (ox, oy) (the
  * model reads in image coordinates, as verify_layer does, so a crop
- * reads each pixel as the whole image does), pitches px_mm (columns) and
- * py_mm (rows).  For every pixel
+ * reads each pixel as the whole image does).  For every pixel
  * of above with some solid over a pixel of below that is not whole
  * solid, the largest distance (mm) from a point of its solid to below's
  * solid, each read at sub-pixel accuracy (docs/verify.md "Sub-pixel
  * overhangs"; pixels beyond the images are empty); fn(ctx, x, y, far_mm)
  * is called (x, y: crop pixels), row by row, for each pixel where that
- * exceeds reach_mm (a lower bound where it is far beyond; INFINITY with
- * no solid in reach).
+ * exceeds rd->reach_mm (a lower bound where it is far beyond; INFINITY
+ * with no solid in reach).
  * A nonzero return of fn stops the scan and is returned.  Unlike
  * verify_layer this does not tell enclosed voids from the outside.
- * threads: as verify_params.  0, ERR_PARAM (sizes), ERR_NOMEM or fn's. */
+ * 0, ERR_PARAM (sizes), ERR_NOMEM or fn's. */
 int verify_far_pixels(const struct raster *below, const struct raster *above, int ox, int oy,
-		      double px_mm, double py_mm, double reach_mm, int threads,
+		      const struct verify_pair_read *rd,
 		      int (*fn)(void *ctx, int x, int y, double far_mm), void *ctx, struct err *e);
 /* The same for the pixels of above in the crop box [bx0, bx1] x [by0, by1]
  * only (clipped to the crops), each read as in the whole crops. */
 int verify_far_pixels_in(const struct raster *below, const struct raster *above, int ox, int oy,
-			 double px_mm, double py_mm, double reach_mm, int threads, int bx0,
-			 int by0, int bx1, int by1,
+			 const struct verify_pair_read *rd, int bx0, int by0, int bx1, int by1,
 			 int (*fn)(void *ctx, int x, int y, double far_mm), void *ctx,
 			 struct err *e);
 

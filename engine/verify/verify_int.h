@@ -77,6 +77,9 @@ struct verify {
 	size_t agg_cap;
 	double *aggx;         /* per-component scratch: largest slope excess (mm) */
 	size_t aggx_cap;
+	struct verify_fit_memo *memo; /* corner fits by neighbourhood (corner.h) */
+	struct verify_ovh *ovh; /* verify_overhangs: the pixels it reads (support.c) */
+	size_t ovh_cap;       /* elements */
 	int32_t *isl_lab;     /* verify_islands: labels of the crop's solid components */
 	size_t isl_lab_cap;
 	size_t *isl_area;     /* verify_islands: per solid component, pixels */
@@ -97,6 +100,15 @@ struct verify {
 	struct verify_contact ref; /* the reference stack's own islands (has_reference) */
 	struct verify_report r;
 	int failed, finished;
+};
+
+/* One pixel verify_overhangs reads at sub-pixel accuracy: crop indices
+ * in the current (i) and previous (pi) layer, the void component of the
+ * previous layer it overhangs, its upper bound and reading (mm). */
+struct verify_ovh {
+	size_t i, pi;
+	uint32_t id;
+	double u_mm, far_mm;
 };
 
 uint32_t verify_uf_find(struct verify *v, uint32_t a);

@@ -52,7 +52,7 @@ static void check_wedge(double tx, double ty, double bis_deg, double open_deg, i
 {
 	enum { W = 15 };
 	uint8_t g[W * W];
-	struct verify_subpx_img im = {g, 0, 0, W, W, PX, PX, 0, NULL};
+	struct verify_subpx_img im = {g, 0, 0, W, W, PX, PX, 0, NULL, NULL};
 	struct verify_corner k;
 	struct hp h[2];
 	double b = bis_deg * M_PI / 180, o = open_deg * M_PI / 180 / 2, det, fx, fy;
@@ -108,7 +108,7 @@ static void test_straight_edge_no_corner(void)
 {
 	enum { W = 15 };
 	uint8_t g[W * W];
-	struct verify_subpx_img im = {g, 0, 0, W, W, PX, PX, 0, NULL};
+	struct verify_subpx_img im = {g, 0, 0, W, W, PX, PX, 0, NULL, NULL};
 	struct hp h = {cos(0.3), sin(0.3), cos(0.3) * 7.4 + sin(0.3) * 7.5};
 	struct verify_corner k;
 	int fitted = 0, grey = 0;
@@ -125,6 +125,62 @@ static void test_straight_edge_no_corner(void)
 			}
 	CHECK(grey >= 5);
 	CHECK_EQ_INT(fitted, 0);
+}
+
+/* The memo of fits (verify_fit_memo) gives every grey pixel of the
+ * wedges above the fit made without it, when it stores the fit and when
+ * it returns it: the same corner or none, the same edges to the bit. */
+static int same_fit(const struct verify_corner *a, const struct verify_corner *b)
+{
+	if (a->n != b->n)
+		return 0;
+	if (a->n == 0)
+		return 1;
+	return a->convex == b->convex && memcmp(a->nx, b->nx, sizeof a->nx) == 0 &&
+	       memcmp(a->ny, b->ny, sizeof a->ny) == 0 && memcmp(a->d, b->d, sizeof a->d) == 0;
+}
+
+static void test_memo_same_fits(void)
+{
+	enum { W = 15 };
+	static const double wedge[6][5] = {{7.3, 7.6, 0, 90, 1},    {7.8, 7.2, 30, 90, 1},
+					   {7.5, 7.45, 200, 60, 1}, {7.3, 7.6, 45, 90, 0},
+					   {7.7, 7.3, 250, 70, 0},  {7.1, 7.9, 120, 120, 0}};
+	struct verify_fit_memo *memo = verify_fit_memo_new();
+	uint8_t g[W * W];
+	struct verify_subpx_img im = {g, 0, 0, W, W, PX, PX, 0, NULL, NULL};
+	int corners = 0, fits = 0;
+
+	REQUIRE(memo);
+	for (int round = 0; round < 2; round++)
+		for (int w = 0; w < 6; w++) {
+			const double *q = wedge[w];
+			double b = q[2] * M_PI / 180, o = q[3] * M_PI / 180 / 2;
+			struct hp h[2];
+			for (int e = 0; e < 2; e++) {
+				double a = b + (e ? 1 : -1) * (M_PI / 2 + o);
+				h[e] = (struct hp){cos(a), sin(a), cos(a) * q[0] + sin(a) * q[1]};
+			}
+			for (int j = 0; j < W; j++)
+				for (int i = 0; i < W; i++)
+					g[j * W + i] = shade(i, j, h, 2, (int)q[4]);
+			for (int j = 0; j < W; j++)
+				for (int i = 0; i < W; i++) {
+					struct verify_corner k0, k1;
+					if (g[j * W + i] == 0 || g[j * W + i] == 255)
+						continue;
+					im.memo = NULL;
+					verify_corner_fit(&im, i, j, &k0);
+					im.memo = memo;
+					verify_corner_fit(&im, i, j, &k1);
+					fits++;
+					corners += k0.n == 2;
+					CHECK(same_fit(&k0, &k1));
+				}
+		}
+	printf("memo: %d fits of grey pixels (twice each), %d corners, all equal\n", fits, corners);
+	CHECK(corners >= 12); /* each wedge's tip, both rounds */
+	verify_fit_memo_free(memo);
 }
 
 /* ---- a pyramid's moving corners: one edge against two ---- */
@@ -163,8 +219,8 @@ static double corner_error(double theta, int one_edge)
 {
 	static uint8_t gb[PN * PN], ga[PN * PN];
 	struct hp hb[4], ha[4];
-	struct verify_subpx_img below = {gb, 0, 0, PN, PN, PX, PX, one_edge, NULL};
-	struct verify_subpx_img above = {ga, 0, 0, PN, PN, PX, PX, one_edge, NULL};
+	struct verify_subpx_img below = {gb, 0, 0, PN, PN, PX, PX, one_edge, NULL, NULL};
+	struct verify_subpx_img above = {ga, 0, 0, PN, PN, PX, PX, one_edge, NULL, NULL};
 	double err = 0, cx[4], cy[4];
 
 	pyramid(15, theta, hb);
@@ -325,6 +381,7 @@ int main(void)
 {
 	RUN(test_corner_fit);
 	RUN(test_straight_edge_no_corner);
+	RUN(test_memo_same_fits);
 	RUN(test_pyramid_corners);
 	RUN(test_overhanging_corner_fails);
 	return harness_report();

@@ -208,6 +208,7 @@ static void test_tolerance_matters(void)
  * the reach it reports none; a nonzero return of fn stops the scan. */
 struct far_seen {
 	int n, stop_at;
+	int last_x, last_y; /* the last pixel passed: calls come row by row */
 	double lo, hi; /* far range seen, px */
 	double hi_mid; /* the largest of rows 30..170, away from the box's ends */
 	double d, nx, ny, c;
@@ -219,6 +220,9 @@ static int far_seen(void *ctx, int x, int y, double far_mm)
 	double s = f->nx * (x + 0.5) + f->ny * (y + 0.5) - f->c; /* centre past below's edge, px */
 
 	f->n++;
+	CHECK(y > f->last_y || (y == f->last_y && x > f->last_x));
+	f->last_x = x;
+	f->last_y = y;
 	f->lo = fmin(f->lo, far_mm / PX);
 	f->hi = fmax(f->hi, far_mm / PX);
 	if (y >= 30 && y <= 170)
@@ -228,8 +232,10 @@ static int far_seen(void *ctx, int x, int y, double far_mm)
 	return f->stop_at && f->n == f->stop_at ? 7 : 0;
 }
 
-static void far_pair(double d_px, int stop_at, struct far_seen *f)
+static void far_pair(double d_px, int stop_at, int threads, struct verify_fit_memo *memo,
+		     struct far_seen *f)
 {
+	struct verify_pair_read rd = {PX, PX, LAYER, threads, memo};
 	struct raster *below = raster_new(N, N), *above = raster_new(N, N);
 	double th = 20 * M_PI / 180;
 	/* the line, capped by the box [20, 180]^2 (an image's empty margin) */
@@ -246,6 +252,7 @@ static void far_pair(double d_px, int stop_at, struct far_seen *f)
 	f->ny = sin(th);
 	f->c = 80.3;
 	f->stop_at = stop_at;
+	f->last_y = -1;
 	hb[0] = (struct hp){f->nx, f->ny, f->c};
 	memcpy(ha, hb, sizeof ha);
 	ha[0].c = f->c + d_px;
@@ -257,7 +264,7 @@ static void far_pair(double d_px, int stop_at, struct far_seen *f)
 			    (uint8_t)lround(255 * clip_area(i, j, ha, 5));
 		}
 	err_clear(&e);
-	rc = verify_far_pixels(below, above, 0, 0, PX, PX, LAYER, 1, far_seen, f, &e);
+	rc = verify_far_pixels(below, above, 0, 0, &rd, far_seen, f, &e);
 	CHECK_EQ_INT(rc, stop_at ? 7 : 0);
 	raster_free(below);
 	raster_free(above);
@@ -265,9 +272,11 @@ static void far_pair(double d_px, int stop_at, struct far_seen *f)
 
 static void test_far_pixels(void)
 {
-	struct far_seen f;
+	struct far_seen f, g;
+	struct verify_fit_memo *memo = verify_fit_memo_new();
 
-	far_pair(1.5, 0, &f); /* 1.5 px a layer: 0.44 px over the reach of 1.064 */
+	REQUIRE(memo);
+	far_pair(1.5, 0, 1, NULL, &f); /* 1.5 px a layer: 0.44 px over the reach of 1.064 */
 	printf("band 1.5 px: %d pixels read %.3f..%.3f px (%.3f away from the ends)\n", f.n, f.lo,
 	       f.hi, f.hi_mid);
 	CHECK(f.n > 160 / 2); /* a pixel every other row at least along the line */
@@ -276,10 +285,20 @@ static void test_far_pixels(void)
 	/* at the ends the band's corner lies 1.5 / cos 20 from below's, read
 	 * within the tolerance */
 	CHECK(f.hi < 1.5 / cos(20 * M_PI / 180) + VERIFY_TOLERANCE_PX);
-	far_pair(0.9, 0, &f); /* under the reach: nothing */
+	/* read on two threads with a memo (twice: its fits made, then
+	 * taken): the same pixels, in row order, the same readings */
+	for (int k = 0; k < 2; k++) {
+		far_pair(1.5, 0, 2, memo, &g);
+		CHECK_EQ_INT(g.n, f.n);
+		CHECK(g.lo == f.lo && g.hi == f.hi && g.hi_mid == f.hi_mid);
+	}
+	far_pair(0.9, 0, 1, NULL, &f); /* under the reach: nothing */
 	CHECK_EQ_INT(f.n, 0);
-	far_pair(3.0, 5, &f); /* fn's nonzero return stops the scan */
+	far_pair(3.0, 5, 1, NULL, &f); /* fn's nonzero return stops the scan */
 	CHECK_EQ_INT(f.n, 5);
+	far_pair(3.0, 5, 2, memo, &f);
+	CHECK_EQ_INT(f.n, 5);
+	verify_fit_memo_free(memo);
 }
 
 int main(void)
