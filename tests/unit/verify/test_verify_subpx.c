@@ -71,12 +71,13 @@ static void render(struct raster *r, const struct hp *h, int nh)
 enum shape { CONE, WEDGE, PYRAMID };
 
 static double g_tol_px; /* 0: the default */
+static int g_threads;   /* verify_params.threads (0: one) */
 
 /* Check the stack of a cavity whose roof leans beta_deg from the
  * vertical; theta_deg turns the wedge in the plane. */
 static void run(enum shape s, double beta_deg, double theta_deg, struct verify_report *rep)
 {
-	struct verify_params p = {LAYER, 45, PX, PX, g_tol_px, 0, 0, 0};
+	struct verify_params p = {LAYER, 45, PX, PX, g_tol_px, 0, 0, g_threads};
 	struct verify *v = NULL;
 	struct raster *r = raster_new(N, N);
 	struct hp h[DISC_EDGES];
@@ -200,6 +201,41 @@ static void test_tolerance_matters(void)
 	g_tol_px = 0;
 }
 
+/* The overhang readings on three threads (the open pixels of each layer
+ * shared out, the corner fits and the memo shared): the same report as
+ * on one, to the bit, on roofs that read over with corners (the pyramid
+ * at 50 degrees turned 30) and without (the cone). */
+static void test_threads_same_report(void)
+{
+	static const enum shape shp[2] = {PYRAMID, CONE};
+	static const double theta[2] = {30, 0};
+
+	for (int k = 0; k < 2; k++) {
+		struct verify_report one, three;
+		g_threads = 0;
+		run(shp[k], 50, theta[k], &one);
+		g_threads = 3;
+		run(shp[k], 50, theta[k], &three);
+		g_threads = 0;
+		CHECK(one.interior_overhang_px > 0);
+		CHECK(one.interior_overhang_px == three.interior_overhang_px);
+		CHECK(one.interior_overhang_mm2 == three.interior_overhang_mm2);
+		CHECK(one.slope_excess_mm == three.slope_excess_mm);
+		CHECK_EQ_INT(one.overhang_layers, three.overhang_layers);
+		CHECK_EQ_INT(one.worst_layer, three.worst_layer);
+		CHECK(one.worst_layer_px == three.worst_layer_px);
+		CHECK(one.exterior_overhang_mm2 == three.exterior_overhang_mm2);
+		CHECK(one.enclosed_void_mm3 == three.enclosed_void_mm3);
+		CHECK_EQ_INT(one.layers, three.layers);
+		for (int l = 0; l < one.layers && l < three.layers; l++)
+			CHECK(one.overhang_px[l] == three.overhang_px[l]);
+		printf("%s at 50 deg on 1 and 3 threads: %lld px over, excess %.6f px, equal\n",
+		       k ? "cone" : "pyramid", one.interior_overhang_px, one.slope_excess_px);
+		verify_report_fini(&one);
+		verify_report_fini(&three);
+	}
+}
+
 /* verify_far_pixels on one pair: below solid on the side n.p <= c of a
  * line turned 20 degrees, above the same line moved d px into the void
  * (solid band [c, c + d] over nothing).  Every pixel of above it reports
@@ -307,6 +343,7 @@ int main(void)
 	RUN(test_wedge);
 	RUN(test_pyramid);
 	RUN(test_tolerance_matters);
+	RUN(test_threads_same_report);
 	RUN(test_far_pixels);
 	return harness_report();
 }
