@@ -223,14 +223,15 @@ static int cmp_i32(const void *a, const void *b)
 }
 
 /* The pixels of above that read over cur (o->at: crop indices, row by
- * row, as one read of the whole crop gives them).  reread (nonzero after
- * a change): only the box ch of the changed pixels, grown by infl pixels (no reading farther from a change can change), is
- * read again (verify_far_pixels_in: each pixel as the whole crop reads
- * it); prev (nprev) are the last read's pixels, and those outside the box
- * still read over. */
+ * row, as one read of the whole crop gives them), read as rd says (the
+ * job's threads and fit memo).  reread (nonzero after a change): only the
+ * box ch of the changed pixels, grown by infl pixels (no reading farther
+ * from a change can change), is read again (verify_far_pixels_in: each
+ * pixel as the whole crop reads it); prev (nprev) are the last read's
+ * pixels, and those outside the box still read over. */
 static int read_over(const struct raster *cur, const struct raster *above, int ox, int oy,
-		     const struct verify_pair_read *rd, int reread, struct pxbox ch, int infl, const int32_t *prev, size_t nprev, struct over *o,
-		     struct err *e)
+		     const struct verify_pair_read *rd, int reread, struct pxbox ch, int infl,
+		     const int32_t *prev, size_t nprev, struct over *o, struct err *e)
 {
 	int w = cur->w, rc, bx0 = ch.x0 - infl, by0 = ch.y0 - infl, bx1 = ch.x1 + infl,
 	    by1 = ch.y1 + infl;
@@ -505,7 +506,7 @@ int hl_repair_build(const struct mesh *res, struct slicer *res_slicer, size_t pa
 	last_part = carve ? raster_new(w, h) : NULL;
 	near = carve ? mem_alloc((size_t)w * (size_t)h) : NULL;
 	lab = mem_alloc((size_t)w * (size_t)h * sizeof *lab);
-	rd.memo = verify_fit_memo_new();
+	rd.memo = verify_fit_memo_new(0);
 	if (!r->layer || !cur || !last || !orig || !last_orig || !inside || !lab || !rd.memo ||
 	    (carve && (!last_part || !near))) {
 		rc = ERR_SET(e, ERR_NOMEM, "hollow: out of memory (mending layers)");
@@ -544,8 +545,7 @@ int hl_repair_build(const struct mesh *res, struct slicer *res_slicer, size_t pa
 			memset(near, 0, (size_t)w * (size_t)h);
 			near_void(cur, inside, HL_CARVE_NEAR_PX, near, lab);
 			near_void(last_orig, last_part, HL_CARVE_NEAR_PX, near, lab);
-			rc = carve_layer(cur, last, x0, y0, inside, last_part, near, &rd, &left,
-					 e);
+			rc = carve_layer(cur, last, x0, y0, inside, last_part, near, &rd, &left, e);
 			if (rc)
 				break;
 		} else if (have_last) {

@@ -278,38 +278,48 @@ struct memo_slot {
 
 struct verify_fit_memo {
 	pthread_mutex_t lock[MEMO_LOCKS]; /* slot s under lock[s % MEMO_LOCKS] */
-	struct memo_slot *slot;           /* VERIFY_FIT_MEMO_SLOTS */
+	int nlock;                        /* locks initialised */
+	struct memo_slot *slot;           /* mask + 1 slots, owned */
+	size_t mask;                      /* slots - 1 (a power of two less one) */
 };
-
-struct verify_fit_memo *verify_fit_memo_new(void)
-{
-	struct verify_fit_memo *m = mem_alloc(sizeof *m);
-
-	if (!m)
-		return NULL;
-	m->slot = mem_calloc(VERIFY_FIT_MEMO_SLOTS, sizeof *m->slot);
-	if (!m->slot) {
-		mem_free(m);
-		return NULL;
-	}
-	for (int i = 0; i < MEMO_LOCKS; i++)
-		pthread_mutex_init(&m->lock[i], NULL);
-	return m;
-}
 
 void verify_fit_memo_free(struct verify_fit_memo *m)
 {
 	if (!m)
 		return;
-	for (int i = 0; i < MEMO_LOCKS; i++)
+	for (int i = 0; i < m->nlock; i++)
 		pthread_mutex_destroy(&m->lock[i]);
 	mem_free(m->slot);
 	mem_free(m);
 }
 
+struct verify_fit_memo *verify_fit_memo_new(size_t slots)
+{
+	struct verify_fit_memo *m = mem_calloc(1, sizeof *m);
+	size_t n = 1;
+
+	if (!m)
+		return NULL;
+	if (slots == 0)
+		slots = VERIFY_FIT_MEMO_SLOTS;
+	while (n <= slots / 2)
+		n *= 2;
+	m->mask = n - 1;
+	m->slot = mem_calloc(n, sizeof *m->slot);
+	for (; m->slot && m->nlock < MEMO_LOCKS; m->nlock++)
+		if (pthread_mutex_init(&m->lock[m->nlock], NULL) != 0)
+			break;
+	if (!m->slot || m->nlock < MEMO_LOCKS) {
+		verify_fit_memo_free(m);
+		return NULL;
+	}
+	return m;
+}
+
 /* The neighbourhood a fit reads (pixels beyond the crop read 0) and its
- * slot (FNV-1a). */
-static size_t memo_key(const struct verify_subpx_img *im, int x, int y, uint8_t *key)
+ * slot in m (FNV-1a). */
+static size_t memo_key(const struct verify_fit_memo *m, const struct verify_subpx_img *im, int x,
+		       int y, uint8_t *key)
 {
 	uint64_t h = 14695981039346656037ull;
 
@@ -317,7 +327,7 @@ static size_t memo_key(const struct verify_subpx_img *im, int x, int y, uint8_t 
 		key[t] = (uint8_t)verify_subpx_gray(im, x + t % KSIDE - KWIN, y + t / KSIDE - KWIN);
 		h = (h ^ key[t]) * 1099511628211ull;
 	}
-	return (size_t)(h ^ (h >> 29)) & (VERIFY_FIT_MEMO_SLOTS - 1);
+	return (size_t)(h ^ (h >> 29)) & m->mask;
 }
 
 static int memo_get(struct verify_fit_memo *m, size_t at, const uint8_t *key,
@@ -415,7 +425,7 @@ void verify_corner_fit(const struct verify_subpx_img *im, int x, int y, struct v
 	if (gate <= VERIFY_CORNER_GATE)
 		return;
 	if (im->memo) {
-		at = memo_key(im, x, y, key);
+		at = memo_key(im->memo, im, x, y, key);
 		if (memo_get(im->memo, at, key, k))
 			return;
 	}

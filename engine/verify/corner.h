@@ -49,7 +49,10 @@ void verify_corner_fit(const struct verify_subpx_img *im, int x, int y, struct v
  * was mended.  verify_corner_fit takes it from im->memo when not NULL:
  * VERIFY_FIT_MEMO_SLOTS slots, a neighbourhood hashed to one of them,
  * which holds the last fit stored there (the slots are shared by threads
- * under striped locks).  The same fits with or without it. */
+ * under striped locks; its full key is compared, so a neighbourhood
+ * hashed to a taken slot only replaces that slot's fit).  The same fits
+ * with or without it.  The slots verify_fit_memo_new(0) makes, 112 bytes
+ * each. */
 #define VERIFY_FIT_MEMO_SLOTS (1u << 16)
 
 #define VERIFY_CORNER_GATE 0.05

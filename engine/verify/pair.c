@@ -194,14 +194,16 @@ int verify_far_pixels_in(const struct raster *below, const struct raster *above,
 		 * coordinates, as verify_layer does, so that a crop reads each
 		 * pixel to the bit as the whole image does */
 		int ix = ox + x0, iy = oy + y0;
-		struct verify_subpx_img bi = {b.px, ix, iy, b.w, b.h, px_mm, py_mm, 0, &s.fb, rd->memo};
-		struct verify_subpx_img ai = {a.px, ix, iy, a.w, a.h, px_mm, py_mm, 0, &s.fa, rd->memo};
+		struct verify_subpx_img bi = {b.px,  ix,    iy, b.w,   b.h,
+					      px_mm, py_mm, 0,  &s.fb, rd->memo};
+		struct verify_subpx_img ai = {a.px,  ix,    iy, a.w,   a.h,
+					      px_mm, py_mm, 0,  &s.fa, rd->memo};
 		struct pair_rows rows = {&s, &bi, &ai, x0, y0, bx0, by0, bx1, by1, reach_mm};
 		parfor_run((size_t)a.h, threads, 4, pair_row, &rows);
 		for (size_t i = 0; i < np && !rc; i++)
 			if (s.far[i] > reach_mm)
-				rc = fn(ctx, (int)(i % (size_t)a.w) + x0, (int)(i / (size_t)a.w) + y0,
-					s.far[i]);
+				rc = fn(ctx, (int)(i % (size_t)a.w) + x0,
+					(int)(i / (size_t)a.w) + y0, s.far[i]);
 	}
 out:
 	pair_fini(&s);

@@ -23,7 +23,8 @@ int verify_subpx_fits_size(struct verify_subpx_fits *f, size_t pixels, size_t gr
 		for (size_t i = 0; i < pixels; i++)
 			atomic_init(&f->at[i], -1);
 	}
-	return mem_grow((void **)&f->fit, &f->cap, grey, sizeof *f->fit);
+	/* a pixel two threads fit at once takes two slots: room for a few */
+	return mem_grow((void **)&f->fit, &f->cap, grey + grey / 16 + 64, sizeof *f->fit);
 }
 
 void verify_subpx_fits_reset(struct verify_subpx_fits *f)

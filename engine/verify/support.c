@@ -144,7 +144,8 @@ static void ovh_read(void *ctx, size_t k, int tid)
 		if (pc->near[o->pi] >= 0) {
 			int32_t n = pc->near[o->pi];
 			o->u_mm = sqrt(pc->d2[o->pi]) +
-				  verify_subpx_gap_mm(r->below, n % pc->w + pc->x0, n / pc->w + pc->y0);
+				  verify_subpx_gap_mm(r->below, n % pc->w + pc->x0,
+						      n / pc->w + pc->y0);
 		}
 	} else if (o->u_mm > r->v->slope_mm) {
 		o->far_mm = verify_subpx_far_bounded_mm(
@@ -178,7 +179,7 @@ int verify_overhangs(struct verify *v, int layer, struct err *e)
 					 v->p.pixel_y_mm, 0, &pc->fits, v->memo};
 	struct verify_subpx_img above = {c->gray, c->x0, c->y0, c->w, c->h, v->p.pixel_x_mm,
 					 v->p.pixel_y_mm, 0, &c->fits, v->memo};
-	struct ovh_read rd = {v, &below, &above, 0};
+	struct ovh_read job = {v, &below, &above, 0};
 	long long out_px = 0;
 
 	if (np && (verify_grow_bytes((void **)&v->agg, &v->agg_cap, np * sizeof *v->agg) ||
@@ -219,7 +220,7 @@ int verify_overhangs(struct verify *v, int layer, struct err *e)
 			v->ovh[no++].id = id;
 		}
 	v->r.exterior_overhang_mm2 += (double)out_px * pa;
-	parfor_run(no, v->p.threads, 64, ovh_read, &rd);
+	parfor_run(no, v->p.threads, 64, ovh_read, &job);
 	for (size_t k = 0; k < no; k++)
 		open += v->ovh[k].u_mm > v->slope_mm;
 	if (open && !pc->any_ok) {
@@ -233,9 +234,9 @@ int verify_overhangs(struct verify *v, int layer, struct err *e)
 			return e ? e->code : ERR_NOMEM;
 		pc->any_ok = 1;
 	}
-	rd.stage = 1;
+	job.stage = 1;
 	if (open)
-		parfor_run(no, v->p.threads, 16, ovh_read, &rd);
+		parfor_run(no, v->p.threads, 16, ovh_read, &job);
 	for (size_t k = 0; k < no; k++) {
 		const struct verify_ovh *o = &v->ovh[k];
 		size_t at = o->id - v->prev_first;

@@ -168,7 +168,7 @@ int verify_new(const struct verify_params *p, struct verify **out, struct err *e
 	/* union-find: 0 unused, 1 = outside */
 	v->ufcap = 1024;
 	v->uf = mem_alloc(v->ufcap * sizeof *v->uf);
-	v->memo = verify_fit_memo_new();
+	v->memo = verify_fit_memo_new(0);
 	if (!v->uf || !v->memo) {
 		verify_free(v);
 		return ERR_SET(e, ERR_NOMEM, "verify: out of memory");

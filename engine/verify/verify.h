@@ -154,9 +154,11 @@ int verify_layer_ref(struct verify *v, const struct raster *r, const struct rast
 /* Corner fits kept by neighbourhood across calls (corner.h): a hollow
  * engine's mending reads each pair of layers several times, and each
  * layer as the upper and then the lower one.  One memo may serve calls on
- * several threads at once.  NULL: out of memory. */
+ * several threads at once.  slots: rounded down to a power of two (0: the
+ * default, 65,536, 7.3 MB touched as used).  Returns the memo, which the
+ * caller frees with verify_fit_memo_free, or NULL when out of memory. */
 struct verify_fit_memo;
-struct verify_fit_memo *verify_fit_memo_new(void);
+struct verify_fit_memo *verify_fit_memo_new(size_t slots);
 void verify_fit_memo_free(struct verify_fit_memo *m);
 
 /* How verify_far_pixels reads a pair of layers. */
@@ -180,7 +182,8 @@ struct verify_pair_read {
  * is called (x, y: crop pixels), row by row, for each pixel where that
  * exceeds rd->reach_mm (a lower bound where it is far beyond; INFINITY
  * with no solid in reach).
- * A nonzero return of fn stops the scan and is returned.  Unlike
+ * A nonzero return of fn stops the calls (every pixel is read first) and
+ * is returned.  Unlike
  * verify_layer this does not tell enclosed voids from the outside.
  * 0, ERR_PARAM (sizes), ERR_NOMEM or fn's. */
 int verify_far_pixels(const struct raster *below, const struct raster *above, int ox, int oy,

@@ -77,7 +77,7 @@ struct verify {
 	size_t agg_cap;
 	double *aggx;         /* per-component scratch: largest slope excess (mm) */
 	size_t aggx_cap;
-	struct verify_fit_memo *memo; /* corner fits by neighbourhood (corner.h) */
+	struct verify_fit_memo *memo; /* corner fits by neighbourhood (corner.h; owned) */
 	struct verify_ovh *ovh; /* verify_overhangs: the pixels it reads (support.c) */
 	size_t ovh_cap;       /* elements */
 	int32_t *isl_lab;     /* verify_islands: labels of the crop's solid components */

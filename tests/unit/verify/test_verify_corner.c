@@ -129,7 +129,8 @@ static void test_straight_edge_no_corner(void)
 
 /* The memo of fits (verify_fit_memo) gives every grey pixel of the
  * wedges above the fit made without it, when it stores the fit and when
- * it returns it: the same corner or none, the same edges to the bit. */
+ * it returns it: the same corner or none, the same edges to the bit.  A
+ * memo of one slot, where every neighbourhood replaces the last, too. */
 static int same_fit(const struct verify_corner *a, const struct verify_corner *b)
 {
 	if (a->n != b->n)
@@ -146,12 +147,12 @@ static void test_memo_same_fits(void)
 	static const double wedge[6][5] = {{7.3, 7.6, 0, 90, 1},    {7.8, 7.2, 30, 90, 1},
 					   {7.5, 7.45, 200, 60, 1}, {7.3, 7.6, 45, 90, 0},
 					   {7.7, 7.3, 250, 70, 0},  {7.1, 7.9, 120, 120, 0}};
-	struct verify_fit_memo *memo = verify_fit_memo_new();
+	struct verify_fit_memo *memo[2] = {verify_fit_memo_new(0), verify_fit_memo_new(1)};
 	uint8_t g[W * W];
 	struct verify_subpx_img im = {g, 0, 0, W, W, PX, PX, 0, NULL, NULL};
 	int corners = 0, fits = 0;
 
-	REQUIRE(memo);
+	REQUIRE(memo[0] && memo[1]);
 	for (int round = 0; round < 2; round++)
 		for (int w = 0; w < 6; w++) {
 			const double *q = wedge[w];
@@ -171,16 +172,19 @@ static void test_memo_same_fits(void)
 						continue;
 					im.memo = NULL;
 					verify_corner_fit(&im, i, j, &k0);
-					im.memo = memo;
-					verify_corner_fit(&im, i, j, &k1);
 					fits++;
 					corners += k0.n == 2;
-					CHECK(same_fit(&k0, &k1));
+					for (int m = 0; m < 2; m++) {
+						im.memo = memo[m];
+						verify_corner_fit(&im, i, j, &k1);
+						CHECK(same_fit(&k0, &k1));
+					}
 				}
 		}
-	printf("memo: %d fits of grey pixels (twice each), %d corners, all equal\n", fits, corners);
+	printf("memo: %d fits of grey pixels (each memo twice), %d corners, all equal\n", fits, corners);
 	CHECK(corners >= 12); /* each wedge's tip, both rounds */
-	verify_fit_memo_free(memo);
+	verify_fit_memo_free(memo[0]);
+	verify_fit_memo_free(memo[1]);
 }
 
 /* ---- a pyramid's moving corners: one edge against two ---- */

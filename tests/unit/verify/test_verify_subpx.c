@@ -309,7 +309,7 @@ static void far_pair(double d_px, int stop_at, int threads, struct verify_fit_me
 static void test_far_pixels(void)
 {
 	struct far_seen f, g;
-	struct verify_fit_memo *memo = verify_fit_memo_new();
+	struct verify_fit_memo *memo = verify_fit_memo_new(0);
 
 	REQUIRE(memo);
 	far_pair(1.5, 0, 1, NULL, &f); /* 1.5 px a layer: 0.44 px over the reach of 1.064 */
