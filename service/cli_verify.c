@@ -11,8 +11,8 @@
  * --solid, islands_added); the part's own islands (islands_part) need
  * external supports whatever fills it and are reported apart
  * (`part_needs_supports`).  --threads: threads for the distance
- * transforms (1 by default, 1..64 accepted, more than 8 act as 8; the
- * report does not depend on it).  Exit 0 when checked (--strict: 3 when not
+ * transforms (more than 8 act as 8) and the overhang readings (1 by
+ * default, 1..64 accepted; the report does not depend on it).  Exit 0 when checked (--strict: 3 when not
  * printable; --strict-all: 3 also when the part needs supports), 1 on
  * errors, 2 on usage errors. */
 #include <errno.h>
