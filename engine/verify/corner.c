@@ -5,6 +5,7 @@
 
 #include <math.h>
 #include <pthread.h>
+#include <stdatomic.h>
 #include <stdint.h>
 #include <string.h>
 
@@ -281,6 +282,7 @@ struct verify_fit_memo {
 	int nlock;                        /* locks initialised */
 	struct memo_slot *slot;           /* mask + 1 slots, owned */
 	size_t mask;                      /* slots - 1 (a power of two less one) */
+	atomic_size_t lookups, hits;      /* verify_fit_memo_stats */
 };
 
 void verify_fit_memo_free(struct verify_fit_memo *m)
@@ -305,6 +307,8 @@ struct verify_fit_memo *verify_fit_memo_new(size_t slots)
 	while (n <= slots / 2)
 		n *= 2;
 	m->mask = n - 1;
+	atomic_init(&m->lookups, 0);
+	atomic_init(&m->hits, 0);
 	m->slot = mem_calloc(n, sizeof *m->slot);
 	for (; m->slot && m->nlock < MEMO_LOCKS; m->nlock++)
 		if (pthread_mutex_init(&m->lock[m->nlock], NULL) != 0)
@@ -341,7 +345,16 @@ static int memo_get(struct verify_fit_memo *m, size_t at, const uint8_t *key,
 	if (hit)
 		*k = s->k;
 	pthread_mutex_unlock(&m->lock[at % MEMO_LOCKS]);
+	atomic_fetch_add_explicit(&m->lookups, 1, memory_order_relaxed);
+	if (hit)
+		atomic_fetch_add_explicit(&m->hits, 1, memory_order_relaxed);
 	return hit;
+}
+
+void verify_fit_memo_stats(const struct verify_fit_memo *m, size_t *lookups, size_t *hits)
+{
+	*lookups = atomic_load(&m->lookups);
+	*hits = atomic_load(&m->hits);
 }
 
 static void memo_put(struct verify_fit_memo *m, size_t at, const uint8_t *key,

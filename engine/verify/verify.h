@@ -160,6 +160,9 @@ int verify_layer_ref(struct verify *v, const struct raster *r, const struct rast
 struct verify_fit_memo;
 struct verify_fit_memo *verify_fit_memo_new(size_t slots);
 void verify_fit_memo_free(struct verify_fit_memo *m);
+/* Fits looked up in m since it was made (the corner fits past the
+ * one-edge gate), and those of them it held. */
+void verify_fit_memo_stats(const struct verify_fit_memo *m, size_t *lookups, size_t *hits);
 
 /* How verify_far_pixels reads a pair of layers. */
 struct verify_pair_read {

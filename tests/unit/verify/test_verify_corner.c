@@ -151,9 +151,12 @@ static void test_memo_same_fits(void)
 	uint8_t g[W * W];
 	struct verify_subpx_img im = {g, 0, 0, W, W, PX, PX, 0, NULL, NULL};
 	int corners = 0, fits = 0;
+	size_t looked[2], held[2], looked1, held1;
 
 	REQUIRE(memo[0] && memo[1]);
-	for (int round = 0; round < 2; round++)
+	for (int round = 0; round < 2; round++) {
+		if (round == 1)
+			verify_fit_memo_stats(memo[0], &looked1, &held1);
 		for (int w = 0; w < 6; w++) {
 			const double *q = wedge[w];
 			double b = q[2] * M_PI / 180, o = q[3] * M_PI / 180 / 2;
@@ -181,7 +184,18 @@ static void test_memo_same_fits(void)
 					}
 				}
 		}
-	printf("memo: %d fits of grey pixels (each memo twice), %d corners, all equal\n", fits, corners);
+	}
+	/* the second round finds every fit the first one stored in the
+	 * default memo (the first round's neighbourhoods, a few hundred,
+	 * take distinct slots of its 65,536); one slot holds only the last */
+	verify_fit_memo_stats(memo[0], &looked[0], &held[0]);
+	verify_fit_memo_stats(memo[1], &looked[1], &held[1]);
+	printf("memo: %d fits of grey pixels (each memo twice), %d corners, all equal; "
+	       "default memo: %zu of %zu lookups held, one slot: %zu of %zu\n",
+	       fits, corners, held[0], looked[0], held[1], looked[1]);
+	CHECK(looked1 > 0 && looked[0] == 2 * looked1 && looked[1] == looked[0]);
+	CHECK(held[0] - held1 == looked1);
+	CHECK(held[1] < looked1);
 	CHECK(corners >= 12); /* each wedge's tip, both rounds */
 	verify_fit_memo_free(memo[0]);
 	verify_fit_memo_free(memo[1]);
