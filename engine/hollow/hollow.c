@@ -260,31 +260,16 @@ static double hollow_mend_reach_mm(const struct verify_params *vp)
 	       0.5 * VERIFY_TOLERANCE_PX * fmax(vp->pixel_x_mm, vp->pixel_y_mm);
 }
 
-/* How far (mm) a mesh output's stepped voids may recede a layer: the most
- * whole pixels along each axis that the slope allows, in mm, the smaller
- * of the two axes' (0: not one pixel along an axis).  The steps are drawn
- * at pixel centres, so a front designed to recede d a layer steps by
- * floor(d / p) or ceil(d / p) pixels of pitch p, and the verifier reads a
- * step of n pixels as n p; designed to recede at most this, no straight
- * front steps beyond the slope.  On a gentler slope than a pixel a layer
- * every step of the optimised voids' roofs reads over (the 12 mm cube at
- * alpha 30: 57,481 px), and carving runs away (a carved pixel asks the
- * layer above for more than the design recedes).  The fill designs its
- * pixels to the rule at any slope. */
-static double step_slope_mm(const struct verify_params *vp)
-{
-	double r = vp->layer_mm * tan(vp->alpha_deg * M_PI / 180);
-
-	/* the 1e-9 keeps a slope of exactly n pixels at n */
-	return fmin(floor(r / vp->pixel_x_mm + 1e-9) * vp->pixel_x_mm,
-		    floor(r / vp->pixel_y_mm + 1e-9) * vp->pixel_y_mm);
-}
-
-/* Nonzero when the slope allows at least a pixel a layer along both axes
- * (step_slope_mm). */
+/* Nonzero when the slope allows at least a pixel a layer.  A mesh output's
+ * stepped voids recede by whole pixels: a roof steps at least one a layer,
+ * read as 1 px, so on a gentler slope the optimised voids' roofs read over
+ * at every step (the 12 mm cube at alpha 30: 57,481 px), and carving runs
+ * away (a carved pixel asks the layer above for more than the design
+ * recedes).  The fill designs its pixels to the rule at any slope. */
 static int steps_follow_slope(const struct verify_params *vp)
 {
-	return step_slope_mm(vp) > 0;
+	return vp->layer_mm * tan(vp->alpha_deg * M_PI / 180) >=
+	       fmin(vp->pixel_x_mm, vp->pixel_y_mm);
 }
 
 /* Nonzero when s's stepped layers are carved (repair.h). */
@@ -339,70 +324,7 @@ static int min_wall_3d(const struct mesh *part, const struct mesh *res, double *
 	return 0;
 }
 
-/* Forward: frees everything build() made (and the rest of s). */
 static void hollow_release(void *state);
-
-/* The hollowing of ctx's part with s->cfg, and what the layers need
- * beside it: the slicer of the result, the slopes of the optimised
- * voids' polygons, the check, the beads, and the mending or carving
- * (repair.h).  unbuild() undoes it.  0 or an error (s then holds what
- * was made, for unbuild or hollow_release). */
-static int build(struct hollow_state *s, const struct engine_ctx *ctx, struct err *e)
-{
-	const struct hl_config *c = &s->cfg;
-	int rc;
-
-	rc = hl_run(ctx->mesh, c, ctx->progress, &s->out, e);
-	if (!rc)
-		rc = min_wall_3d(ctx->mesh, s->out.mesh, &s->min_wall_3d_mm, e);
-	if (!rc)
-		rc = slice_new(s->out.mesh, &s->slicer, e);
-	if (!rc && s->out.voids_optimised > 0) {
-		double t1 = progress_now_s();
-		rc = hl_slopes_check(s->out.mesh, ctx->mesh->nv, ctx->mesh->nt, s->layer_mm,
-				     s->layer_mm * tan(c->alpha_rad), &s->slopes, e);
-		s->t_slopes = progress_now_s() - t1;
-	} else {
-		s->slopes.worst_layer = -1;
-	}
-	if (!rc)
-		rc = start_verify(s, s->out.mesh, e);
-	/* layer outputs print the pixels: beads split off the optimised voids
-	 * there are dropped like voids under min_void_mm3 (fill/fill.h) */
-	if (!rc && s->out.voids_optimised > 0)
-		rc = hl_fragments_find(s->out.mesh, ctx->mesh->nv, ctx->mesh->nt,
-				       s->map ? s->map : &s->own_map,
-				       stepped(s) ? 0 : s->map ? s->antialias : 1, VERIFY_THRESHOLD,
-				       s->layer_mm, c->opt.min_void_mm3, &s->frag, e);
-	/* images written: mend what the optimised voids' grey edges read
-	 * over; a mesh stepped at the pixels: carve what its pixels read over
-	 * (repair.h); G-code carries the polygons */
-	if (!rc && s->out.voids_optimised > 0) {
-		struct verify_params vp;
-		verify_params_of(s, &vp);
-		if (s->map || carve_stepped(s, &vp))
-			rc = hl_repair_build(s->out.mesh, s->slicer, s->part_nv, s->part_nt,
-					     s->map ? s->map : &s->own_map, s->antialias, &s->out.fill,
-					     &s->frag, s->layer_mm, vp.pixel_x_mm, vp.pixel_y_mm,
-					     hollow_mend_reach_mm(&vp), !s->map, vp.threads, &s->repair,
-					     e);
-	}
-	return rc;
-}
-
-/* Undo build(): s as before it ran. */
-static void unbuild(struct hollow_state *s)
-{
-	hl_outcome_fini(&s->out);
-	slice_free(s->slicer);
-	s->slicer = NULL;
-	memset(&s->slopes, 0, sizeof s->slopes);
-	s->t_slopes = 0;
-	verify_free(s->ver);
-	s->ver = NULL;
-	hl_fill_fini(&s->frag);
-	hl_repair_fini(&s->repair);
-}
 
 static int hollow_prepare(const struct engine_ctx *ctx, const void *params, void **out,
 			  struct err *e)
@@ -433,8 +355,7 @@ static int hollow_prepare(const struct engine_ctx *ctx, const void *params, void
 	c->opt.wall_next_mm = p->wall_next_mm;
 	c->opt.stack_layer_mm = p->stack_layer_mm > 0 ? p->stack_layer_mm : fmin(ctx->layer_mm, 0.1);
 	c->opt.opt_layer_mm = fmax(p->opt_layer_mm, c->opt.stack_layer_mm);
-	c->alpha_rad = s->alpha_deg * M_PI / 180;
-	c->opt.alpha_rad = c->alpha_rad; /* a mesh output may lower it, below */
+	c->opt.alpha_rad = s->alpha_deg * M_PI / 180;
 	c->opt.margin_rad = p->margin_deg * M_PI / 180;
 	if (c->opt.margin_rad >= 0.5 * c->opt.alpha_rad)
 		c->opt.margin_rad = 0.5 * c->opt.alpha_rad;
@@ -482,40 +403,55 @@ static int hollow_prepare(const struct engine_ctx *ctx, const void *params, void
 		struct verify_params vp;
 		verify_params_of(s, &vp);
 		if (!steps_follow_slope(&vp)) {
-			double pmax = fmax(vp.pixel_x_mm, vp.pixel_y_mm);
+			double pmin = fmin(vp.pixel_x_mm, vp.pixel_y_mm);
 			if (!p->fill) {
 				rc = ERR_FIELD(e, "alpha_deg",
 					       "a mesh output steps the optimiser's voids by whole "
 					       "pixels (%g mm), at least one a layer, but alpha_deg %g "
 					       "allows %.4f mm a layer: use alpha_deg >= %.1f, "
 					       "fill=true, or a layer output",
-					       pmax, s->alpha_deg, vp.layer_mm * tan(c->alpha_rad),
-					       atan(pmax / vp.layer_mm) * 180 / M_PI);
+					       pmin, s->alpha_deg, vp.layer_mm * tan(c->opt.alpha_rad),
+					       atan(pmin / vp.layer_mm) * 180 / M_PI);
 				hollow_release(s);
 				return rc;
 			}
 			c->opt.rounds = 0; /* the fill alone */
 		}
 	}
-	rc = build(s, ctx, e);
-	/* a mesh's stepped voids: a long roof at the rule keeps pixels over
-	 * where its steps fall behind the design farther than the carving
-	 * reaches (repair.h); then the optimiser designs them again to recede
-	 * whole pixels a layer, which the steps follow (step_slope_mm) */
-	if (!rc && stepped(s) && s->repair.layers_left > 0) {
+	rc = hl_run(ctx->mesh, c, ctx->progress, &s->out, e);
+	if (!rc)
+		rc = min_wall_3d(ctx->mesh, s->out.mesh, &s->min_wall_3d_mm, e);
+	if (!rc)
+		rc = slice_new(s->out.mesh, &s->slicer, e);
+	if (!rc && s->out.voids_optimised > 0) {
+		double t1 = progress_now_s();
+		rc = hl_slopes_check(s->out.mesh, ctx->mesh->nv, ctx->mesh->nt, s->layer_mm,
+				     s->layer_mm * tan(c->opt.alpha_rad), &s->slopes, e);
+		s->t_slopes = progress_now_s() - t1;
+	} else {
+		s->slopes.worst_layer = -1;
+	}
+	if (!rc)
+		rc = start_verify(s, s->out.mesh, e);
+	/* layer outputs print the pixels: beads split off the optimised voids
+	 * there are dropped like voids under min_void_mm3 (fill/fill.h) */
+	if (!rc && s->out.voids_optimised > 0)
+		rc = hl_fragments_find(s->out.mesh, ctx->mesh->nv, ctx->mesh->nt,
+				       s->map ? s->map : &s->own_map,
+				       stepped(s) ? 0 : s->map ? s->antialias : 1, VERIFY_THRESHOLD,
+				       s->layer_mm, c->opt.min_void_mm3, &s->frag, e);
+	/* images written: mend what the optimised voids' grey edges read
+	 * over; a mesh stepped at the pixels: carve what its pixels read over
+	 * (repair.h); G-code carries the polygons */
+	if (!rc && s->out.voids_optimised > 0) {
 		struct verify_params vp;
-		double step_rad;
 		verify_params_of(s, &vp);
-		step_rad = atan(step_slope_mm(&vp) / vp.layer_mm);
-		/* left over the check's reach, not only the carving's */
-		if (step_rad < c->opt.alpha_rad &&
-		    s->repair.left_far_mm > vp.layer_mm * tan(c->alpha_rad) +
-						    VERIFY_TOLERANCE_PX *
-							    fmax(vp.pixel_x_mm, vp.pixel_y_mm)) {
-			unbuild(s);
-			c->opt.alpha_rad = step_rad;
-			rc = build(s, ctx, e);
-		}
+		if (s->map || carve_stepped(s, &vp))
+			rc = hl_repair_build(s->out.mesh, s->slicer, s->part_nv, s->part_nt,
+					     s->map ? s->map : &s->own_map, s->antialias, &s->out.fill,
+					     &s->frag, s->layer_mm, vp.pixel_x_mm, vp.pixel_y_mm,
+					     hollow_mend_reach_mm(&vp), !s->map, vp.threads, &s->repair,
+					     e);
 	}
 	if (!rc && stepped(s)) {
 		s->part_view = (struct mesh){s->out.mesh->v, s->out.mesh->tri, s->part_nv, s->part_nt};
@@ -752,7 +688,6 @@ static int hollow_metrics(void *state, struct metrics *m, struct err *e)
 	rc |= metrics_num(m, "hollow.wall_mm", s->cfg.opt.wall_mm);
 	rc |= metrics_num(m, "hollow.wall_next_mm", s->cfg.opt.wall_next_mm);
 	rc |= metrics_num(m, "hollow.alpha_deg", s->alpha_deg);
-	rc |= metrics_num(m, "hollow.design_alpha_deg", s->cfg.opt.alpha_rad * 180 / M_PI);
 	rc |= metrics_num(m, "hollow.opt_layer_mm", o->opt.opt_layer_mm);
 	rc |= metrics_num(m, "hollow.sample_mm", o->opt.sample_mm);
 	rc |= metrics_num(m, "hollow.opt_layer_min_mm", s->cfg.opt.opt_layer_min_mm);

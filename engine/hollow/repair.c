@@ -115,15 +115,10 @@ void hl_repair_apply(const struct hl_repair *rp, double z_mm, struct raster *r)
 }
 
 /* The pixels read over in one pass: crop pixels (i = y w + x). */
-/* Pixels read over: crop indices y w + x, and with keep_far their
- * readings (mm) in far. */
 struct over {
 	int32_t *at;
 	size_t n, cap;
 	int w;
-	int keep_far;
-	double *far;
-	size_t far_cap;
 };
 
 static int note_over(void *ctx, int x, int y, double far_mm)
@@ -131,16 +126,10 @@ static int note_over(void *ctx, int x, int y, double far_mm)
 	struct over *o = ctx;
 	void *arr = o->at;
 
+	(void)far_mm;
 	if (mem_grow(&arr, &o->cap, o->n + 1, sizeof *o->at))
 		return ERR_NOMEM;
 	o->at = arr;
-	if (o->keep_far) {
-		arr = o->far;
-		if (mem_grow(&arr, &o->far_cap, o->n + 1, sizeof *o->far))
-			return ERR_NOMEM;
-		o->far = arr;
-		o->far[o->n] = far_mm;
-	}
 	o->at[o->n++] = y * o->w + x;
 	return 0;
 }
@@ -278,7 +267,7 @@ static int mend_layer(struct raster *cur, const struct raster *above,
 		      const struct raster *above_drawn, int ox, int oy, struct inside *in,
 		      int32_t *lab, const struct verify_pair_read *rd, int *left, struct err *e)
 {
-	struct over o = {NULL, 0, 0, cur->w, 0, NULL, 0};
+	struct over o = {NULL, 0, 0, cur->w};
 	const uint8_t *inside;
 	int32_t *prev = NULL;
 	size_t nprev = 0, prev_cap = 0;
@@ -415,14 +404,13 @@ static void near_void(const struct raster *drawn, const struct raster *inside, i
  * none reads over or HL_REPAIR_PASSES passes.  Solid
  * taken from over a void asks nothing of the layer below; the layer above
  * is read against it in its turn.  *left: 1 when a pixel still reads
- * over; *left_far_mm raised to the largest reading (mm) of such a
- * pixel. */
+ * over. */
 static int carve_layer(struct raster *cur, const struct raster *below, int ox, int oy,
 		       const struct raster *inside, const struct raster *inside_below,
 		       const uint8_t *near, const struct verify_pair_read *rd, int *left,
-		       double *left_far_mm, struct err *e)
+		       struct err *e)
 {
-	struct over o = {NULL, 0, 0, cur->w, 1, NULL, 0};
+	struct over o = {NULL, 0, 0, cur->w};
 	int infl = verify_far_pad_px(rd->reach_mm, rd->px_mm, rd->py_mm);
 	struct pxbox ch = pxbox_empty(); /* the pixels the last pass cleared */
 	int rc = 0;
@@ -443,18 +431,14 @@ static int carve_layer(struct raster *cur, const struct raster *below, int ox, i
 				continue; /* the part's own overhang, not the voids' */
 			if (!near[c]) {
 				*left = 1; /* the voids', but too far from the design */
-				*left_far_mm = fmax(*left_far_mm, o.far[i]);
 				continue;
 			}
-			o.far[mine] = o.far[i];
 			o.at[mine++] = o.at[i]; /* solid: verify_far_pixels reads no other */
 		}
 		if (mine == 0)
 			break;
 		if (pass == HL_REPAIR_PASSES) {
 			*left = 1;
-			for (size_t i = 0; i < mine; i++)
-				*left_far_mm = fmax(*left_far_mm, o.far[i]);
 			break;
 		}
 		ch = pxbox_empty();
@@ -464,7 +448,6 @@ static int carve_layer(struct raster *cur, const struct raster *below, int ox, i
 		}
 	}
 	mem_free(o.at);
-	mem_free(o.far);
 	return rc;
 }
 
@@ -562,8 +545,7 @@ int hl_repair_build(const struct mesh *res, struct slicer *res_slicer, size_t pa
 			memset(near, 0, (size_t)w * (size_t)h);
 			near_void(cur, inside, HL_CARVE_NEAR_PX, near, lab);
 			near_void(last_orig, last_part, HL_CARVE_NEAR_PX, near, lab);
-			rc = carve_layer(cur, last, x0, y0, inside, last_part, near, &rd, &left,
-					 &r->left_far_mm, e);
+			rc = carve_layer(cur, last, x0, y0, inside, last_part, near, &rd, &left, e);
 			if (rc)
 				break;
 		} else if (have_last) {

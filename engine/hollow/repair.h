@@ -64,8 +64,6 @@ struct hl_repair {
 			    * (negative when carved) */
 	int layers;        /* layers with a mended pixel */
 	int layers_left;   /* layers where a pixel still reads over after the passes */
-	double left_far_mm; /* carving: the largest reading (mm, verify_far_pixels) of a
-			     * pixel left over, 0 when none (the mending leaves it 0) */
 	double seconds;
 };
 

@@ -33,7 +33,7 @@ static void fill_params(const struct hl_config *c, struct hl_fill_params *p)
 	p->wall_next_mm = c->opt.wall_next_mm;
 	p->pixel_mm = c->opt.pixel_mm;
 	p->layer_mm = c->print_layer_mm;
-	p->alpha_rad = c->alpha_rad;
+	p->alpha_rad = c->opt.alpha_rad;
 	p->margin_rad = c->opt.margin_rad;
 	p->min_void_mm3 = c->opt.min_void_mm3;
 	p->lean = c->fill_lean;
@@ -280,7 +280,7 @@ static void empty_note(const struct hl_config *c, struct hl_outcome *o)
 		 * a reach under one pixel no solid pixel may hang over a void */
 		const struct raster_map *fm = &c->fill_map;
 		double pitch = 1 / sqrt(fabs(fm->a[0][0] * fm->a[1][1] - fm->a[0][1] * fm->a[1][0]));
-		double reach = c->print_layer_mm * tan(c->alpha_rad);
+		double reach = c->print_layer_mm * tan(c->opt.alpha_rad);
 		if (reach < pitch) {
 			snprintf(o->note, sizeof o->note,
 				 "no support-free void: at this alpha a layer may overhang %.3f mm, less "

@@ -20,12 +20,8 @@ struct err;
  * parameters); run.c derives the fill's own parameters from it. */
 struct hl_config {
 	struct hl_opt_params opt;  /* the optimiser's rounds (opt.target: left NULL, run.c
-				    * sets the stability target; opt.alpha_rad: the
-				    * slope its voids are designed to, at most
-				    * alpha_rad); the fill takes its walls, pixel,
-				    * margin and min_void_mm3 */
-	double alpha_rad;          /* the overhang rule (from the vertical): the fill's
-				    * slope and the note's */
+				    * sets the stability target); the fill takes its
+				    * walls, pixel, alpha, margin and min_void_mm3 */
 	double print_layer_mm;     /* the job's layer (the fill's layers; contact
 				    * layer for stability) */
 	int fill;                  /* top-down fill of what the optimiser left */

@@ -323,7 +323,6 @@ static void test_stepped_roof_carved(void)
 	CHECK(carved.slope_excess_px <= VERIFY_TOLERANCE_PX);
 	CHECK_EQ_INT(carved.islands, 0);
 	CHECK_EQ_INT(r.layers_left, 0);
-	CHECK(r.left_far_mm == 0);
 	CHECK(r.pixels > 0);
 	/* only solid taken: the ledger is what the images lost */
 	CHECK(r.mm3 < 0);
@@ -349,12 +348,6 @@ static void test_stepped_roof_limit(void)
 	CHECK(carved.interior_overhang_px > 0);
 	CHECK(carved.interior_overhang_px < drawn.interior_overhang_px);
 	CHECK(r.layers_left > 0);
-	/* the worst pixel left reads as the check of the whole images reads
-	 * it (hollow.c designs the voids again when it passes the check's
-	 * reach) */
-	printf("  left_far_mm %.6f, the check's worst %.6f mm\n", r.left_far_mm,
-	       LAYER * tan(45 * M_PI / 180) + carved.slope_excess_px * PX);
-	CHECK_NEAR(r.left_far_mm, LAYER * tan(45 * M_PI / 180) + carved.slope_excess_px * PX, 1e-6);
 	CHECK_EQ_INT(carved.islands, 0);
 	verify_report_fini(&drawn);
 	verify_report_fini(&carved);
