@@ -450,8 +450,8 @@ static int hollow_prepare(const struct engine_ctx *ctx, const void *params, void
 			rc = hl_repair_build(s->out.mesh, s->slicer, s->part_nv, s->part_nt,
 					     s->map ? s->map : &s->own_map, s->antialias, &s->out.fill,
 					     &s->frag, s->layer_mm, vp.pixel_x_mm, vp.pixel_y_mm,
-					     hollow_mend_reach_mm(&vp), !s->map, vp.threads, &s->repair,
-					     e);
+					     hollow_mend_reach_mm(&vp), c->opt.wall_mm, !s->map,
+					     vp.threads, &s->repair, e);
 	}
 	if (!rc && stepped(s)) {
 		s->part_view = (struct mesh){s->out.mesh->v, s->out.mesh->tri, s->part_nv, s->part_nt};

@@ -18,6 +18,7 @@
 #include "engine/core/progress.h"
 #include "engine/geom/label.h"
 #include "engine/mesh/mesh.h"
+#include "engine/slice/erode.h"
 #include "engine/slice/slice.h"
 #include "engine/verify/verify.h"
 
@@ -353,61 +354,23 @@ static int mend_layer(struct raster *cur, const struct raster *above,
 	return rc;
 }
 
-/* near (w h): set to 1 where a void pixel of the drawn layer (drawn
- * below VERIFY_THRESHOLD where the part, inside, is wholly solid: the
- * optimised voids and the fill) lies within d pixels (the square of side
- * 2 d + 1); other pixels keep their value.  tmp: w h scratch.  Two passes
- * of a running count. */
-static void near_void(const struct raster *drawn, const struct raster *inside, int d,
-		      uint8_t *near, int32_t *tmp)
-{
-	int w = drawn->w, h = drawn->h;
-
-	for (int y = 0; y < h; y++) {
-		const uint8_t *g = drawn->px + (size_t)y * drawn->stride;
-		const uint8_t *in = inside->px + (size_t)y * inside->stride;
-		int32_t *t = tmp + (size_t)y * (size_t)w;
-		int c = 0;
-		/* c: void pixels in [x - d, x + d] of the row */
-		for (int x = 0; x < d && x < w; x++)
-			c += g[x] < VERIFY_THRESHOLD && in[x] == 255;
-		for (int x = 0; x < w; x++) {
-			if (x + d < w)
-				c += g[x + d] < VERIFY_THRESHOLD && in[x + d] == 255;
-			if (x - d - 1 >= 0)
-				c -= g[x - d - 1] < VERIFY_THRESHOLD && in[x - d - 1] == 255;
-			t[x] = c;
-		}
-	}
-	for (int x = 0; x < w; x++) {
-		int32_t c = 0;
-		for (int y = 0; y < d && y < h; y++)
-			c += tmp[(size_t)y * (size_t)w + (size_t)x] > 0;
-		for (int y = 0; y < h; y++) {
-			if (y + d < h)
-				c += tmp[(size_t)(y + d) * (size_t)w + (size_t)x] > 0;
-			if (y - d - 1 >= 0)
-				c -= tmp[(size_t)(y - d - 1) * (size_t)w + (size_t)x] > 0;
-			if (c > 0)
-				near[(size_t)y * (size_t)w + (size_t)x] = 1;
-		}
-	}
-}
-
 /* Carve layer k + 1 (cur, drawn; crop pixel (0, 0) is image pixel (ox,
  * oy)) over layer k (below, final; inside, inside_below: the part at
  * layers k + 1 and k): passes of verify_far_pixels clear each pixel of cur
  * read over where the part is wholly solid at both layers (so what it
  * hangs over is the voids', not the outside, and no cut opens the part's
- * surface) and near is set (within HL_CARVE_NEAR_PX of a void drawn in
- * layer k + 1 or k: the walls round the design keep all but that), until
- * none reads over or HL_REPAIR_PASSES passes.  Solid
- * taken from over a void asks nothing of the layer below; the layer above
- * is read against it in its turn.  *left: 1 when a pixel still reads
- * over. */
+ * surface) and, with guard (may be NULL), inside guard (>= 128: where a
+ * cut keeps the wall to the outside), until none reads over or
+ * HL_REPAIR_PASSES passes.  A pixel read over lies farther than the reach
+ * from below's solid, so over below's void (carved or drawn): the cuts
+ * never leave the footprint of the voids under them, and above a void's
+ * top each layer's cuts lie a pixel and more inside the last layer's, so
+ * a top rises only until it closes.  Solid taken from over a void asks
+ * nothing of the layer below; the layer above is read against it in its
+ * turn.  *left: 1 when a pixel still reads over. */
 static int carve_layer(struct raster *cur, const struct raster *below, int ox, int oy,
 		       const struct raster *inside, const struct raster *inside_below,
-		       const uint8_t *near, const struct verify_pair_read *rd, int *left,
+		       const struct raster *guard, const struct verify_pair_read *rd, int *left,
 		       struct err *e)
 {
 	struct over o = {NULL, 0, 0, cur->w};
@@ -429,8 +392,8 @@ static int carve_layer(struct raster *cur, const struct raster *below, int ox, i
 			size_t c = (size_t)o.at[i];
 			if (inside->px[c] != 255 || inside_below->px[c] != 255)
 				continue; /* the part's own overhang, not the voids' */
-			if (!near[c]) {
-				*left = 1; /* the voids', but too far from the design */
+			if (guard && guard->px[c] < 128) {
+				*left = 1; /* the voids', but the wall would thin */
 				continue;
 			}
 			o.at[mine++] = o.at[i]; /* solid: verify_far_pixels reads no other */
@@ -451,16 +414,50 @@ static int carve_layer(struct raster *cur, const struct raster *below, int ox, i
 	return rc;
 }
 
+/* Carving's guard: the part (closed mesh, box bp) eroded by r_mm in 3D
+ * (slice/erode.h, pitch pixel_mm, n layers of layer_mm), read a layer at
+ * a time into *guard (w x h, owned) through the carving's crop map; src
+ * (its own slicer, owned) feeds the eroder *er. */
+static int guard_open(const struct mesh *part, const struct box3 *bp, double r_mm, double pixel_mm,
+		      double layer_mm, int n, int w, int h, struct slice_mid_source *src,
+		      struct slice_eroder **er, struct raster **guard, struct err *e)
+{
+	struct slice_erode_params ep;
+	struct slice_erode_source es;
+	int rc = slice_new(part, &src->slicer, e);
+
+	if (rc)
+		return rc;
+	memset(&ep, 0, sizeof ep);
+	ep.r_mm = r_mm;
+	ep.pixel_mm = pixel_mm;
+	ep.layer_mm = layer_mm;
+	ep.layer_count = n;
+	ep.x0_mm = bp->lo.x;
+	ep.y0_mm = bp->lo.y;
+	ep.x1_mm = bp->hi.x;
+	ep.y1_mm = bp->hi.y;
+	es.layer = slice_mid_layer;
+	es.ctx = src;
+	rc = slice_erode_new(&ep, &es, er, e);
+	if (!rc && !(*guard = raster_new(w, h)))
+		rc = ERR_SET(e, ERR_NOMEM, "hollow: out of memory (carving layers)");
+	return rc;
+}
+
 int hl_repair_build(const struct mesh *res, struct slicer *res_slicer, size_t part_nv,
 		    size_t part_nt, const struct raster_map *map, int antialias, const struct hl_fill *fill,
 		    const struct hl_fill *frag, double layer_mm, double px_mm, double py_mm,
-		    double reach_mm, int carve, int threads, struct hl_repair *r, struct err *e)
+		    double reach_mm, double wall_mm, int carve, int threads, struct hl_repair *r,
+		    struct err *e)
 {
 	struct mesh part = {res->v, res->tri, part_nv, part_nt};
 	struct slicer *sp = NULL;
+	struct slice_mid_source gsrc = {NULL, layer_mm}; /* carving: the guard's slices */
+	struct slice_eroder *ger = NULL;                /* carving: the part eroded */
+	struct raster *guard = NULL;
 	struct raster *cur = NULL, *last = NULL, *orig = NULL, *last_orig = NULL, *inside = NULL;
 	struct raster *last_part = NULL; /* carving: the part at the layer below */
-	uint8_t *near = NULL;            /* carving: where it may take solid */
 	struct paths preg;               /* carving: the part's section */
 	int32_t *lab = NULL;
 	struct paths reg;
@@ -504,26 +501,31 @@ int hl_repair_build(const struct mesh *res, struct slicer *res_slicer, size_t pa
 	last_orig = raster_new(w, h);
 	inside = raster_new(w, h);
 	last_part = carve ? raster_new(w, h) : NULL;
-	near = carve ? mem_alloc((size_t)w * (size_t)h) : NULL;
 	lab = mem_alloc((size_t)w * (size_t)h * sizeof *lab);
 	rd.memo = verify_fit_memo_new(0);
 	if (!r->layer || !cur || !last || !orig || !last_orig || !inside || !lab || !rd.memo ||
-	    (carve && (!last_part || !near))) {
+	    (carve && !last_part)) {
 		rc = ERR_SET(e, ERR_NOMEM, "hollow: out of memory (mending layers)");
 		goto out;
 	}
 	r->n = n;
 	r->layer_mm = layer_mm;
 	rc = slice_new(&part, &sp, e);
+	if (!rc && carve && wall_mm - HL_CARVE_SLACK_PX * fmax(px_mm, py_mm) > 0)
+		rc = guard_open(&part, &bp, wall_mm - HL_CARVE_SLACK_PX * fmax(px_mm, py_mm),
+				fmin(px_mm, py_mm), layer_mm, n, w, h, &gsrc, &ger, &guard, e);
 	/* mending: top down, each layer under its mended one; carving: bottom
 	 * up, each layer over its carved one (last: the layer done before,
-	 * last_orig its drawing) */
-	for (int step = 0; !rc && step <= k1 - k0; step++) {
+	 * last_orig its drawing), and on past the voids' layers while a layer
+	 * loses solid (a top rising until it closes) */
+	for (int step = 0, cut = 0; !rc; step++) {
 		int k = carve ? k0 + step : k1 - step;
 		double z = (k + 0.5) * layer_mm;
 		struct raster_map m = *map;
 		int left = 0;
 		size_t cnt = 0;
+		if (carve ? k >= n || (k > k1 && !cut) : k < k0)
+			break;
 		raster_clear(cur);
 		if ((rc = slice_at(res_slicer, z, &reg, NULL, e)) != 0)
 			break;
@@ -540,12 +542,16 @@ int hl_repair_build(const struct mesh *res, struct slicer *res_slicer, size_t pa
 		}
 		memcpy(orig->px, cur->px, (size_t)w * (size_t)h);
 		if (have_last && carve) {
-			/* near the voids drawn in this layer or the one below (a
-			 * collapsed top may rise a layer, no more) */
-			memset(near, 0, (size_t)w * (size_t)h);
-			near_void(cur, inside, HL_CARVE_NEAR_PX, near, lab);
-			near_void(last_orig, last_part, HL_CARVE_NEAR_PX, near, lab);
-			rc = carve_layer(cur, last, x0, y0, inside, last_part, near, &rd, &left, e);
+			if (guard) {
+				struct raster_map gm = *map;
+				gm.b[0] -= x0;
+				gm.b[1] -= y0;
+				raster_clear(guard);
+				rc = slice_erode_raster(ger, k, &gm, 0, guard, e);
+				if (rc)
+					break;
+			}
+			rc = carve_layer(cur, last, x0, y0, inside, last_part, guard, &rd, &left, e);
 			if (rc)
 				break;
 		} else if (have_last) {
@@ -579,6 +585,7 @@ int hl_repair_build(const struct mesh *res, struct slicer *res_slicer, size_t pa
 			r->layers++;
 		}
 		r->layers_left += left;
+		cut = carve && cnt > 0;
 		{
 			/* cur, mended or carved, is the next layer's last */
 			struct raster *t = last;
@@ -605,7 +612,9 @@ out:
 	raster_free(last_orig);
 	raster_free(inside);
 	raster_free(last_part);
-	mem_free(near);
+	raster_free(guard);
+	slice_erode_free(ger);
+	slice_free(gsrc.slicer);
 	mem_free(lab);
 	verify_fit_memo_free(rd.memo);
 	paths_fini(&reg);

@@ -42,11 +42,10 @@ int hl_layer_draw_stepped(const struct paths *region, const struct paths *part,
 /* Passes of the mending a layer gets at most. */
 #define HL_REPAIR_PASSES 8
 
-/* Carving (hl_repair_build, carve 1) takes only pixels within this many
- * pixels (Chebyshev) of a void drawn in the layer or the one under it:
- * the part's walls round the design lose at most that in the plane, and
- * a void's top rises at most a layer. */
-#define HL_CARVE_NEAR_PX 2
+/* Carving (hl_repair_build, carve 1) keeps the wall to the part's
+ * outside but this many pixels (the larger pitch): it cuts only where the
+ * part's 3D distance to its outside is wall_mm less that. */
+#define HL_CARVE_SLACK_PX 2
 
 /* One mended pixel: image pixel (x, y) drawn with gray g (raised by the
  * mending, 0 where carved). */
@@ -88,20 +87,22 @@ void hl_repair_fini(struct hl_repair *r);
  *   hl_layer_draw_stepped, antialias unused), bottom up: an over pixel of
  *   layer k + 1 is cleared where the part at layers k and k + 1 is wholly
  *   solid (what it hangs over is a void, and no cut opens the part's
- *   surface) and within HL_CARVE_NEAR_PX of a void drawn in layer k + 1
- *   or k, up to HL_REPAIR_PASSES passes a layer, over the layers the voids
- *   span and one more each way (a void of the fill's may ask a cut of the
- *   layer above those, which is then not read again: the caller's check
- *   reads it); layer
- *   k + 2 is read against the carved layer in its turn.  Only solid over
- *   the voids is taken.
+ *   surface) and, for wall_mm > HL_CARVE_SLACK_PX pixels, where the part's
+ *   3D distance to its outside is at least wall_mm less those pixels, up
+ *   to HL_REPAIR_PASSES passes a layer, over the layers the voids span and
+ *   one more each way, and on upward while a layer loses solid (a void's
+ *   top rising until it closes: each layer's cuts lie over the void of the
+ *   one under it, farther than the reach from its solid); layer k + 2 is
+ *   read against the carved layer in its turn.  Only solid over the voids
+ *   is taken.
  * Only pixels inside the part change.  r (zeroed or finished) receives
  * the changed pixels per layer.  0, ERR_NOMEM, ERR_LIMIT (a box over
  * 2^28 pixels) or a slicer error. */
 int hl_repair_build(const struct mesh *res, struct slicer *res_slicer, size_t part_nv,
 		    size_t part_nt, const struct raster_map *map, int antialias, const struct hl_fill *fill,
 		    const struct hl_fill *frag, double layer_mm, double px_mm, double py_mm,
-		    double reach_mm, int carve, int threads, struct hl_repair *r, struct err *e);
+		    double reach_mm, double wall_mm, int carve, int threads, struct hl_repair *r,
+		    struct err *e);
 
 /* Draw the mended pixels of the print layer at mid-plane z_mm into r, an
  * image of the map r was built on, drawn as r was built (hl_layer_draw, or

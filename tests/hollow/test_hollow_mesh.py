@@ -95,23 +95,24 @@ def check_manifold(pts, tris):
     return dict(bad), euler, vol
 
 
-def hollow_cube(out, *settings):
-    """Hollow the 8 mm cube into out (its format by the extension) with
-    --set settings; its metrics."""
-    run("run", CUBE, "-o", out, "--engine", "hollow", "--set", "height_mm=8",
+def hollow_cube(out, *settings, height_mm=8):
+    """Hollow the cube, height_mm tall (8 mm), into out (its format by the
+    extension) with --set settings; its metrics."""
+    run("run", CUBE, "-o", out, "--engine", "hollow", "--set", f"height_mm={height_mm}",
         *[a for kv in settings for a in ("--set", kv)], "--threads", "2", "--quiet",
         "--metrics", out + ".json")
     with open(out + ".json") as f:
         return json.load(f)
 
 
-def reslice_verify(tmp, stl):
+def reslice_verify(tmp, stl, height_mm=8):
     """stl sliced again with --engine solid, and infilld verify --strict's
-    report of it against the plain 8 mm cube (raises when it fails)."""
+    report of it against the plain cube height_mm tall (raises when it
+    fails)."""
     re = os.path.join(tmp, "re.sl1")
     solid = os.path.join(tmp, "solid.sl1")
     run("run", stl, "-o", re, "--engine", "solid", "--threads", "2", "--quiet")
-    run("run", CUBE, "-o", solid, "--engine", "solid", "--set", "height_mm=8",
+    run("run", CUBE, "-o", solid, "--engine", "solid", "--set", f"height_mm={height_mm}",
         "--threads", "2", "--quiet")
     return json.loads(run("verify", re, "--solid", solid, "--strict"))
 
@@ -226,6 +227,30 @@ class HollowMeshOptimisedTest(unittest.TestCase):
         for k in ("slope_excess_px", "enclosed_void_mm3", "fin_px", "min_wall_mm", "islands"):
             self.assertEqual(own[k], rep[k], k)
         self.assertGreater(rep["enclosed_void_mm3"], 0)
+
+    def test_long_roofs_carved_to_their_tops(self):
+        # the 12 mm cube's four voids have roofs exactly at the rule, 100
+        # layers long: stepped at pixel centres they recede 1 px a layer
+        # where 1.06 are designed, so their tops end a few pixels wide
+        # (28 px over at 0.47 px when the cuts stayed within 2 px of the
+        # design); carved on upward, each top rises until it closes,
+        # keeping the wall to the outside less 2 px
+        stl = os.path.join(self.tmp.name, "c12.stl")
+        m = hollow_cube(stl, "fill=false", height_mm=12)
+        h = m["hollow"]
+        self.assertGreaterEqual(h["voids_optimised"], 4)
+        self.assertGreater(h["volume_reduction"], 0.35)
+        self.assertEqual(h["mended"]["layers_left"], 0)
+        bad, _, vol = check_manifold(*read_stl(stl))
+        self.assertEqual(bad, {})
+        rep = reslice_verify(self.tmp.name, stl, height_mm=12)
+        self.assertEqual(rep["interior_overhang_px"], 0, rep)
+        self.assertLessEqual(rep["slope_excess_px"], rep["tolerance_px"])
+        self.assertEqual(rep["islands_added"], 0)
+        pixel_mm = 120.96 / 2560  # the SL1's display width / pixels
+        self.assertGreaterEqual(rep["min_wall_mm"], 1.0 - 2 * pixel_mm)
+        self.assertGreaterEqual(rep["min_wall_vertical_mm"], 1.0 - 2 * pixel_mm)
+        self.assertEqual(h["verify"]["slope_excess_px"], rep["slope_excess_px"])
 
     def test_slope_under_a_pixel_a_layer(self):
         # alpha 30 allows 0.029 mm a layer, under the 0.047 mm pixel a

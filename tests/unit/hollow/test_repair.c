@@ -148,9 +148,10 @@ static void check_stack(const struct mesh *m, const struct hl_repair *r,
 	check_stack_as(m, 0, r, rep, solid_mm3);
 }
 
-/* Mend m's layers (carve: carve its stepped layers); every mended pixel
- * inside the cube's image. */
-static void mend_as(const struct mesh *m, int carve, struct hl_repair *r)
+/* Mend m's layers (carve: carve its stepped layers, keeping wall_mm to
+ * the cube's outside less the slack); every mended pixel inside the
+ * cube's image. */
+static void mend_as(const struct mesh *m, int carve, double wall_mm, struct hl_repair *r)
 {
 	struct raster_map map;
 	struct slicer *sl = NULL;
@@ -161,8 +162,8 @@ static void mend_as(const struct mesh *m, int carve, struct hl_repair *r)
 	map_of(&map);
 	memset(r, 0, sizeof *r);
 	REQUIRE_OK(slice_new(m, &sl, &e), &e);
-	REQUIRE_OK(hl_repair_build(m, sl, 8, 12, &map, 1, NULL, NULL, LAYER, PX, PX, reach, carve, 1, r,
-				   &e),
+	REQUIRE_OK(hl_repair_build(m, sl, 8, 12, &map, 1, NULL, NULL, LAYER, PX, PX, reach, wall_mm,
+				   carve, 1, r, &e),
 		   &e);
 	slice_free(sl);
 	for (int k = 0; k < r->n; k++)
@@ -176,7 +177,7 @@ static void mend_as(const struct mesh *m, int carve, struct hl_repair *r)
 
 static void mend(const struct mesh *m, struct hl_repair *r)
 {
-	mend_as(m, 0, r);
+	mend_as(m, 0, 1.0, r);
 }
 
 static void test_flat_roof_mended(void)
@@ -257,50 +258,85 @@ static double void_half(double z, double beta_deg)
 	return z <= 5 ? 3 : 3 - (z - 5) * t;
 }
 
-/* Carved pixels of r, against the analytic void (independent of the
- * drawing): each was solid in its layer's drawing (its centre outside the
- * void's square there), is cleared, and lies over the void of the layer
- * under it, at most HL_CARVE_NEAR_PX pixels (and half a pixel of
- * rounding) beyond that square, so the walls round the void keep all but
- * that. */
-static void check_carved_over_void(const struct hl_repair *r, double beta_deg)
+/* Is pixel (x, y) of layer k void in the carved stack: its centre inside
+ * the analytic void's square at the layer's mid-plane (the stepped
+ * drawing), or carved by r? */
+static int void_at(const struct hl_repair *r, int k, int x, int y, double beta_deg)
 {
+	double half = void_half((k + 0.5) * LAYER, beta_deg);
 	struct raster_map map;
 
+	if (k < 0 || k >= r->n)
+		return 0;
 	map_of(&map);
-	for (int k = 0; k < r->n; k++)
-		for (size_t i = 0; i < r->layer[k].n; i++) {
-			double x = (r->layer[k].px[i].x + 0.5 - map.b[0]) * PX - 5;
-			double y = (r->layer[k].px[i].y + 0.5 - map.b[1]) * PX - 5;
-			double d = fmax(fabs(x), fabs(y));
-			double hb = void_half((k - 0.5) * LAYER, beta_deg);
-			double ho = void_half((k + 0.5) * LAYER, beta_deg);
-			CHECK_EQ_INT(r->layer[k].px[i].g, 0);
-			CHECK(hb > 0 && d < hb + (HL_CARVE_NEAR_PX + 0.5) * PX);
-			CHECK(d >= ho - 1e-9);
-		}
+	if (fmax(fabs((x + 0.5 - map.b[0]) * PX - 5), fabs((y + 0.5 - map.b[1]) * PX - 5)) < half)
+		return 1;
+	for (size_t i = 0; i < r->layer[k].n; i++)
+		if (r->layer[k].px[i].x == x && r->layer[k].px[i].y == y)
+			return 1;
+	return 0;
 }
 
-/* Carve m's stepped layers; report them drawn and carved. */
-static void carve_roof(double beta_deg, struct hl_repair *r, struct verify_report *drawn,
-		       struct verify_report *carved, double *carved_mm3)
+/* Carved pixels of r, against the analytic void (independent of the
+ * drawing and of the verifier): each was solid in its layer's drawing (its
+ * centre outside the void's square there), is cleared, hangs (the pixel
+ * under it and its eight neighbours are void in the carved stack: farther
+ * than the slope from the solid below), and keeps the wall to the cube's
+ * outside less HL_CARVE_SLACK_PX pixels and a pixel of the guard's own
+ * sampling.  *rise: layers carved above the analytic void's top. */
+static void check_carved_over_void(const struct hl_repair *r, double beta_deg, double wall_mm,
+				   int *rise)
+{
+	struct raster_map map;
+	int top = -1;
+
+	map_of(&map);
+	for (int k = 0; k < r->n; k++) {
+		if (void_half((k + 0.5) * LAYER, beta_deg) > 0)
+			top = k;
+		for (size_t i = 0; i < r->layer[k].n; i++) {
+			const struct hl_mend *q = &r->layer[k].px[i];
+			double x = (q->x + 0.5 - map.b[0]) * PX, y = (q->y + 0.5 - map.b[1]) * PX;
+			double z = (k + 0.5) * LAYER;
+			double out = fmin(fmin(fmin(x, SIDE - x), fmin(y, SIDE - y)), fmin(z, SIDE - z));
+			int hangs = 1;
+			CHECK_EQ_INT(q->g, 0);
+			CHECK(fmax(fabs(x - 5), fabs(y - 5)) >= void_half(z, beta_deg) - 1e-9);
+			for (int dy = -1; dy <= 1; dy++)
+				for (int dx = -1; dx <= 1; dx++)
+					hangs &= void_at(r, k - 1, q->x + dx, q->y + dy, beta_deg);
+			CHECK(hangs);
+			CHECK(out >= wall_mm - (HL_CARVE_SLACK_PX + 1) * PX);
+		}
+	}
+	*rise = 0;
+	for (int k = top + 1; k < r->n; k++)
+		if (r->layer[k].n)
+			*rise = k - top;
+}
+
+/* Carve m's stepped layers keeping wall_mm; report them drawn and
+ * carved; *rise: layers carved above the analytic top. */
+static void carve_roof(double beta_deg, double wall_mm, struct hl_repair *r,
+		       struct verify_report *drawn, struct verify_report *carved,
+		       double *carved_mm3, int *rise)
 {
 	struct mesh m;
 	double sd, sc;
 
 	part(&m, beta_deg);
-	mend_as(&m, 1, r);
+	mend_as(&m, 1, wall_mm, r);
 	check_stack_as(&m, 1, NULL, drawn, &sd);
 	check_stack_as(&m, 1, r, carved, &sc);
-	printf("roof %g deg, stepped: drawn %lld px over (excess %.3f px), carved %lld px over "
-	       "(excess %.3f px) on %d layers, %lld pixels on %d layers, %.4f mm3, void %.3f -> "
-	       "%.3f mm3, %d left\n",
-	       beta_deg, drawn->interior_overhang_px, drawn->slope_excess_px,
+	check_carved_over_void(r, beta_deg, wall_mm, rise);
+	printf("roof %g deg, stepped, wall %g mm: drawn %lld px over (excess %.3f px), carved "
+	       "%lld px over (excess %.3f px) on %d layers, %lld pixels on %d layers, %.4f mm3, "
+	       "void %.3f -> %.3f mm3, %d left, top risen %d layers\n",
+	       beta_deg, wall_mm, drawn->interior_overhang_px, drawn->slope_excess_px,
 	       carved->interior_overhang_px, carved->slope_excess_px, carved->overhang_layers,
 	       r->pixels, r->layers, r->mm3, drawn->enclosed_void_mm3, carved->enclosed_void_mm3,
-	       r->layers_left);
+	       r->layers_left, *rise);
 	*carved_mm3 = sc - sd;
-	check_carved_over_void(r, beta_deg);
 	mem_free(m.v);
 	mem_free(m.tri);
 }
@@ -315,8 +351,9 @@ static void test_stepped_roof_carved(void)
 	struct hl_repair r;
 	struct verify_report drawn, carved;
 	double mm3;
+	int rise;
 
-	carve_roof(44, &r, &drawn, &carved, &mm3);
+	carve_roof(44, 1.0, &r, &drawn, &carved, &mm3, &rise);
 	CHECK(drawn.interior_overhang_px > 0);
 	CHECK(drawn.slope_excess_px > VERIFY_TOLERANCE_PX);
 	CHECK_EQ_INT(carved.interior_overhang_px, 0);
@@ -333,22 +370,51 @@ static void test_stepped_roof_carved(void)
 	hl_repair_fini(&r);
 }
 
-/* The limit: pixel steps recede 1 px a layer at most (two read 2 px,
- * over the 0.05 mm slope plus 0.2 px), so a long roof exactly at the rule
- * (1.06 px a layer) falls 0.06 px a layer behind; carving stays within
- * HL_CARVE_NEAR_PX of the design, so near the top some pixels are left
- * over and counted (the check then fails: nothing is hidden). */
-static void test_stepped_roof_limit(void)
+/* A long roof exactly at the rule (1.06 px a layer, 60 layers): pixel
+ * steps recede 1 px a layer at most (two read 2 px, over the 0.05 mm
+ * slope plus 0.2 px), so the carved roof falls 0.06 px a layer behind the
+ * design and its top ends a few pixels wide; carved on upward, the top
+ * rises, narrowing a pixel and more a side a layer, until it closes: every
+ * layer passes, and the top rose a few layers, no more. */
+static void test_stepped_roof_at_the_rule(void)
 {
 	struct hl_repair r;
 	struct verify_report drawn, carved;
 	double mm3;
+	int rise;
 
-	carve_roof(45, &r, &drawn, &carved, &mm3);
+	carve_roof(45, 1.0, &r, &drawn, &carved, &mm3, &rise);
+	CHECK(drawn.interior_overhang_px > 0);
+	CHECK_EQ_INT(carved.interior_overhang_px, 0);
+	CHECK(carved.slope_excess_px <= VERIFY_TOLERANCE_PX);
+	CHECK_EQ_INT(carved.islands, 0);
+	CHECK_EQ_INT(r.layers_left, 0);
+	/* 60 layers 0.064 px behind: about 4 px at the top, closed within
+	 * as many layers */
+	CHECK(rise >= 1 && rise <= 5);
+	verify_report_fini(&drawn);
+	verify_report_fini(&carved);
+	hl_repair_fini(&r);
+}
+
+/* The guard: where the top may not rise without thinning the wall to the
+ * outside (here 2.1 mm asked over a roof whose top lies 2.02 mm under the
+ * cube's top face), the cuts stop at the wall less its slack, and what
+ * still reads over is left and counted (the check then fails: nothing is
+ * hidden). */
+static void test_stepped_roof_wall_kept(void)
+{
+	struct hl_repair r;
+	struct verify_report drawn, carved;
+	double mm3;
+	int rise;
+
+	carve_roof(45, 2.1, &r, &drawn, &carved, &mm3, &rise);
 	CHECK(carved.interior_overhang_px > 0);
 	CHECK(carved.interior_overhang_px < drawn.interior_overhang_px);
 	CHECK(r.layers_left > 0);
 	CHECK_EQ_INT(carved.islands, 0);
+	CHECK(rise <= 1);
 	verify_report_fini(&drawn);
 	verify_report_fini(&carved);
 	hl_repair_fini(&r);
@@ -359,6 +425,7 @@ int main(void)
 	RUN(test_flat_roof_mended);
 	RUN(test_steep_roof_kept);
 	RUN(test_stepped_roof_carved);
-	RUN(test_stepped_roof_limit);
+	RUN(test_stepped_roof_at_the_rule);
+	RUN(test_stepped_roof_wall_kept);
 	return harness_report();
 }
