@@ -16,6 +16,7 @@
  * ~2n circumcentres (n = a loop's samples, a few hundred).
  */
 #include <math.h>
+#include <stdint.h>
 #include <string.h>
 
 #include "engine/core/err.h"
@@ -29,6 +30,105 @@ static int inside_loop(const double *xy, size_t n, double x, double y)
 	int in = 0;
 
 	for (size_t i = 0, j = n - 1; i < n; j = i++) {
+		double xi = xy[2 * i], yi = xy[2 * i + 1], xj = xy[2 * j], yj = xy[2 * j + 1];
+		if ((yi > y) != (yj > y) && x < (xj - xi) * (y - yi) / (yj - yi) + xi)
+			in = !in;
+	}
+	return in;
+}
+
+/* The loop's edges by horizontal slab: inside_slabs() tests only the
+ * edges whose y-range meets the query's slab, with the same crossing
+ * test as inside_loop(), so the answer is the same (an edge that does
+ * not span y adds no crossing) in O(edges per slab) instead of O(n).
+ * A loop of fewer than 64 vertices, or one whose edges would fill more
+ * than 16 n entries (long edges), is tested whole (ns 0). */
+struct slabs {
+	double y0, inv_h; /* slab k: y in [y0 + k / inv_h, y0 + (k + 1) / inv_h) */
+	size_t ns;
+	size_t *start;    /* edges of slab k: edge[start[k] .. start[k + 1]) */
+	uint32_t *edge;   /* edge i joins vertices i and i - 1 (mod n) */
+};
+
+static size_t slab_of(const struct slabs *S, double y)
+{
+	double k = floor((y - S->y0) * S->inv_h);
+
+	return k < 0 ? 0 : k >= (double)S->ns ? S->ns - 1 : (size_t)k;
+}
+
+/* Build S over the loop xy (n vertices); ns 0 (whole-loop tests) when
+ * small, stretched or out of memory.  Frees with slabs_fini. */
+static void slabs_build(struct slabs *S, const double *xy, size_t n)
+{
+	double y0 = INFINITY, y1 = -INFINITY;
+	size_t total = 0;
+
+	memset(S, 0, sizeof *S);
+	if (n < 64 || n > UINT32_MAX)
+		return;
+	for (size_t i = 0; i < n; i++) {
+		y0 = fmin(y0, xy[2 * i + 1]);
+		y1 = fmax(y1, xy[2 * i + 1]);
+	}
+	if (!(y1 > y0))
+		return;
+	S->ns = n / 4;
+	S->y0 = y0;
+	S->inv_h = (double)S->ns / (y1 - y0);
+	for (size_t i = 0, j = n - 1; i < n; j = i++)
+		total += slab_of(S, fmax(xy[2 * i + 1], xy[2 * j + 1])) -
+			 slab_of(S, fmin(xy[2 * i + 1], xy[2 * j + 1])) + 1;
+	if (total > 16 * n ||
+	    !(S->start = mem_calloc(S->ns + 1, sizeof *S->start)) ||
+	    !(S->edge = mem_alloc(total * sizeof *S->edge))) {
+		mem_free(S->start);
+		memset(S, 0, sizeof *S);
+		return;
+	}
+	for (size_t i = 0, j = n - 1; i < n; j = i++)
+		for (size_t k = slab_of(S, fmin(xy[2 * i + 1], xy[2 * j + 1]));
+		     k <= slab_of(S, fmax(xy[2 * i + 1], xy[2 * j + 1])); k++)
+			S->start[k + 1]++;
+	for (size_t k = 0; k < S->ns; k++)
+		S->start[k + 1] += S->start[k];
+	{
+		size_t *fill = mem_alloc((S->ns + 1) * sizeof *fill);
+		if (!fill) {
+			mem_free(S->start);
+			mem_free(S->edge);
+			memset(S, 0, sizeof *S);
+			return;
+		}
+		memcpy(fill, S->start, (S->ns + 1) * sizeof *fill);
+		for (size_t i = 0, j = n - 1; i < n; j = i++)
+			for (size_t k = slab_of(S, fmin(xy[2 * i + 1], xy[2 * j + 1]));
+			     k <= slab_of(S, fmax(xy[2 * i + 1], xy[2 * j + 1])); k++)
+				S->edge[fill[k]++] = (uint32_t)i;
+		mem_free(fill);
+	}
+}
+
+static void slabs_fini(struct slabs *S)
+{
+	mem_free(S->start);
+	mem_free(S->edge);
+	memset(S, 0, sizeof *S);
+}
+
+/* inside_loop(xy, n, x, y) through S. */
+static int inside_slabs(const struct slabs *S, const double *xy, size_t n, double x, double y)
+{
+	size_t k;
+	int in = 0;
+
+	if (!S->ns)
+		return inside_loop(xy, n, x, y);
+	if (y < S->y0 || y > S->y0 + (double)S->ns / S->inv_h)
+		return 0; /* no edge spans y */
+	k = slab_of(S, y);
+	for (size_t q = S->start[k]; q < S->start[k + 1]; q++) {
+		size_t i = S->edge[q], j = i ? i - 1 : n - 1;
 		double xi = xy[2 * i], yi = xy[2 * i + 1], xj = xy[2 * j], yj = xy[2 * j + 1];
 		if ((yi > y) != (yj > y) && x < (xj - xi) * (y - yi) / (yj - yi) + xi)
 			in = !in;
@@ -59,9 +159,11 @@ int hl_poles(const double *xy, size_t n, double *dir, double *ub, struct err *e)
 	double *cc = NULL, *raw = NULL;
 	signed char *cin = NULL;
 	uint32_t fan[512];
+	struct slabs S;
 	int rc = 0;
 
 	delaunay_init(&dt);
+	slabs_build(&S, xy, n);
 	pts = mem_alloc(n * sizeof *pts);
 	raw = mem_alloc(n * sizeof *raw);
 	if (!pts || !raw)
@@ -89,7 +191,8 @@ int hl_poles(const double *xy, size_t n, double *dir, double *ub, struct err *e)
 			double d;
 			if (cin[t] < 0) {
 				delaunay_circumcenter_mm(&dt, pts, t, &cc[2 * t], &cc[2 * t + 1]);
-				cin[t] = (signed char)inside_loop(xy, n, cc[2 * t], cc[2 * t + 1]);
+				cin[t] = (signed char)inside_slabs(&S, xy, n, cc[2 * t],
+								   cc[2 * t + 1]);
 			}
 			if (!cin[t])
 				continue;
@@ -116,6 +219,7 @@ int hl_poles(const double *xy, size_t n, double *dir, double *ub, struct err *e)
 nomem:
 	rc = ERR_SET(e, ERR_NOMEM, "voronoi poles of %zu samples: out of memory", n);
 out:
+	slabs_fini(&S);
 	delaunay_fini(&dt);
 	mem_free(pts);
 	mem_free(cc);

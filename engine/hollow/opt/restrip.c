@@ -32,7 +32,14 @@
  * support-free by construction.  Clearance to the surface is tested on the
  * path's triangles at offset 0, as void.c does.  A pair with no such strip
  * (a slab leaning past alpha: no offset reaches the loop above) ends the
- * void there.  O(n m) per pair of loops of n and m vertices.
+ * void there.  O(n m) per pair of loops of n and m vertices up to
+ * RS_FULL_CELLS cells; larger pairs (a 156 mm gear's loops: 4,734 x 4,734)
+ * search bands round the diagonal j = i m / n first, a narrow one and
+ * then strip.c's, each at most RS_MAX_CELLS cells: O(n (n / 32)) time and
+ * memory, where the full grid took 22 M cells (560 MB) and about 4 s a
+ * pair.  A band can miss a strip the full grid holds, never return one
+ * that fails the check below; a pair no band within the cap joins ends
+ * the void there.
  */
 #include <math.h>
 #include <stdint.h>
@@ -78,10 +85,36 @@ struct rs {
 	const unsigned char *flr;
 	double reach;
 	double floor2; /* squared longest cross edge from a floor vertex (mm^2) */
-	/* DP grid (na + 1) x (nb + 1) */
+	/* DP grid: row i (0..na) holds cells j = ws(i) .. ws(i) + bw - 1
+	 * of 0..nb (bw = nb + 1: the full grid) */
 	double *cost, *lo, *hi;
 	unsigned char *from;
+	size_t bw;
 };
+
+/* Pairs up to this many grid cells are searched in full (every loop of
+ * the bench models: up to about 400 x 400). */
+#define RS_FULL_CELLS ((size_t)1 << 20)
+/* No band of more cells is searched (25 bytes a cell). */
+#define RS_MAX_CELLS ((size_t)1 << 22)
+
+/* First cell (column) of row i's band. */
+static size_t band_start(const struct rs *s, size_t i)
+{
+	size_t half = s->bw / 2;
+	double c = (double)i * (double)s->nb / (double)s->na;
+	size_t ws = c > (double)half ? (size_t)(c - (double)half) : 0;
+
+	return ws + s->bw > s->nb + 1 ? s->nb + 1 - s->bw : ws;
+}
+
+/* Index of cell (i, j) in the band storage, or SIZE_MAX outside it. */
+static size_t cell_at(const struct rs *s, size_t i, size_t j)
+{
+	size_t ws = band_start(s, i);
+
+	return j >= ws && j < ws + s->bw ? i * s->bw + (j - ws) : SIZE_MAX;
+}
 
 /* I_ij for grid cell (i, j) (indices relative to the start pair). */
 static int cell_iv(const struct rs *s, size_t i, size_t j, double *t0, double *t1)
@@ -123,42 +156,45 @@ static double tri_area(struct vec3 a, struct vec3 b, struct vec3 c)
 	return 0.5 * v3_len(v3_cross(v3_sub(b, a), v3_sub(c, a)));
 }
 
-/* The DP from cell (0, 0) to (na, nb) (the same edge); 1 if a path exists. */
+/* The DP from cell (0, 0) to (na, nb) (the same edge) over the band of
+ * width s->bw; 1 if a path exists. */
 static int run_dp(struct rs *s)
 {
-	size_t na = s->na, nb = s->nb, W = nb + 1;
+	size_t na = s->na, nb = s->nb, bw = s->bw;
 	double t0, t1;
 
-	for (size_t k = 0; k < (na + 1) * W; k++)
+	for (size_t k = 0; k < (na + 1) * bw; k++)
 		s->cost[k] = INFINITY;
 	if (!cell_iv(s, 0, 0, &t0, &t1))
 		return 0;
 	s->cost[0] = 0;
 	s->lo[0] = t0;
 	s->hi[0] = t1;
-	for (size_t i = 0; i <= na; i++)
-		for (size_t j = 0; j <= nb; j++) {
-			size_t c = i * W + j;
+	for (size_t i = 0; i <= na; i++) {
+		size_t ws = band_start(s, i);
+		for (size_t j = ws; j < ws + bw; j++) {
+			size_t c = i * bw + (j - ws), cd;
 			double c0 = s->cost[c];
 			if (!isfinite(c0))
 				continue;
 			/* i-step: triangle (a_i, b_j, a_{i+1}); a_{i+1} starts afresh */
-			if (i < na && cell_iv(s, i + 1, j, &t0, &t1)) {
+			if (i < na && (cd = cell_at(s, i + 1, j)) != SIZE_MAX &&
+			    cell_iv(s, i + 1, j, &t0, &t1)) {
 				double t = c0 + tri_area(lower_at(s, i, s->lo[c]), upper_at(s, j),
 							 lower_at(s, i + 1, t0));
 				if (i + 1 == na && j == nb) { /* closing cell: a_0's interval */
 					t0 = fmax(t0, s->lo[0]);
 					t1 = fmin(t1, s->hi[0]);
 				}
-				if (t0 <= t1 && t < s->cost[c + W]) {
-					s->cost[c + W] = t;
-					s->lo[c + W] = t0;
-					s->hi[c + W] = t1;
-					s->from[c + W] = 0;
+				if (t0 <= t1 && t < s->cost[cd]) {
+					s->cost[cd] = t;
+					s->lo[cd] = t0;
+					s->hi[cd] = t1;
+					s->from[cd] = 0;
 				}
 			}
 			/* j-step: triangle (b_j, b_{j+1}, a_i); a_i's interval narrows */
-			if (j < nb && cell_iv(s, i, j + 1, &t0, &t1)) {
+			if (j < nb && j + 1 < ws + bw && cell_iv(s, i, j + 1, &t0, &t1)) {
 				double l0 = fmax(t0, s->lo[c]), l1 = fmin(t1, s->hi[c]);
 				double t = c0 + tri_area(upper_at(s, j), upper_at(s, j + 1),
 							 lower_at(s, i, l0));
@@ -174,7 +210,8 @@ static int run_dp(struct rs *s)
 				}
 			}
 		}
-	return isfinite(s->cost[na * W + nb]);
+	}
+	return isfinite(s->cost[cell_at(s, na, nb)]);
 }
 
 /* Strip between loop k (lower) and k+1 (placed at Q): offsets of loop k
@@ -186,8 +223,9 @@ static int restrip_pair(struct hl_void *v, size_t k, const double *Q, double rea
 {
 	struct rs s = {v, v->off[k], v->off[k + 1] - v->off[k], v->off[k + 1],
 		       v->off[k + 2] - v->off[k + 1], 0, 0, Q, flr, reach_mm, 0,
-		       NULL, NULL, NULL, NULL};
-	size_t na = s.na, nb = s.nb, W = nb + 1, steps = na + nb, cells = (na + 1) * W;
+		       NULL, NULL, NULL, NULL, 0};
+	size_t na = s.na, nb = s.nb, steps = na + nb, cells = (na + 1) * (nb + 1);
+	size_t nmax = na > nb ? na : nb, bands[3], nbands = 0;
 	size_t *pi = NULL, *pj = NULL, cand[3] = {0, 0, 0};
 	double *lo = NULL, *hi = NULL;
 	double best[3] = {INFINITY, INFINITY, INFINITY};
@@ -228,6 +266,21 @@ static int restrip_pair(struct hl_void *v, size_t k, const double *Q, double rea
 				break;
 			}
 	}
+	/* the full grid, or bands of half-width n / 32 + 16 and n / 8 + 6
+	 * (strip.c's), each within the cap */
+	if (cells <= RS_FULL_CELLS) {
+		bands[nbands++] = nb + 1;
+	} else {
+		size_t hw[2] = {nmax / 32 + 16, nmax / 8 + 6};
+		for (int b = 0; b < 2; b++) {
+			size_t bw = 2 * hw[b] + 1 < nb + 1 ? 2 * hw[b] + 1 : nb + 1;
+			if ((na + 1) * bw <= RS_MAX_CELLS && (!nbands || bw > bands[nbands - 1]))
+				bands[nbands++] = bw;
+		}
+		if (!nbands)
+			goto out; /* no strip within the cap: the void ends here */
+	}
+	cells = (na + 1) * bands[nbands - 1];
 	s.cost = mem_alloc(cells * sizeof *s.cost);
 	s.lo = mem_alloc(cells * sizeof *s.lo);
 	s.hi = mem_alloc(cells * sizeof *s.hi);
@@ -240,14 +293,18 @@ static int restrip_pair(struct hl_void *v, size_t k, const double *Q, double rea
 		rc = ERR_NOMEM;
 		goto out;
 	}
-	for (int c = 0; c < 3 && !found && isfinite(best[c]); c++) {
+	for (size_t t = 0; t < 3 * nbands && !found; t++) {
+		int c = (int)(t % 3);
 		size_t i = na, j = nb;
+		if (!isfinite(best[c]))
+			continue;
+		s.bw = bands[t / 3];
 		s.jb0 = cand[c];
 		if (!run_dp(&s))
 			continue;
 		/* walk back: grid points of the path, last to first */
 		for (size_t q = steps + 1; q-- > 0;) {
-			size_t cc = i * W + j;
+			size_t cc = cell_at(&s, i, j);
 			pi[q] = i;
 			pj[q] = j;
 			if (q == 0)

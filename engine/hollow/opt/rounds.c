@@ -168,6 +168,8 @@ struct round_in {
 	struct paths *base;       /* round 1 offset per slice (rounds >= 2), or NULL */
 	struct paths *keep;       /* round 1: receives the offset per slice */
 	const struct hl_nlp_opts *nlp;
+	struct progress *prog;    /* polled for cancellation while voids are built */
+	double f;                 /* its fraction meanwhile */
 };
 
 static void slices_fini(struct hl_slice *sl, size_t n)
@@ -202,6 +204,10 @@ struct chain_ctx {
 	struct hl_void *vv;
 	size_t nvv, vcap;
 	size_t unbuilt;           /* runs of loops no void could be made of */
+	double deadline_s;        /* optimise_s's end (progress_now_s), 0: none */
+	struct progress *prog;    /* polled for cancellation (may be NULL) */
+	double f;                 /* prog's fraction meanwhile */
+	int spent;                /* the deadline passed: no more voids built */
 };
 
 /* Section 6's P -> P~ where the paper applies it, at contours whose
@@ -272,6 +278,14 @@ static int chain_voids(struct chain_ctx *x, const struct hl_loop **chain, size_t
 		struct hl_void V;
 		void *arr;
 		int rc;
+		/* each void can take seconds on long loops: the wall-clock guard
+		 * and a cancelled job are heard between them */
+		if (x->deadline_s > 0 && progress_now_s() >= x->deadline_s)
+			x->spent = 1;
+		if (x->spent)
+			return 0;
+		if (x->prog && (rc = progress_update(x->prog, x->f, e)) != 0)
+			return rc;
 		hl_void_init(&V);
 		rc = hl_void_build(chain + a, b - a, x->blk, &V, &used, e);
 		if (rc < 0)
@@ -506,10 +520,11 @@ static int round_voids(const struct round_in *in, struct hl_opt_stats *o, struct
 		struct hl_block blk = {blocked, &bx};
 		const struct hl_loop **chain = mem_alloc(((size_t)nslices + 1) * sizeof *chain);
 		struct chain_ctx cx = {&blk, hl_reach_slope(in->nlp->alpha_rad), c->wall_next_mm,
-				       c->smooth_passes, vv, nvv, vcap, 0};
+				       c->smooth_passes, vv, nvv, vcap, 0, in->nlp->deadline_s,
+				       in->prog, in->f, 0};
 		if (!chain)
 			goto nomem;
-		for (int k = 0; k < nslices; k++)
+		for (int k = 0; k < nslices && !rc && !cx.spent; k++)
 			for (size_t a = 0; a < sl[k].n; a++) {
 				size_t len = 0;
 				if (down[k][a] >= 0)
@@ -518,13 +533,14 @@ static int round_voids(const struct round_in *in, struct hl_opt_stats *o, struct
 				     aa = kk + 1 < nslices ? up[kk][aa] : -1, kk++)
 					chain[len++] = &sl[kk].loop[aa];
 				rc = chain_voids(&cx, chain, 0, len, e);
-				if (rc)
+				if (rc || cx.spent)
 					break;
 			}
 		vv = cx.vv;
 		nvv = cx.nvv;
 		vcap = cx.vcap;
 		o->groups_unbuilt += cx.unbuilt;
+		o->budget_spent |= cx.spent;
 		if (rc) {
 			mem_free(chain);
 			goto out;
@@ -901,7 +917,8 @@ int hl_opt_run(const struct mesh *part, const struct hl_opt_params *c, struct pr
 	for (int r = 1; r <= c->rounds; r++) {
 		struct round_in in = {c,     res, r == 1 ? c->wall_mm : c->wall_next_mm,
 				      sj,    &nslices, m, thin_mm, r == 1 ? tmax : 0, stack_count,
-				      r == 1 ? NULL : base, r == 1 ? base : NULL, &nlp};
+				      r == 1 ? NULL : base, r == 1 ? base : NULL, &nlp,
+				      prog, (double)(r - 1) / c->rounds};
 		struct hl_void *vv = NULL;
 		size_t nvv = 0, kept = 0;
 		double f0 = (double)(r - 1) / c->rounds, f1 = (double)r / c->rounds, t0;

@@ -12,8 +12,9 @@
  * triangles the caller blocks (they meet the outer surface) cost
  * infinity, which is what keeps the strip clear of the part's skin.  The
  * start pair is a_0 and its nearest b.  A band of width W around the
- * diagonal is searched first (O(n W) area evaluations), the full grid
- * (O(n m)) only if the band has no admissible path.
+ * diagonal is searched first (O(n W) area evaluations and memory), the
+ * full grid (O(n m)) only if the band has no admissible path and the
+ * grid is small (STRIP_FULL_CELLS, STRIP_MAX_CELLS).
  */
 #include <math.h>
 #include <string.h>
@@ -60,21 +61,57 @@ static int tri_blocked(const struct strip_in *s, struct vec3 a, struct vec3 b, s
 	       s->block->blocked(s->block->ctx, a, b, c);
 }
 
+/* Pairs up to this many grid cells search strip.c's band and then the
+ * full grid (every loop of the bench models: up to about 400 x 400);
+ * larger pairs (a 156 mm gear's loops: 4,734 x 4,734, where the full grid
+ * took 22 M cells, 200 MB and seconds a pair) bands of at most
+ * STRIP_MAX_CELLS cells (9 bytes a cell). */
+#define STRIP_FULL_CELLS ((size_t)1 << 20)
+#define STRIP_MAX_CELLS ((size_t)1 << 22)
+
+/* Row i's window of the band |j - i nb / na| <= band: columns jlo..jhi. */
+static void band_row(const struct strip_in *s, size_t band, size_t i, size_t *jlo, size_t *jhi)
+{
+	double jc = (double)i * (double)s->nb / (double)s->na;
+
+	*jlo = jc > (double)band ? (size_t)(jc - (double)band) : 0;
+	*jhi = (size_t)fmin((double)s->nb, jc + (double)band);
+}
+
+/* Cells a row of the band stores (band >= max(na, nb): the full grid). */
+static size_t band_width(const struct strip_in *s, size_t band)
+{
+	return 2 * band + 2 < s->nb + 1 ? 2 * band + 2 : s->nb + 1;
+}
+
+/* Index of cell (i, j) in the band's storage, SIZE_MAX outside it. */
+static size_t band_cell(const struct strip_in *s, size_t band, size_t i, size_t j)
+{
+	size_t jlo, jhi;
+
+	band_row(s, band, i, &jlo, &jhi);
+	return j >= jlo && j <= jhi ? i * band_width(s, band) + (j - jlo) : SIZE_MAX;
+}
+
 /* DP within |j - i * nb / na| <= band (band >= max(na, nb): full grid).
- * cost/from: (na+1) x (nb+1).  Returns the final cost. */
+ * cost/from: (na + 1) x band_width cells, row i holding its window.
+ * Returns the final cost. */
 static double run_dp(const struct strip_in *s, size_t band, double *cost, unsigned char *from)
 {
-	size_t na = s->na, nb = s->nb, W = nb + 1;
+	size_t na = s->na, nb = s->nb, W = band_width(s, band);
 
-	for (size_t k = 0; k < (na + 1) * (nb + 1); k++)
+	for (size_t k = 0; k < (na + 1) * W; k++)
 		cost[k] = INFINITY;
 	cost[0] = 0;
 	for (size_t i = 0; i <= na; i++) {
-		double jc = (double)i * (double)nb / (double)na;
-		size_t jlo = jc > (double)band ? (size_t)(jc - (double)band) : 0;
-		size_t jhi = (size_t)fmin((double)nb, jc + (double)band);
+		size_t jlo, jhi, nlo = 0, nhi = 0;
+		band_row(s, band, i, &jlo, &jhi);
+		if (i < na)
+			band_row(s, band, i + 1, &nlo, &nhi);
 		for (size_t j = jlo; j <= jhi; j++) {
-			double c = cost[i * W + j];
+			size_t at = i * W + (j - jlo);
+			size_t to = i < na && j >= nlo && j <= nhi ? (i + 1) * W + (j - nlo) : SIZE_MAX;
+			double c = cost[at];
 			struct vec3 ai = pa_at(s, i), bj = pb_at(s, j);
 			if (!isfinite(c))
 				continue;
@@ -83,25 +120,26 @@ static double run_dp(const struct strip_in *s, size_t band, double *cost, unsign
 				continue;
 			/* the (expensive) clearance test only for a triangle that
 			 * would improve its target cell */
-			if (i < na) { /* triangle (a_i, b_j, a_{i+1}) */
+			if (to != SIZE_MAX) {
+				/* triangle (a_i, b_j, a_{i+1}) */
 				struct vec3 A = pa_at(s, i), B = pb_at(s, j), C = pa_at(s, i + 1);
 				double t = c + tri_area_cost(s, A, B, C, C, B);
-				if (t < cost[(i + 1) * W + j] && !tri_blocked(s, A, B, C)) {
-					cost[(i + 1) * W + j] = t;
-					from[(i + 1) * W + j] = 0;
+				if (t < cost[to] && !tri_blocked(s, A, B, C)) {
+					cost[to] = t;
+					from[to] = 0;
 				}
 			}
-			if (j < nb) { /* triangle (b_j, b_{j+1}, a_i) */
+			if (j < jhi) { /* triangle (b_j, b_{j+1}, a_i) */
 				struct vec3 A = pb_at(s, j), B = pb_at(s, j + 1), C = pa_at(s, i);
 				double t = c + tri_area_cost(s, A, B, C, C, B);
-				if (t < cost[i * W + j + 1] && !tri_blocked(s, A, B, C)) {
-					cost[i * W + j + 1] = t;
-					from[i * W + j + 1] = 1;
+				if (t < cost[at + 1] && !tri_blocked(s, A, B, C)) {
+					cost[at + 1] = t;
+					from[at + 1] = 1;
 				}
 			}
 		}
 	}
-	return cost[na * W + nb];
+	return cost[band_cell(s, band, na, nb)];
 }
 
 int hl_strip(const double *pa, double za, size_t na, uint32_t ida, const double *pb, double zb,
@@ -109,7 +147,7 @@ int hl_strip(const double *pa, double za, size_t na, uint32_t ida, const double 
 	     size_t *tcap, struct hl_xedge **xe, size_t *nxe, size_t *xcap, struct err *e)
 {
 	struct strip_in s = {pa, pb, za, zb, na, nb, 0, 0, block, 0, 0};
-	size_t W = nb + 1, steps = na + nb, i, j, k;
+	size_t steps = na + nb, i, j, k, bands[3], nbands = 0;
 	double *cost = NULL, best = INFINITY;
 	unsigned char *from = NULL;
 	size_t *pi = NULL, *pj = NULL;
@@ -139,8 +177,29 @@ int hl_strip(const double *pa, double za, size_t na, uint32_t ida, const double 
 		r = fmax(3.0, 0.25 * fmax(hi[0] - lo[0], hi[1] - lo[1]));
 		s.reach2 = r * r;
 	}
-	cost = mem_alloc((na + 1) * (nb + 1) * sizeof *cost);
-	from = mem_alloc((na + 1) * (nb + 1));
+	{
+		/* the bands tried, narrow to wide: strip.c's n / 8 + 6 then the
+		 * full grid; past STRIP_FULL_CELLS a narrower n / 32 + 16 first
+		 * and none over STRIP_MAX_CELLS */
+		size_t nmax = na > nb ? na : nb, full = na + nb;
+		if ((na + 1) * (nb + 1) <= STRIP_FULL_CELLS) {
+			bands[nbands++] = nmax / 8 + 6;
+			if (nmax / 8 + 6 < nmax)
+				bands[nbands++] = full;
+		} else {
+			size_t cand[3] = {nmax / 32 + 16, nmax / 8 + 6, full};
+			for (int b = 0; b < 3; b++)
+				if ((na + 1) * band_width(&s, cand[b]) <= STRIP_MAX_CELLS &&
+				    (!nbands || band_width(&s, cand[b]) > band_width(&s, bands[nbands - 1])))
+					bands[nbands++] = cand[b];
+			if (!nbands) {
+				rc = 1; /* no strip within the cap */
+				goto out;
+			}
+		}
+	}
+	cost = mem_alloc((na + 1) * band_width(&s, bands[nbands - 1]) * sizeof *cost);
+	from = mem_alloc((na + 1) * band_width(&s, bands[nbands - 1]));
 	pi = mem_alloc((steps + 1) * sizeof *pi);
 	pj = mem_alloc((steps + 1) * sizeof *pj);
 	if (!cost || !from || !pi || !pj)
@@ -150,10 +209,12 @@ int hl_strip(const double *pa, double za, size_t na, uint32_t ida, const double 
 	 * does pass 2 run the DP with the test inside (clearance tests cost
 	 * BVH queries; pass 2 needs them on every improving candidate). */
 	for (s.use_block = 0; s.use_block <= 1; s.use_block++) {
-		size_t band = (na > nb ? na : nb) / 8 + 6;
+		size_t band = 0;
 		int ok = 1;
-		if (!isfinite(run_dp(&s, band, cost, from)) &&
-		    (band >= na && band >= nb ? 1 : !isfinite(run_dp(&s, na + nb, cost, from)))) {
+		for (size_t b = 0; b < nbands && !band; b++)
+			if (isfinite(run_dp(&s, bands[b], cost, from)))
+				band = bands[b];
+		if (!band) {
 			if (s.use_block) {
 				rc = 1; /* no admissible strip */
 				goto out;
@@ -168,7 +229,7 @@ int hl_strip(const double *pa, double za, size_t na, uint32_t ida, const double 
 			pj[k] = j;
 			if (k == 0)
 				break;
-			if (from[i * W + j] == 0)
+			if (from[band_cell(&s, band, i, j)] == 0)
 				i--;
 			else
 				j--;

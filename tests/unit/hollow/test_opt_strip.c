@@ -191,6 +191,32 @@ static void test_strip_frustum(void)
 	hl_loop_fini(&B);
 }
 
+/* Long loops (two 100 x 100 mm squares sampled every 0.1 mm: 4,000 x
+ * 4,000 grid cells, past STRIP_FULL_CELLS) are searched in a band round
+ * the diagonal, in bounded memory; the band holds the known optimum,
+ * the vertical band of the equal squares (area perimeter x dz). */
+static void test_strip_long_loops_banded(void)
+{
+	struct hl_loop A, B;
+	struct strip_out o;
+	struct err e;
+	double area;
+
+	memset(&o, 0, sizeof o);
+	err_clear(&e);
+	rect_loop(&A, 0, 0, 100, 100, 0.1, 0.25, 0);
+	rect_loop(&B, 0, 0, 100, 100, 0.1, 0.75, 1);
+	REQUIRE(A.xy && B.xy && A.n == 4000 && B.n == 4000);
+	REQUIRE_OK(hl_strip(A.xy, A.z_mm, A.n, 0, B.xy, B.z_mm, B.n, (uint32_t)A.n, NULL, &o.tri,
+			    &o.nt, &o.tcap, &o.xe, &o.nxe, &o.xcap, &e),
+		   &e);
+	area = check_band(&A, &B, &o, 0, 0, 50, 50);
+	CHECK_NEAR(area, 400 * 0.5, 1e-6);
+	strip_out_fini(&o);
+	hl_loop_fini(&A);
+	hl_loop_fini(&B);
+}
+
 /* Block callbacks (ctx: the vertex positions that may not be joined). */
 static int block_all(void *ctx, struct vec3 a, struct vec3 b, struct vec3 c)
 {
@@ -417,6 +443,45 @@ static void test_restrip_taper(void)
 		hl_loop_fini(&L[k]);
 }
 
+/* The same on long loops (tapering 60 mm squares sampled every 0.05 mm:
+ * 4,800 vertices a loop, past RS_FULL_CELLS): the band search still
+ * gives every pair its strip, every cross edge from a non-floor vertex
+ * within reach (re-measured), and the solver's check at alpha passes. */
+static void test_restrip_long_loops_banded(void)
+{
+	enum { NL = 4 };
+	struct hl_loop L[NL];
+	const struct hl_loop *lp[NL];
+	struct hl_void v;
+	struct hl_check c;
+	struct err e;
+	size_t used = 0, first = 99;
+	double reach = 0.95 * H_MM * tan(ALPHA);
+
+	err_clear(&e);
+	hl_void_init(&v);
+	for (int k = 0; k < NL; k++) {
+		double d = 0.2 * k;
+		rect_loop(&L[k], d, d, 60 - d, 60 - d, 0.05, 0.25 + H_MM * k, k);
+		lp[k] = &L[k];
+		REQUIRE(L[k].xy);
+	}
+	CHECK(L[0].n == 4800);
+	REQUIRE_OK(hl_void_build(lp, NL, NULL, &v, &used, &e), &e);
+	CHECK_EQ_INT(used, NL);
+	REQUIRE_OK(hl_void_restrip(&v, reach / H_MM, NULL, &first, &e), &e);
+	CHECK_EQ_INT(first, 0);
+	CHECK_EQ_INT(v.nloops, NL);
+	REQUIRE(v.start != NULL);
+	CHECK_EQ_INT(check_start(&v, v.start, reach), v.nxe);
+	hl_void_check(&v, v.start, ALPHA, 1e-3, &c);
+	CHECK_NUM(c.worst_edge_mm, <=, 1e-9);
+	CHECK_NUM(c.worst_face, <=, 1e-9);
+	hl_void_fini(&v);
+	for (int k = 0; k < NL; k++)
+		hl_loop_fini(&L[k]);
+}
+
 static void test_restrip_step_ends_void(void)
 {
 	enum { NL = 4 };
@@ -543,9 +608,11 @@ int main(void)
 {
 	RUN(test_strip_equal_squares);
 	RUN(test_strip_frustum);
+	RUN(test_strip_long_loops_banded);
 	RUN(test_strip_blocked);
 	RUN(test_void_build_prism);
 	RUN(test_restrip_taper);
+	RUN(test_restrip_long_loops_banded);
 	RUN(test_restrip_step_ends_void);
 	RUN(test_start_sweep);
 	return harness_report();
