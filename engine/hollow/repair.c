@@ -414,38 +414,6 @@ static int carve_layer(struct raster *cur, const struct raster *below, int ox, i
 	return rc;
 }
 
-/* Carving's guard: the part (closed mesh) eroded by r_mm in 3D
- * (slice/erode.h, pitch pixel_mm, n layers of layer_mm) over the XY box
- * of bp (material outside it is read as outside), read a layer at a time
- * into *guard (w x h, owned) through the carving's crop map; src (its own
- * slicer, owned) feeds the eroder *er. */
-static int guard_open(const struct mesh *part, const struct box3 *bp, double r_mm, double pixel_mm,
-		      double layer_mm, int n, int w, int h, struct slice_mid_source *src,
-		      struct slice_eroder **er, struct raster **guard, struct err *e)
-{
-	struct slice_erode_params ep;
-	struct slice_erode_source es;
-	int rc = slice_new(part, &src->slicer, e);
-
-	if (rc)
-		return rc;
-	memset(&ep, 0, sizeof ep);
-	ep.r_mm = r_mm;
-	ep.pixel_mm = pixel_mm;
-	ep.layer_mm = layer_mm;
-	ep.layer_count = n;
-	ep.x0_mm = bp->lo.x;
-	ep.y0_mm = bp->lo.y;
-	ep.x1_mm = bp->hi.x;
-	ep.y1_mm = bp->hi.y;
-	es.layer = slice_mid_layer;
-	es.ctx = src;
-	rc = slice_erode_new(&ep, &es, er, e);
-	if (!rc && !(*guard = raster_new(w, h)))
-		rc = ERR_SET(e, ERR_NOMEM, "hollow: out of memory (carving layers)");
-	return rc;
-}
-
 int hl_repair_build(const struct mesh *res, struct slicer *res_slicer, size_t part_nv,
 		    size_t part_nt, const struct raster_map *map, int antialias, const struct hl_fill *fill,
 		    const struct hl_fill *frag, double layer_mm, double px_mm, double py_mm,
@@ -513,17 +481,21 @@ int hl_repair_build(const struct mesh *res, struct slicer *res_slicer, size_t pa
 	r->layer_mm = layer_mm;
 	rc = slice_new(&part, &sp, e);
 	if (!rc && carve && wall_mm - HL_CARVE_SLACK_PX * fmax(px_mm, py_mm) > 0) {
-		/* eroded over the crop's part of the part only: a pixel of the
-		 * crop lies farther than the wall from this box's edge, so the
-		 * edge (read as outside) changes no pixel's answer */
+		/* the guard: the part eroded in 3D, read a layer at a time
+		 * through the crop's map, over the crop's part of the part only
+		 * (a pixel of the crop lies farther than the wall from this
+		 * box's edge, so the edge, read as outside, changes no pixel's
+		 * answer) */
 		double g = wall_mm + (pad + 2) * fmax(px_mm, py_mm);
 		struct box3 bg = bp;
 		bg.lo.x = fmax(bp.lo.x, bv.lo.x - g);
 		bg.lo.y = fmax(bp.lo.y, bv.lo.y - g);
 		bg.hi.x = fmin(bp.hi.x, bv.hi.x + g);
 		bg.hi.y = fmin(bp.hi.y, bv.hi.y + g);
-		rc = guard_open(&part, &bg, wall_mm - HL_CARVE_SLACK_PX * fmax(px_mm, py_mm),
-				fmin(px_mm, py_mm), layer_mm, n, w, h, &gsrc, &ger, &guard, e);
+		rc = slice_erode_mesh_new(&part, wall_mm - HL_CARVE_SLACK_PX * fmax(px_mm, py_mm),
+					  fmin(px_mm, py_mm), layer_mm, n, &bg, &gsrc, &ger, e);
+		if (!rc && !(guard = raster_new(w, h)))
+			rc = ERR_SET(e, ERR_NOMEM, "hollow: out of memory (carving layers)");
 	}
 	/* mending: top down, each layer under its mended one; carving: bottom
 	 * up, each layer over its carved one (last: the layer done before,

@@ -78,8 +78,6 @@ int hy_stack_init(struct hy_stack *st, const struct mesh *m, struct box3 box, do
 		  double layer_mm, int layers, double shell_mm, struct progress *pg,
 		  struct err *e)
 {
-	struct slice_erode_params ep;
-	struct slice_erode_source src;
 	struct slice_erode_info info;
 	struct slice_eroder *er = NULL;
 	struct slice_mid_source sc = {NULL, layer_mm};
@@ -91,20 +89,8 @@ int hy_stack_init(struct hy_stack *st, const struct mesh *m, struct box3 box, do
 
 	memset(st, 0, sizeof *st);
 	paths_init(&region);
-	if ((rc = slice_new(m, &sc.slicer, e)) != 0)
-		return rc;
-	memset(&ep, 0, sizeof ep);
-	ep.r_mm = shell_mm;
-	ep.pixel_mm = pitch_mm;
-	ep.layer_mm = layer_mm;
-	ep.layer_count = layers;
-	ep.x0_mm = box.lo.x;
-	ep.y0_mm = box.lo.y;
-	ep.x1_mm = box.hi.x;
-	ep.y1_mm = box.hi.y;
-	src.layer = slice_mid_layer;
-	src.ctx = &sc;
-	if ((rc = slice_erode_new(&ep, &src, &er, e)) != 0) {
+	if ((rc = slice_erode_mesh_new(m, shell_mm, pitch_mm, layer_mm, layers, &box, &sc, &er,
+				       e)) != 0) {
 		if (rc == ERR_LIMIT)
 			snprintf(e->field, sizeof e->field, "grid_mm");
 		goto out;

@@ -12,6 +12,7 @@
 #include "engine/slice/erode.h"
 #include "engine/core/err.h"
 #include "engine/core/mem.h"
+#include "engine/geom/vec.h"
 #include "engine/slice/layer.h"
 #include "engine/slice/slice.h"
 
@@ -609,4 +610,32 @@ int slice_erode_raster(struct slice_eroder *er, int k, const struct raster_map *
 		rc = slice_rasterize(&reg, map, antialias, r, e);
 	paths_fini(&reg);
 	return rc;
+}
+
+int slice_erode_mesh_new(const struct mesh *m, double r_mm, double pixel_mm, double layer_mm,
+			 int layer_count, const struct box3 *bb, struct slice_mid_source *src,
+			 struct slice_eroder **out, struct err *e)
+{
+	struct slice_erode_params ep;
+	struct slice_erode_source es;
+	int rc;
+
+	*out = NULL;
+	src->slicer = NULL;
+	src->layer_mm = layer_mm;
+	rc = slice_new(m, &src->slicer, e);
+	if (rc)
+		return rc;
+	memset(&ep, 0, sizeof ep);
+	ep.r_mm = r_mm;
+	ep.pixel_mm = pixel_mm;
+	ep.layer_mm = layer_mm;
+	ep.layer_count = layer_count;
+	ep.x0_mm = bb->lo.x;
+	ep.y0_mm = bb->lo.y;
+	ep.x1_mm = bb->hi.x;
+	ep.y1_mm = bb->hi.y;
+	es.layer = slice_mid_layer;
+	es.ctx = src; /* the caller's, outliving the eroder */
+	return slice_erode_new(&ep, &es, out, e);
 }

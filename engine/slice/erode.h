@@ -76,6 +76,18 @@ int slice_erode_new(const struct slice_erode_params *p, const struct slice_erode
 		    struct slice_eroder **out, struct err *e);
 void slice_erode_free(struct slice_eroder *er);
 
+/* The usual eroder: of mesh m (closed, printer frame, mm) by r_mm, on a
+ * grid of pixel_mm over the XY box of bb, layer_count layers of layer_mm,
+ * its mid-plane slices taken through a slicer of its own made into
+ * src->slicer (src->layer_mm set).  The caller frees *out with
+ * slice_erode_free and then src->slicer with slice_free, also on error
+ * (either may be NULL).  0 or slice_new's and slice_erode_new's errors. */
+struct mesh;
+struct box3;
+int slice_erode_mesh_new(const struct mesh *m, double r_mm, double pixel_mm, double layer_mm,
+			 int layer_count, const struct box3 *bb, struct slice_mid_source *src,
+			 struct slice_eroder **out, struct err *e);
+
 /* The eroded region of layer k (normalised, nm), replacing *region.  k
  * must not decrease from one call to the next (ERR_PARAM); asking for
  * the same k again is free.  Errors of the source are passed on. */

@@ -140,27 +140,9 @@ struct eroded {
 static int eroded_open(struct eroded *x, const struct mesh *m, double r_mm, double pixel_mm,
 		       double layer_mm, int layer_count, const struct box3 *bb, struct err *e)
 {
-	struct slice_erode_params ep;
-	struct slice_erode_source src;
-	int rc;
-
 	memset(x, 0, sizeof *x);
-	rc = slice_new(m, &x->sc.slicer, e);
-	if (rc)
-		return rc;
-	x->sc.layer_mm = layer_mm;
-	src.layer = slice_mid_layer;
-	src.ctx = &x->sc; /* x outlives the eroder */
-	memset(&ep, 0, sizeof ep);
-	ep.r_mm = r_mm;
-	ep.pixel_mm = pixel_mm;
-	ep.layer_mm = layer_mm;
-	ep.layer_count = layer_count;
-	ep.x0_mm = bb->lo.x;
-	ep.y0_mm = bb->lo.y;
-	ep.x1_mm = bb->hi.x;
-	ep.y1_mm = bb->hi.y;
-	return slice_erode_new(&ep, &src, &x->er, e);
+	return slice_erode_mesh_new(m, r_mm, pixel_mm, layer_mm, layer_count, bb, &x->sc, &x->er,
+				    e);
 }
 
 static void eroded_close(struct eroded *x)
