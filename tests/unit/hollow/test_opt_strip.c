@@ -123,22 +123,34 @@ out:
 	return area;
 }
 
+/* The strip between two equal squares of side side_mm sampled every s_mm
+ * (0.25 and 0.75 mm high) into o, checked as a band; A, B: the loops
+ * (the caller finishes them); *area: the band's (NAN when not built). */
+static void equal_squares(double side_mm, double s_mm, struct hl_loop *A, struct hl_loop *B,
+			  struct strip_out *o, double *area)
+{
+	struct err e;
+
+	*area = NAN;
+	memset(o, 0, sizeof *o);
+	err_clear(&e);
+	rect_loop(A, 0, 0, side_mm, side_mm, s_mm, 0.25, 0);
+	rect_loop(B, 0, 0, side_mm, side_mm, s_mm, 0.75, 1);
+	REQUIRE(A->xy && B->xy && A->n == (size_t)llround(4 * side_mm / s_mm));
+	REQUIRE_OK(hl_strip(A->xy, A->z_mm, A->n, 0, B->xy, B->z_mm, B->n, (uint32_t)A->n, NULL,
+			    &o->tri, &o->nt, &o->tcap, &o->xe, &o->nxe, &o->xcap, &e),
+		   &e);
+	*area = check_band(A, B, o, 0, 0, side_mm / 2, side_mm / 2);
+}
+
 static void test_strip_equal_squares(void)
 {
 	struct hl_loop A, B;
 	struct strip_out o;
-	struct err e;
 	double area;
 
-	memset(&o, 0, sizeof o);
-	err_clear(&e);
-	rect_loop(&A, 0, 0, 10, 10, 0.5, 0.25, 0);
-	rect_loop(&B, 0, 0, 10, 10, 0.5, 0.75, 1);
-	REQUIRE(A.xy && B.xy && A.n == 80);
-	REQUIRE_OK(hl_strip(A.xy, A.z_mm, A.n, 0, B.xy, B.z_mm, B.n, (uint32_t)A.n, NULL, &o.tri,
-			    &o.nt, &o.tcap, &o.xe, &o.nxe, &o.xcap, &e),
-		   &e);
-	area = check_band(&A, &B, &o, 0, 0, 5, 5);
+	equal_squares(10, 0.5, &A, &B, &o, &area);
+
 	/* the vertical band: perimeter x dz = 40 x 0.5 */
 	CHECK_NEAR(area, 20, 1e-6);
 	/* the least-area path stays next to the diagonal of the grid: its
@@ -199,18 +211,11 @@ static void test_strip_long_loops_banded(void)
 {
 	struct hl_loop A, B;
 	struct strip_out o;
-	struct err e;
 	double area;
 
-	memset(&o, 0, sizeof o);
-	err_clear(&e);
-	rect_loop(&A, 0, 0, 100, 100, 0.1, 0.25, 0);
-	rect_loop(&B, 0, 0, 100, 100, 0.1, 0.75, 1);
-	REQUIRE(A.xy && B.xy && A.n == 4000 && B.n == 4000);
-	REQUIRE_OK(hl_strip(A.xy, A.z_mm, A.n, 0, B.xy, B.z_mm, B.n, (uint32_t)A.n, NULL, &o.tri,
-			    &o.nt, &o.tcap, &o.xe, &o.nxe, &o.xcap, &e),
-		   &e);
-	area = check_band(&A, &B, &o, 0, 0, 50, 50);
+	equal_squares(100, 0.1, &A, &B, &o, &area);
+
+	CHECK_EQ_INT(A.n, 4000);
 	CHECK_NEAR(area, 400 * 0.5, 1e-6);
 	strip_out_fini(&o);
 	hl_loop_fini(&A);
