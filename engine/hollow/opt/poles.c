@@ -24,22 +24,28 @@
 #include "engine/geom/delaunay.h"
 #include "engine/hollow/opt/opt_int.h"
 
+/* Does the horizontal ray from (x, y) to +x cross the loop's edge from
+ * vertex j to vertex i?  The crossing-number test's one step. */
+static int edge_crosses(const double *xy, size_t i, size_t j, double x, double y)
+{
+	double xi = xy[2 * i], yi = xy[2 * i + 1], xj = xy[2 * j], yj = xy[2 * j + 1];
+
+	return (yi > y) != (yj > y) && x < (xj - xi) * (y - yi) / (yj - yi) + xi;
+}
+
 /* Crossing-number point-in-polygon for the loop xy (n vertices). */
 static int inside_loop(const double *xy, size_t n, double x, double y)
 {
 	int in = 0;
 
-	for (size_t i = 0, j = n - 1; i < n; j = i++) {
-		double xi = xy[2 * i], yi = xy[2 * i + 1], xj = xy[2 * j], yj = xy[2 * j + 1];
-		if ((yi > y) != (yj > y) && x < (xj - xi) * (y - yi) / (yj - yi) + xi)
-			in = !in;
-	}
+	for (size_t i = 0, j = n - 1; i < n; j = i++)
+		in ^= edge_crosses(xy, i, j, x, y);
 	return in;
 }
 
 /* The loop's edges by horizontal slab: inside_slabs() tests only the
- * edges whose y-range meets the query's slab, with the same crossing
- * test as inside_loop(), so the answer is the same (an edge that does
+ * edges whose y-range meets the query's slab, with inside_loop()'s
+ * edge_crosses(), so the answer is the same (an edge that does
  * not span y adds no crossing) in O(edges per slab) instead of O(n).
  * A loop of fewer than 64 vertices, or one whose edges would fill more
  * than 16 n entries (long edges), is tested whole (ns 0). */
@@ -128,10 +134,8 @@ static int inside_slabs(const struct slabs *S, const double *xy, size_t n, doubl
 		return 0; /* no edge spans y */
 	k = slab_of(S, y);
 	for (size_t q = S->start[k]; q < S->start[k + 1]; q++) {
-		size_t i = S->edge[q], j = i ? i - 1 : n - 1;
-		double xi = xy[2 * i], yi = xy[2 * i + 1], xj = xy[2 * j], yj = xy[2 * j + 1];
-		if ((yi > y) != (yj > y) && x < (xj - xi) * (y - yi) / (yj - yi) + xi)
-			in = !in;
+		size_t i = S->edge[q];
+		in ^= edge_crosses(xy, i, i ? i - 1 : n - 1, x, y);
 	}
 	return in;
 }
