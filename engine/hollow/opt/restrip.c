@@ -33,11 +33,10 @@
  * path's triangles at offset 0, as void.c does.  A pair with no such strip
  * (a slab leaning past alpha: no offset reaches the loop above) ends the
  * void there.  O(n m) per pair of loops of n and m vertices up to
- * RS_FULL_CELLS cells; larger pairs (a 156 mm gear's loops: 4,734 x 4,734)
- * search bands round the diagonal j = i m / n first, a narrow one and
- * then strip.c's, each at most RS_MAX_CELLS cells: O(n (n / 32)) time and
- * memory, where the full grid took 22 M cells (560 MB) and about 4 s a
- * pair.  A band can miss a strip the full grid holds, never return one
+ * HL_DP_FULL_CELLS cells; larger pairs (a 156 mm gear's loops: 4,734 x
+ * 4,734) search the bands of opt_int.h (HL_DP_*: 25 bytes a cell here),
+ * O(n (n / 32)) time and memory, where the full grid took 22 M cells
+ * (560 MB) and about 4 s a pair.  A band can miss a strip the full grid holds, never return one
  * that fails the check below; a pair no band within the cap joins ends
  * the void there.
  */
@@ -91,12 +90,6 @@ struct rs {
 	unsigned char *from;
 	size_t bw;
 };
-
-/* Pairs up to this many grid cells are searched in full (every loop of
- * the bench models: up to about 400 x 400). */
-#define RS_FULL_CELLS ((size_t)1 << 20)
-/* No band of more cells is searched (25 bytes a cell). */
-#define RS_MAX_CELLS ((size_t)1 << 22)
 
 /* First cell (column) of row i's band. */
 static size_t band_start(const struct rs *s, size_t i)
@@ -266,15 +259,15 @@ static int restrip_pair(struct hl_void *v, size_t k, const double *Q, double rea
 				break;
 			}
 	}
-	/* the full grid, or bands of half-width n / 32 + 16 and n / 8 + 6
-	 * (strip.c's), each within the cap */
-	if (cells <= RS_FULL_CELLS) {
+	/* the full grid, or the bands HL_DP_NARROW_HW and HL_DP_WIDE_HW,
+	 * each within the cap */
+	if (cells <= HL_DP_FULL_CELLS) {
 		bands[nbands++] = nb + 1;
 	} else {
-		size_t hw[2] = {nmax / 32 + 16, nmax / 8 + 6};
+		size_t hw[2] = {HL_DP_NARROW_HW(nmax), HL_DP_WIDE_HW(nmax)};
 		for (int b = 0; b < 2; b++) {
 			size_t bw = 2 * hw[b] + 1 < nb + 1 ? 2 * hw[b] + 1 : nb + 1;
-			if ((na + 1) * bw <= RS_MAX_CELLS && (!nbands || bw > bands[nbands - 1]))
+			if ((na + 1) * bw <= HL_DP_MAX_CELLS && (!nbands || bw > bands[nbands - 1]))
 				bands[nbands++] = bw;
 		}
 		if (!nbands)

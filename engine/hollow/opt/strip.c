@@ -14,7 +14,7 @@
  * start pair is a_0 and its nearest b.  A band of width W around the
  * diagonal is searched first (O(n W) area evaluations and memory), the
  * full grid (O(n m)) only if the band has no admissible path and the
- * grid is small (STRIP_FULL_CELLS, STRIP_MAX_CELLS).
+ * grid is small (opt_int.h, HL_DP_*: 9 bytes a cell here).
  */
 #include <math.h>
 #include <string.h>
@@ -60,14 +60,6 @@ static int tri_blocked(const struct strip_in *s, struct vec3 a, struct vec3 b, s
 	return s->use_block && s->block && s->block->blocked &&
 	       s->block->blocked(s->block->ctx, a, b, c);
 }
-
-/* Pairs up to this many grid cells search strip.c's band and then the
- * full grid (every loop of the bench models: up to about 400 x 400);
- * larger pairs (a 156 mm gear's loops: 4,734 x 4,734, where the full grid
- * took 22 M cells, 200 MB and seconds a pair) bands of at most
- * STRIP_MAX_CELLS cells (9 bytes a cell). */
-#define STRIP_FULL_CELLS ((size_t)1 << 20)
-#define STRIP_MAX_CELLS ((size_t)1 << 22)
 
 /* Row i's window of the band |j - i nb / na| <= band: columns jlo..jhi. */
 static void band_row(const struct strip_in *s, size_t band, size_t i, size_t *jlo, size_t *jhi)
@@ -178,18 +170,18 @@ int hl_strip(const double *pa, double za, size_t na, uint32_t ida, const double 
 		s.reach2 = r * r;
 	}
 	{
-		/* the bands tried, narrow to wide: strip.c's n / 8 + 6 then the
-		 * full grid; past STRIP_FULL_CELLS a narrower n / 32 + 16 first
-		 * and none over STRIP_MAX_CELLS */
+		/* the bands tried, narrow to wide: HL_DP_WIDE_HW then the full
+		 * grid; past HL_DP_FULL_CELLS HL_DP_NARROW_HW first and none
+		 * over HL_DP_MAX_CELLS */
 		size_t nmax = na > nb ? na : nb, full = na + nb;
-		if ((na + 1) * (nb + 1) <= STRIP_FULL_CELLS) {
-			bands[nbands++] = nmax / 8 + 6;
-			if (nmax / 8 + 6 < nmax)
+		if ((na + 1) * (nb + 1) <= HL_DP_FULL_CELLS) {
+			bands[nbands++] = HL_DP_WIDE_HW(nmax);
+			if (HL_DP_WIDE_HW(nmax) < nmax)
 				bands[nbands++] = full;
 		} else {
-			size_t cand[3] = {nmax / 32 + 16, nmax / 8 + 6, full};
+			size_t cand[3] = {HL_DP_NARROW_HW(nmax), HL_DP_WIDE_HW(nmax), full};
 			for (int b = 0; b < 3; b++)
-				if ((na + 1) * band_width(&s, cand[b]) <= STRIP_MAX_CELLS &&
+				if ((na + 1) * band_width(&s, cand[b]) <= HL_DP_MAX_CELLS &&
 				    (!nbands || band_width(&s, cand[b]) > band_width(&s, bands[nbands - 1])))
 					bands[nbands++] = cand[b];
 			if (!nbands) {

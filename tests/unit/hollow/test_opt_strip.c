@@ -204,7 +204,7 @@ static void test_strip_frustum(void)
 }
 
 /* Long loops (two 100 x 100 mm squares sampled every 0.1 mm: 4,000 x
- * 4,000 grid cells, past STRIP_FULL_CELLS) are searched in a band round
+ * 4,000 grid cells, past HL_DP_FULL_CELLS) are searched in a band round
  * the diagonal, in bounded memory; the band holds the known optimum,
  * the vertical band of the equal squares (area perimeter x dz). */
 static void test_strip_long_loops_banded(void)
@@ -449,7 +449,7 @@ static void test_restrip_taper(void)
 }
 
 /* The same on long loops (tapering 60 mm squares sampled every 0.05 mm:
- * 4,800 vertices a loop, past RS_FULL_CELLS): the band search still
+ * 4,800 vertices a loop, past HL_DP_FULL_CELLS): the band search still
  * gives every pair its strip, every cross edge from a non-floor vertex
  * within reach (re-measured), and the solver's check at alpha passes. */
 static void test_restrip_long_loops_banded(void)
