@@ -34,7 +34,7 @@
  * (a slab leaning past alpha: no offset reaches the loop above) ends the
  * void there.  O(n m) per pair of loops of n and m vertices up to
  * HL_DP_FULL_CELLS cells; larger pairs (a 156 mm gear's loops: 4,734 x
- * 4,734) search the bands of opt_int.h (HL_DP_*: 25 bytes a cell here),
+ * 4,734) search the bands of dpband.h (HL_DP_*: 25 bytes a cell here),
  * O(n (n / 32)) time and memory, where the full grid took 22 M cells
  * (560 MB) and about 4 s a pair.  A band can miss a strip the full grid holds, never return one
  * that fails the check below; a pair no band within the cap joins ends
@@ -47,6 +47,7 @@
 
 #include "engine/core/err.h"
 #include "engine/core/mem.h"
+#include "engine/hollow/opt/dpband.h"
 #include "engine/hollow/opt/opt_int.h"
 
 /* Offsets t with |w + t r| <= D (r unit): [t0, t1]; 0 if none. */

@@ -14,13 +14,14 @@
  * start pair is a_0 and its nearest b.  A band of width W around the
  * diagonal is searched first (O(n W) area evaluations and memory), the
  * full grid (O(n m)) only if the band has no admissible path and the
- * grid is small (opt_int.h, HL_DP_*: 9 bytes a cell here).
+ * grid is small (dpband.h, HL_DP_*: 9 bytes a cell here).
  */
 #include <math.h>
 #include <string.h>
 
 #include "engine/core/err.h"
 #include "engine/core/mem.h"
+#include "engine/hollow/opt/dpband.h"
 #include "engine/hollow/opt/opt_int.h"
 
 struct strip_in {
