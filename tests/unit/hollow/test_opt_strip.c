@@ -370,33 +370,48 @@ static size_t check_start(const struct hl_void *v, const double *l, double reach
 	return measured;
 }
 
+/* A tapering stack of nl squares of side side_mm at the bottom (half
+ * side less 0.2 mm a loop: walls leaning 0.2 mm per 0.5 mm layer, well
+ * inside alpha 45), sampled every s_mm, 0.25 mm up and H_MM apart, built
+ * into v (initialised here) and restripped: every loop used, none cut
+ * off, a start made.  L (nl loops) and v are the caller's to finish. */
+static void taper_restrip(int nl, double side_mm, double s_mm, struct hl_loop *L,
+			  struct hl_void *v)
+{
+	const struct hl_loop *lp[8];
+	struct err e;
+	size_t used = 0, first = 99;
+	double reach = 0.95 * H_MM * tan(ALPHA);
+
+	err_clear(&e);
+	hl_void_init(v);
+	REQUIRE(nl <= 8);
+	for (int k = 0; k < nl; k++) {
+		double d = 0.2 * k;
+		rect_loop(&L[k], d, d, side_mm - d, side_mm - d, s_mm, 0.25 + H_MM * k, k);
+		lp[k] = &L[k];
+		REQUIRE(L[k].xy);
+	}
+	REQUIRE_OK(hl_void_build(lp, (size_t)nl, NULL, v, &used, &e), &e);
+	CHECK_EQ_INT(used, nl);
+	REQUIRE_OK(hl_void_restrip(v, reach / H_MM, NULL, &first, &e), &e);
+	CHECK_EQ_INT(first, 0);
+	CHECK_EQ_INT(v->nloops, nl);
+	REQUIRE(v->start != NULL);
+}
+
 static void test_restrip_taper(void)
 {
 	enum { NL = 6 };
 	struct hl_loop L[NL];
-	const struct hl_loop *lp[NL];
 	struct hl_void v;
 	struct hl_check c;
 	struct err e;
-	size_t used = 0, first = 99;
 	double reach = 0.95 * H_MM * tan(ALPHA), *l = NULL, atop, v0, vs;
-	double s = 0.5 * H_MM * tan(ALPHA);
 
 	err_clear(&e);
-	hl_void_init(&v);
-	/* squares centred on (5, 5), half side 5 - 0.2 k: walls lean 0.2 mm
-	 * per 0.5 mm layer, well inside alpha 45 */
-	for (int k = 0; k < NL; k++) {
-		double d = 0.2 * k;
-		rect_loop(&L[k], d, d, 10 - d, 10 - d, s, 0.25 + H_MM * k, k);
-		lp[k] = &L[k];
-		REQUIRE(L[k].xy);
-	}
-	REQUIRE_OK(hl_void_build(lp, NL, NULL, &v, &used, &e), &e);
-	CHECK_EQ_INT(used, NL);
-	REQUIRE_OK(hl_void_restrip(&v, reach / H_MM, NULL, &first, &e), &e);
-	CHECK_EQ_INT(first, 0);
-	CHECK_EQ_INT(v.nloops, NL);
+	/* squares of 10 mm centred on (5, 5) */
+	taper_restrip(NL, 10, 0.5 * H_MM * tan(ALPHA), L, &v);
 	REQUIRE(v.start != NULL);
 	l = mem_alloc(v.nv * sizeof *l);
 	REQUIRE(l);
@@ -456,27 +471,12 @@ static void test_restrip_long_loops_banded(void)
 {
 	enum { NL = 4 };
 	struct hl_loop L[NL];
-	const struct hl_loop *lp[NL];
 	struct hl_void v;
 	struct hl_check c;
-	struct err e;
-	size_t used = 0, first = 99;
 	double reach = 0.95 * H_MM * tan(ALPHA);
 
-	err_clear(&e);
-	hl_void_init(&v);
-	for (int k = 0; k < NL; k++) {
-		double d = 0.2 * k;
-		rect_loop(&L[k], d, d, 60 - d, 60 - d, 0.05, 0.25 + H_MM * k, k);
-		lp[k] = &L[k];
-		REQUIRE(L[k].xy);
-	}
+	taper_restrip(NL, 60, 0.05, L, &v);
 	CHECK(L[0].n == 4800);
-	REQUIRE_OK(hl_void_build(lp, NL, NULL, &v, &used, &e), &e);
-	CHECK_EQ_INT(used, NL);
-	REQUIRE_OK(hl_void_restrip(&v, reach / H_MM, NULL, &first, &e), &e);
-	CHECK_EQ_INT(first, 0);
-	CHECK_EQ_INT(v.nloops, NL);
 	REQUIRE(v.start != NULL);
 	CHECK_EQ_INT(check_start(&v, v.start, reach), v.nxe);
 	hl_void_check(&v, v.start, ALPHA, 1e-3, &c);
