@@ -245,6 +245,57 @@ int paths_bbox(const struct paths *ps, struct pt2 *lo, struct pt2 *hi)
 	return any;
 }
 
+/* A loop measured once for paths_hole_owners. */
+struct loop_box {
+	double area2; /* twice the signed area, nm^2 */
+	struct pt2 lo, hi;
+};
+
+int paths_hole_owners(const struct paths *ps, size_t *owner)
+{
+	struct loop_box *lb;
+	size_t *outer, no = 0;
+
+	if (ps->n == 0)
+		return 0;
+	lb = mem_alloc(ps->n * sizeof *lb);
+	outer = mem_alloc(ps->n * sizeof *outer);
+	if (!lb || !outer) {
+		mem_free(lb);
+		mem_free(outer);
+		return ERR_NOMEM;
+	}
+	for (size_t i = 0; i < ps->n; i++) {
+		struct paths one = {(struct path *)&ps->v[i], 1, 1};
+		lb[i].area2 = (double)path_area2_nm2(&ps->v[i]);
+		if (!paths_bbox(&one, &lb[i].lo, &lb[i].hi))
+			lb[i].area2 = 0;
+		owner[i] = SIZE_MAX;
+		if (lb[i].area2 > 0)
+			outer[no++] = i;
+	}
+	for (size_t i = 0; i < ps->n; i++) {
+		struct pt2 q;
+		size_t best = SIZE_MAX;
+		if (lb[i].area2 >= 0)
+			continue;
+		q = ps->v[i].pts[0];
+		for (size_t k = 0; k < no; k++) {
+			const struct loop_box *b = &lb[outer[k]];
+			struct paths one = {(struct path *)&ps->v[outer[k]], 1, 1};
+			if (q.x < b->lo.x || q.x > b->hi.x || q.y < b->lo.y || q.y > b->hi.y ||
+			    (best != SIZE_MAX && b->area2 >= lb[best].area2))
+				continue;
+			if (paths_winding(&one, q))
+				best = outer[k];
+		}
+		owner[i] = best;
+	}
+	mem_free(lb);
+	mem_free(outer);
+	return 0;
+}
+
 double paths_distance_mm(const struct paths *ps, struct pt2 q)
 {
 	double best = INFINITY;

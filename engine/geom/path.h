@@ -85,6 +85,17 @@ int paths_winding(const struct paths *ps, struct pt2 q);
 /* Bounding box of all points; returns 0 when ps has no points. */
 int paths_bbox(const struct paths *ps, struct pt2 *lo, struct pt2 *hi);
 
+/* The outer loop of each hole of a normalised region.  owner[i] receives,
+ * for each clockwise path i (a hole), the index of the smallest
+ * counter-clockwise path whose inside holds the hole's first point, and
+ * SIZE_MAX for counter-clockwise paths, paths of under 3 points or of zero
+ * area, and holes that no loop holds.  Areas and bounding boxes are taken
+ * once and the winding test runs only on loops whose box holds the point,
+ * so a layer of many voids costs holes x outers box tests, not that many
+ * passes over every vertex.  owner has ps->n entries, caller-owned.
+ * Returns 0 or ERR_NOMEM (owner then undefined). */
+int paths_hole_owners(const struct paths *ps, size_t *owner);
+
 /* Distance in mm from q to the nearest edge of the closed paths. */
 double paths_distance_mm(const struct paths *ps, struct pt2 q);
 

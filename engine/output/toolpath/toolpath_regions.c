@@ -30,13 +30,16 @@
  * shrunk past its inradius from self-crossing raw edges, O(n^2) crossings
  * per polygon, so removing them first matters for layers of many small
  * islands (lattice struts).  Each hole goes with the smallest outer loop
- * around it.  kept receives shallow copies (no ownership); returns the
- * number of paths dropped. */
+ * around it (paths_hole_owners; owner has in->n entries).  kept receives
+ * shallow copies (no ownership); returns the number of paths dropped, or
+ * (size_t)-1 when out of memory. */
 static size_t prune_vanishing(const struct paths *in, double d, struct paths *kept,
-			      unsigned char *mark)
+			      unsigned char *mark, size_t *owner)
 {
 	size_t dropped = 0;
 
+	if (paths_hole_owners(in, owner))
+		return (size_t)-1;
 	for (size_t i = 0; i < in->n; i++) {
 		struct paths one = {&in->v[i], 1, 1};
 		struct pt2 lo, hi;
@@ -45,23 +48,11 @@ static size_t prune_vanishing(const struct paths *in, double d, struct paths *ke
 		    ((double)(hi.x - lo.x) <= 2 * d || (double)(hi.y - lo.y) <= 2 * d))
 			mark[i] = 1;
 	}
-	for (size_t i = 0; i < in->n; i++) {
-		size_t best = SIZE_MAX;
-		double best_a = 0;
-		if (in->v[i].n == 0 || path_area2_nm2(&in->v[i]) >= 0)
-			continue;
-		for (size_t j = 0; j < in->n; j++) {
-			struct paths one = {&in->v[j], 1, 1};
-			double a = (double)path_area2_nm2(&in->v[j]);
-			if (a <= 0 || (best != SIZE_MAX && a >= best_a))
-				continue;
-			if (paths_winding(&one, in->v[i].pts[0])) {
-				best = j;
-				best_a = a;
-			}
-		}
-		mark[i] = best != SIZE_MAX && mark[best];
-	}
+	for (size_t i = 0; i < in->n; i++)
+		if (owner[i] != SIZE_MAX)
+			mark[i] = mark[owner[i]];
+		else if (in->v[i].n > 0 && path_area2_nm2(&in->v[i]) < 0)
+			mark[i] = 0; /* a hole no loop holds */
 	kept->n = 0;
 	for (size_t i = 0; i < in->n; i++) {
 		if (mark[i])
@@ -76,6 +67,7 @@ static int offset(const struct paths *in, double delta_nm, struct paths *out, st
 {
 	struct paths kept;
 	unsigned char *mark;
+	size_t *owner;
 	int rc;
 
 	if (in->n == 0) {
@@ -86,13 +78,15 @@ static int offset(const struct paths *in, double delta_nm, struct paths *out, st
 		return clip_offset(in, delta_nm, CLIP_JOIN_MITER, 3.0, 0, out, e);
 	kept.v = mem_alloc(in->n * sizeof *kept.v);
 	mark = mem_alloc(in->n);
-	if (!kept.v || !mark) {
+	owner = mem_alloc(in->n * sizeof *owner);
+	if (!kept.v || !mark || !owner ||
+	    prune_vanishing(in, -delta_nm, &kept, mark, owner) == (size_t)-1) {
 		mem_free(kept.v);
 		mem_free(mark);
+		mem_free(owner);
 		return ERR_SET(e, ERR_NOMEM, "out of memory offsetting a region");
 	}
 	kept.cap = in->n;
-	prune_vanishing(in, -delta_nm, &kept, mark);
 	if (kept.n == 0) {
 		paths_clear(out);
 		rc = 0;
@@ -101,6 +95,7 @@ static int offset(const struct paths *in, double delta_nm, struct paths *out, st
 	}
 	mem_free(kept.v);
 	mem_free(mark);
+	mem_free(owner);
 	return rc;
 }
 
@@ -237,39 +232,27 @@ static int skin_of(const struct tp_config *c, const struct tp_layer_in *in, cons
 /* Keep the pieces (outer loop with its holes) of a normalised region whose
  * outer loop encloses at least min_mm2; drops slivers at sloped walls
  * that are too small to hold solid lines.  Each hole goes with the
- * smallest outer loop containing it.  O(holes x outers). */
+ * smallest outer loop containing it (paths_hole_owners). */
 static int drop_small(struct paths *ps, double min_mm2, struct err *e)
 {
 	unsigned char *keep;
-	double *area;
+	size_t *owner;
 	size_t k = 0;
 
 	if (ps->n == 0)
 		return 0;
 	keep = mem_calloc(ps->n, 1);
-	area = mem_calloc(ps->n, sizeof *area);
-	if (!keep || !area) {
+	owner = mem_alloc(ps->n * sizeof *owner);
+	if (!keep || !owner || paths_hole_owners(ps, owner)) {
 		mem_free(keep);
-		mem_free(area);
+		mem_free(owner);
 		return ERR_SET(e, ERR_NOMEM, "out of memory computing skins");
 	}
-	for (size_t i = 0; i < ps->n; i++) {
-		area[i] = path_area_mm2(&ps->v[i]);
-		keep[i] = area[i] >= min_mm2;
-	}
-	for (size_t i = 0; i < ps->n; i++) {
-		size_t best = SIZE_MAX;
-		if (area[i] >= 0 || ps->v[i].n == 0)
-			continue;
-		for (size_t j = 0; j < ps->n; j++) {
-			struct paths one = {&ps->v[j], 1, 1};
-			if (area[j] <= 0 || (best != SIZE_MAX && area[j] >= area[best]))
-				continue;
-			if (paths_winding(&one, ps->v[i].pts[0]))
-				best = j;
-		}
-		keep[i] = best != SIZE_MAX && keep[best];
-	}
+	for (size_t i = 0; i < ps->n; i++)
+		keep[i] = path_area_mm2(&ps->v[i]) >= min_mm2;
+	for (size_t i = 0; i < ps->n; i++)
+		if (owner[i] != SIZE_MAX)
+			keep[i] = keep[owner[i]];
 	for (size_t i = 0; i < ps->n; i++) {
 		if (keep[i])
 			ps->v[k++] = ps->v[i];
@@ -278,7 +261,7 @@ static int drop_small(struct paths *ps, double min_mm2, struct err *e)
 	}
 	ps->n = k;
 	mem_free(keep);
-	mem_free(area);
+	mem_free(owner);
 	return 0;
 }
 

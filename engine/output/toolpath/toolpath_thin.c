@@ -64,14 +64,13 @@ static int path_contains(const struct path *p, struct pt2 q)
 	return paths_winding(&one, q) != 0;
 }
 
-static int bbox_contains(const struct path *p, struct pt2 q)
-{
-	struct paths one = {(struct path *)p, 1, 1};
+/* A piece of tp_thin's input, measured once. */
+struct piece_box {
+	double area_mm2;  /* signed (holes < 0); 0 for a piece without points */
+	double holes_mm2; /* summed signed areas of the holes it owns (<= 0) */
+	size_t owner;     /* a hole's smallest outer piece, else SIZE_MAX */
 	struct pt2 lo, hi;
-
-	return paths_bbox(&one, &lo, &hi) && q.x >= lo.x && q.x <= hi.x && q.y >= lo.y &&
-	       q.y <= hi.y;
-}
+};
 
 /* Centre p between the walls: *c and the local width *w_nm. */
 static void centre(struct tp_index *ix, struct pt2 p, int64_t max_w, struct pt2 *c,
@@ -430,7 +429,8 @@ int tp_thin(const struct paths *pieces, enum tp_role role, int64_t min_w_nm, int
 	struct pt2 *chain = NULL;
 	size_t chain_cap = 0;
 	unsigned char *printed = NULL;
-	size_t *owner = NULL, sides_cap = 0;
+	size_t *owner = NULL, *pown = NULL, sides_cap = 0;
+	struct piece_box *pa = NULL;
 	struct side *sides = NULL;
 	/* Pieces below this area are offset noise (corner slivers of the
 	 * mitred coverage), neither printed nor reported. */
@@ -449,9 +449,19 @@ int tp_thin(const struct paths *pieces, enum tp_role role, int64_t min_w_nm, int
 		goto out;
 	printed = mem_calloc(pieces->n, 1);
 	owner = mem_alloc((sliver.n ? sliver.n : 1) * sizeof *owner);
-	if (!printed || !owner) {
+	pa = mem_calloc(pieces->n, sizeof *pa);
+	pown = mem_alloc(pieces->n * sizeof *pown);
+	if (!printed || !owner || !pa || !pown || paths_hole_owners(&sliver, owner) ||
+	    paths_hole_owners(pieces, pown)) {
 		rc = ERR_SET(e, ERR_NOMEM, "out of memory planning thin walls");
 		goto out;
+	}
+	for (size_t k = 0; k < pieces->n; k++) {
+		struct paths one = {&pieces->v[k], 1, 1};
+		pa[k].area_mm2 = path_area_mm2(&pieces->v[k]);
+		pa[k].owner = pown[k];
+		if (!paths_bbox(&one, &pa[k].lo, &pa[k].hi))
+			pa[k].area_mm2 = 0;
 	}
 	for (size_t i = 0; i < sliver.n; i++) {
 		const struct path *o = &sliver.v[i];
@@ -459,20 +469,9 @@ int tp_thin(const struct paths *pieces, enum tp_role role, int64_t min_w_nm, int
 		size_t nh = 0, np = o->n + 1;
 		if (o->n < 3 || path_area2_nm2(o) <= 0)
 			continue; /* holes are handled with their outer loop */
-		/* Its holes (a ring-shaped sliver), each with the smallest outer
-		 * loop around it its owner. */
+		/* Its holes (a ring-shaped sliver): those whose smallest outer
+		 * loop it is (owner[], paths_hole_owners). */
 		for (size_t j = 0; j < sliver.n; j++) {
-			owner[j] = SIZE_MAX;
-			if (sliver.v[j].n < 3 || path_area2_nm2(&sliver.v[j]) >= 0 ||
-			    !bbox_contains(o, sliver.v[j].pts[0]) || !path_contains(o, sliver.v[j].pts[0]))
-				continue;
-			owner[j] = i;
-			for (size_t t = 0; t < sliver.n; t++)
-				if (t != i && path_area2_nm2(&sliver.v[t]) > 0 &&
-				    path_area2_nm2(&sliver.v[t]) < path_area2_nm2(o) &&
-				    bbox_contains(&sliver.v[t], sliver.v[j].pts[0]) &&
-				    path_contains(&sliver.v[t], sliver.v[j].pts[0]))
-					owner[j] = SIZE_MAX;
 			if (owner[j] == i) {
 				nh++;
 				np += sliver.v[j].n + 1;
@@ -534,8 +533,9 @@ int tp_thin(const struct paths *pieces, enum tp_role role, int64_t min_w_nm, int
 		/* Credit the piece this sliver came from. */
 		for (size_t k = 0; added && k < pieces->n; k++) {
 			const struct path *pc = &pieces->v[k];
-			if (pc->n >= 3 && path_area2_nm2(pc) > 0 && bbox_contains(pc, o->pts[0]) &&
-			    path_contains(pc, o->pts[0])) {
+			struct pt2 q = o->pts[0];
+			if (pa[k].area_mm2 > 0 && q.x >= pa[k].lo.x && q.x <= pa[k].hi.x &&
+			    q.y >= pa[k].lo.y && q.y <= pa[k].hi.y && path_contains(pc, q)) {
 				if (!printed[k])
 					items->thin_regions++;
 				printed[k] = 1;
@@ -543,23 +543,23 @@ int tp_thin(const struct paths *pieces, enum tp_role role, int64_t min_w_nm, int
 			}
 		}
 	}
-	/* Unprinted pieces: their area less their holes'. */
+	/* Unprinted pieces: their area less their holes' (each hole counted
+	 * with its smallest outer loop). */
+	for (size_t j = 0; j < pieces->n; j++)
+		if (pa[j].owner != SIZE_MAX)
+			pa[pa[j].owner].holes_mm2 += pa[j].area_mm2;
 	for (size_t k = 0; k < pieces->n; k++) {
-		double a = path_area_mm2(&pieces->v[k]);
-		if (printed[k] || a < noise_mm2)
+		double a = pa[k].area_mm2 + pa[k].holes_mm2;
+		if (printed[k] || pa[k].area_mm2 < noise_mm2)
 			continue;
 		items->thin_dropped++;
-		for (size_t j = 0; j < pieces->n; j++) {
-			const struct path *h = &pieces->v[j];
-			if (h->n >= 3 && path_area2_nm2(h) < 0 && bbox_contains(&pieces->v[k], h->pts[0]) &&
-			    path_contains(&pieces->v[k], h->pts[0]))
-				a += path_area_mm2(h);
-		}
 		items->thin_dropped_mm2 += a > 0 ? a : 0;
 	}
 out:
 	mem_free(printed);
 	mem_free(owner);
+	mem_free(pa);
+	mem_free(pown);
 	mem_free(sides);
 	mem_free(chain);
 	mem_free(b.pts);

@@ -35,6 +35,57 @@ static void test_area_winding(void)
 	paths_fini(&ps);
 }
 
+/* Brute force for paths_hole_owners: every outer loop tested against
+ * every hole's first point by winding, no boxes. */
+static size_t owner_brute(const struct paths *ps, size_t i)
+{
+	size_t best = SIZE_MAX;
+
+	if (path_area2_nm2(&ps->v[i]) >= 0)
+		return SIZE_MAX;
+	for (size_t j = 0; j < ps->n; j++) {
+		struct paths one = {&ps->v[j], 1, 1};
+		if (path_area2_nm2(&ps->v[j]) <= 0 || !paths_winding(&one, ps->v[i].pts[0]))
+			continue;
+		if (best == SIZE_MAX || path_area2_nm2(&ps->v[j]) < path_area2_nm2(&ps->v[best]))
+			best = j;
+	}
+	return best;
+}
+
+static void test_hole_owners(void)
+{
+	struct paths ps;
+	size_t owner[64];
+
+	paths_init(&ps);
+	square(&ps, 0, 0, 10, 0);    /* 0: hole of 1 */
+	square(&ps, -5, -5, 40, 1);  /* 1: outer */
+	square(&ps, 2, 2, 4, 1);     /* 2: island inside hole 0 */
+	square(&ps, 3, 3, 1, 0);     /* 3: hole of 2, not of 1 */
+	square(&ps, 50, 50, 2, 0);   /* 4: a hole no loop holds */
+	square(&ps, 20, 20, 10, 1);  /* 5: a second island of 1's */
+	square(&ps, 24, 20, 2, 0);   /* 6: its hole touching its edge (on-edge first point) */
+	paths_add(&ps);              /* 7: empty */
+	/* a row of small islands, each with a hole: the many-voids layer */
+	for (int k = 0; k < 20; k++) {
+		square(&ps, -4.5 + 1.5 * k, 32, 1.2, 1);
+		square(&ps, -4.4 + 1.5 * k, 32.1, 0.5, 0);
+	}
+	CHECK_EQ_INT(paths_hole_owners(&ps, owner), 0);
+	CHECK(owner[0] == 1);
+	CHECK(owner[1] == SIZE_MAX && owner[2] == SIZE_MAX && owner[5] == SIZE_MAX);
+	CHECK(owner[3] == 2);
+	CHECK(owner[4] == SIZE_MAX);
+	CHECK(owner[6] == 5);
+	CHECK(owner[7] == SIZE_MAX);
+	for (size_t i = 0; i < ps.n; i++)
+		CHECK(owner[i] == owner_brute(&ps, i));
+	for (size_t k = 0; k < 20; k++)
+		CHECK(owner[9 + 2 * k] == 8 + 2 * k);
+	paths_fini(&ps);
+}
+
 static void test_clip(void)
 {
 	struct paths a, b, out;
@@ -98,6 +149,7 @@ static void test_raster_map(void)
 int main(void)
 {
 	RUN(test_area_winding);
+	RUN(test_hole_owners);
 	RUN(test_clip);
 	RUN(test_raster_map);
 	return harness_report();
