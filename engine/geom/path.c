@@ -3,6 +3,7 @@
 #include "engine/core/err.h"
 #include "engine/core/mem.h"
 
+#include <stdlib.h>
 #include <string.h>
 
 void path_init(struct path *p)
@@ -248,51 +249,56 @@ int paths_bbox(const struct paths *ps, struct pt2 *lo, struct pt2 *hi)
 /* A loop measured once for paths_hole_owners. */
 struct loop_box {
 	double area2; /* twice the signed area, nm^2 */
+	size_t i;     /* its index in the region */
 	struct pt2 lo, hi;
 };
+
+static int cmp_loop_area(const void *pa, const void *pb)
+{
+	const struct loop_box *a = pa, *b = pb;
+
+	if (a->area2 != b->area2)
+		return a->area2 < b->area2 ? -1 : 1;
+	return (a->i > b->i) - (a->i < b->i);
+}
 
 int paths_hole_owners(const struct paths *ps, size_t *owner)
 {
 	struct loop_box *lb;
-	size_t *outer, no = 0;
+	size_t no = 0;
 
 	if (ps->n == 0)
 		return 0;
 	lb = mem_alloc(ps->n * sizeof *lb);
-	outer = mem_alloc(ps->n * sizeof *outer);
-	if (!lb || !outer) {
-		mem_free(lb);
-		mem_free(outer);
+	if (!lb)
 		return ERR_NOMEM;
-	}
 	for (size_t i = 0; i < ps->n; i++) {
 		struct paths one = {(struct path *)&ps->v[i], 1, 1};
-		lb[i].area2 = (double)path_area2_nm2(&ps->v[i]);
-		if (!paths_bbox(&one, &lb[i].lo, &lb[i].hi))
-			lb[i].area2 = 0;
 		owner[i] = SIZE_MAX;
-		if (lb[i].area2 > 0)
-			outer[no++] = i;
+		lb[no].area2 = (double)path_area2_nm2(&ps->v[i]);
+		lb[no].i = i;
+		if (lb[no].area2 > 0 && paths_bbox(&one, &lb[no].lo, &lb[no].hi))
+			no++;
 	}
+	/* smallest first: the first loop around a hole is its owner */
+	qsort(lb, no, sizeof *lb, cmp_loop_area);
 	for (size_t i = 0; i < ps->n; i++) {
 		struct pt2 q;
-		size_t best = SIZE_MAX;
-		if (lb[i].area2 >= 0)
+		if (ps->v[i].n < 3 || path_area2_nm2(&ps->v[i]) >= 0)
 			continue;
 		q = ps->v[i].pts[0];
 		for (size_t k = 0; k < no; k++) {
-			const struct loop_box *b = &lb[outer[k]];
-			struct paths one = {(struct path *)&ps->v[outer[k]], 1, 1};
-			if (q.x < b->lo.x || q.x > b->hi.x || q.y < b->lo.y || q.y > b->hi.y ||
-			    (best != SIZE_MAX && b->area2 >= lb[best].area2))
+			const struct loop_box *b = &lb[k];
+			struct paths one = {(struct path *)&ps->v[b->i], 1, 1};
+			if (q.x < b->lo.x || q.x > b->hi.x || q.y < b->lo.y || q.y > b->hi.y)
 				continue;
-			if (paths_winding(&one, q))
-				best = outer[k];
+			if (paths_winding(&one, q)) {
+				owner[i] = b->i;
+				break;
+			}
 		}
-		owner[i] = best;
 	}
 	mem_free(lb);
-	mem_free(outer);
 	return 0;
 }
 
