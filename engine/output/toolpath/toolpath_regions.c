@@ -49,10 +49,8 @@ static size_t prune_vanishing(const struct paths *in, double d, struct paths *ke
 			mark[i] = 1;
 	}
 	for (size_t i = 0; i < in->n; i++)
-		if (owner[i] != SIZE_MAX)
+		if (owner[i] != SIZE_MAX) /* a hole: as its outer loop */
 			mark[i] = mark[owner[i]];
-		else if (in->v[i].n > 0 && path_area2_nm2(&in->v[i]) < 0)
-			mark[i] = 0; /* a hole no loop holds */
 	kept->n = 0;
 	for (size_t i = 0; i < in->n; i++) {
 		if (mark[i])

@@ -68,7 +68,6 @@ static int path_contains(const struct path *p, struct pt2 q)
 struct piece_box {
 	double area_mm2;  /* signed (holes < 0); 0 for a piece without points */
 	double holes_mm2; /* summed signed areas of the holes it owns (<= 0) */
-	size_t owner;     /* a hole's smallest outer piece, else SIZE_MAX */
 	struct pt2 lo, hi;
 };
 
@@ -459,7 +458,6 @@ int tp_thin(const struct paths *pieces, enum tp_role role, int64_t min_w_nm, int
 	for (size_t k = 0; k < pieces->n; k++) {
 		struct paths one = {&pieces->v[k], 1, 1};
 		pa[k].area_mm2 = path_area_mm2(&pieces->v[k]);
-		pa[k].owner = pown[k];
 		if (!paths_bbox(&one, &pa[k].lo, &pa[k].hi))
 			pa[k].area_mm2 = 0;
 	}
@@ -546,8 +544,8 @@ int tp_thin(const struct paths *pieces, enum tp_role role, int64_t min_w_nm, int
 	/* Unprinted pieces: their area less their holes' (each hole counted
 	 * with its smallest outer loop). */
 	for (size_t j = 0; j < pieces->n; j++)
-		if (pa[j].owner != SIZE_MAX)
-			pa[pa[j].owner].holes_mm2 += pa[j].area_mm2;
+		if (pown[j] != SIZE_MAX)
+			pa[pown[j]].holes_mm2 += pa[j].area_mm2;
 	for (size_t k = 0; k < pieces->n; k++) {
 		double a = pa[k].area_mm2 + pa[k].holes_mm2;
 		if (printed[k] || pa[k].area_mm2 < noise_mm2)
