@@ -230,8 +230,10 @@ static void recede_fins(struct hl_win *s, int ww, int wh, const struct hl_geo *g
  *       above cannot reach in one layer at the design slope; sig carries
  *       su down the layers, so the solid recedes by dd per layer on
  *       average even when dd is under a pixel (a sub-pixel slope, drawn
- *       as a staircase).  sig counts only while within 2 px of
- *       dist(V(k + 1)): farther, the void it was measured from has
+ *       as a staircase); it is carried only while dd is under
+ *       HL_FILL_SIG_MAX_PX pixels (else su = dist(V(k + 1))).  sig
+ *       counts only while within 2 px of dist(V(k + 1)): farther, the
+ *       void it was measured from has
  *       receded (a floor, keep_apart), and sig run down to 0 would turn
  *       solid far from any void into void: ghost cells a pixel or two
  *       wide, every layer, which keep_apart then walled off (the femur's
@@ -253,7 +255,7 @@ static void recede_fins(struct hl_win *s, int ww, int wh, const struct hl_geo *g
 int hl_step_grow(struct hl_win *s, int ww, int wh, const struct hl_geo *g, struct err *e)
 {
 	size_t np = (size_t)ww * (size_t)wh;
-	int anyv = 0, rc;
+	int anyv = 0, rc, carry = g->dd < HL_FILL_SIG_MAX_PX * g->pmax;
 
 	for (size_t i = 0; i < np; i++)
 		anyv |= s->void_above[i];
@@ -262,7 +264,7 @@ int hl_step_grow(struct hl_win *s, int ww, int wh, const struct hl_geo *g, struc
 		return rc;
 	for (size_t i = 0; i < np; i++) {
 		double dv = sqrt(s->void_above_d2_mm2[i]), sig = s->sig_above_mm[i];
-		double su = dv > sig + 2 * g->pmax ? dv : fmin(dv, sig);
+		double su = dv > sig + 2 * g->pmax || !carry ? dv : fmin(dv, sig);
 		s->inside_mm[i] = (float)su;
 		s->core[i] = s->region[i] && !s->void_above[i] && su > g->dd;
 		s->step_mask[i] = s->core[i] || !s->region[i]; /* E u not C(k) */
