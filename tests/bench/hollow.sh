@@ -234,6 +234,27 @@ PY
 	echo "50 mm ball, the optimiser alone:"
 	python3 "$(dirname "$0")/hollow_axisym.py" --write-ball "$TMP/ball.stl" 25 >/dev/null &&
 		run_one "$TMP/ball.stl" z 45 lightweight 8 false || status=1
+	# the same ball for an FDM printer (generic-fdm: 0.2 mm layers on the
+	# engine's 0.05 mm grid, a slope of 3.9 px a layer, where the fill grows
+	# nearly round; docs/hollow.md section 10, "A bulky part")
+	echo "50 mm ball, G-code (generic-fdm), the fill alone:"
+	/usr/bin/time -f '%e %M' -o "$TMP/ball_fdm.time" "$BIN" run "$TMP/ball.stl" \
+		-o "$TMP/ball_fdm.gcode" --engine hollow --format gcode --set up=z \
+		--set rounds=0 --set wall_mm=1.0 --set wall_next_mm=0.8 --threads 2 --quiet \
+		--metrics "$TMP/ball_fdm.json" &&
+		python3 - "$TMP/ball_fdm.json" "$TMP/ball_fdm.time" <<'PY' || status=1
+import json, sys
+m = json.load(open(sys.argv[1])); h = m["hollow"]; v = h["verify"]; g = m["gcode"]
+wall, rss = open(sys.argv[2]).read().split()[-2:]
+print("  %.1f %% in %d voids, interior overhang %g mm2 (slope excess %.3f px), interior "
+      "islands %d, walls %.3f / between %.3f mm, fins %.1f mm3, slivers %.1f mm3, "
+      "G-code thin pieces dropped %.0f mm2, %s s, %d MB"
+      % (100 * h["volume_reduction"], h["voids"], v["interior_overhang_mm2"],
+         v["slope_excess_px"], v["islands_interior"], v["min_wall_mm"],
+         v["min_wall_between_mm"], v["fin_mm3"], v["sliver_mm3"], g["thin_dropped_mm2"],
+         wall, int(rss) // 1024))
+PY
+	rm -f "$TMP/ball_fdm.gcode"
 fi
 if [ "$MODE" = large ]; then
 	[ -s "$TMP/ball.stl" ] ||
