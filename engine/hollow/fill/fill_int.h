@@ -52,7 +52,7 @@ int hl_grid_nearest(const int32_t *lab, int w, int h, double px_mm, double py_mm
 /* hl_step_grow() carries the inside distance down the layers (sig) only
  * while the design's slope dd is under this many pixels: there a front
  * stepped in whole pixels falls behind the slope and sig makes it up (SL1
- * pitch: dd 1.02 px at alpha 45).  At a few pixels a layer (0.2 mm FDM
+ * pitch: dd 1.04 px at alpha 45).  At a few pixels a layer (0.2 mm FDM
  * layers on the 0.05 mm grid: 3.9 px) the EDT's own threshold moves the
  * front, and sig, carried pixel by pixel under a front that moved several
  * pixels, broke diagonal fronts into checkerboards: a 50 mm ball's G-code
