@@ -233,10 +233,10 @@ static void recede_fins(struct hl_win *s, int ww, int wh, const struct hl_geo *g
  *       as a staircase); it is carried only while dd is under
  *       HL_FILL_SIG_MAX_PX pixels (else su = dist(V(k + 1))).  sig
  *       counts only while within 2 px of dist(V(k + 1)): farther, the
- *       void it was measured from has
- *       receded (a floor, keep_apart), and sig run down to 0 would turn
- *       solid far from any void into void: ghost cells a pixel or two
- *       wide, every layer, which keep_apart then walled off (the femur's
+ *       void it was measured from has receded (a floor, keep_apart),
+ *       and sig run down to 0 would turn solid far from any void into
+ *       void: ghost cells a pixel or two wide, every layer, which
+ *       keep_apart then walled off (the femur's
  *       head lost most of its void to them: 21.7 % -> 41.7 % without);
  *   R = pixels of C(k), solid in layer k + 1 and not in E, farther than
  *       dg from E u not C(k) (s->support_d2_mm2; thin solid between voids, staircase
