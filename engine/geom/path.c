@@ -272,11 +272,13 @@ int paths_hole_owners(const struct paths *ps, size_t *owner)
 	lb = mem_alloc(ps->n * sizeof *lb);
 	if (!lb)
 		return ERR_NOMEM;
+	/* each area once: the outer loops into lb, the holes marked owner 0
+	 * until their owner is found (paths under 3 points have area 0) */
 	for (size_t i = 0; i < ps->n; i++) {
 		struct paths one = {(struct path *)&ps->v[i], 1, 1};
-		owner[i] = SIZE_MAX;
 		lb[no].area2 = (double)path_area2_nm2(&ps->v[i]);
 		lb[no].i = i;
+		owner[i] = lb[no].area2 < 0 ? 0 : SIZE_MAX;
 		if (lb[no].area2 > 0 && paths_bbox(&one, &lb[no].lo, &lb[no].hi))
 			no++;
 	}
@@ -284,8 +286,9 @@ int paths_hole_owners(const struct paths *ps, size_t *owner)
 	qsort(lb, no, sizeof *lb, cmp_loop_area);
 	for (size_t i = 0; i < ps->n; i++) {
 		struct pt2 q;
-		if (ps->v[i].n < 3 || path_area2_nm2(&ps->v[i]) >= 0)
+		if (owner[i] == SIZE_MAX)
 			continue;
+		owner[i] = SIZE_MAX;
 		q = ps->v[i].pts[0];
 		for (size_t k = 0; k < no; k++) {
 			const struct loop_box *b = &lb[k];
