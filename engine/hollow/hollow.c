@@ -155,18 +155,18 @@ struct hollow_state {
 	 * (hmesh.h), so with optimised voids (stepped()) the check, the beads
 	 * and the carving read the layers it slices to again */
 	int mesh_out;
-	struct mesh part_view;       /* stepped(): the part alone (out.mesh's first) */
-	struct slicer *part_slicer;  /* stepped(): on part_view, which it points to */
-	struct raster *part_img;     /* stepped(): its drawing, own-sized */
-	struct paths part_region;    /* stepped(): its section */
+	/* the part alone, drawn on the checked pixels: the check's reference
+	 * (verify_layer_ref: the part's own air and islands), and the outer
+	 * surface of a stepped mesh */
+	struct mesh part_view;       /* out.mesh's first part_nv, part_nt */
+	struct slicer *part_slicer;  /* on part_view, which it points to */
+	struct raster *part_img;     /* its drawing, the checked raster's size */
+	struct paths part_region;    /* its section */
 	struct raster *own;          /* verification raster when the output has none */
 	struct raster_map own_map;
 	double layer_mm, alpha_deg, t_prepare, t_verify;
 	double min_wall_3d_mm;       /* void vertices to the outer surface */
 	size_t part_nv, part_nt;     /* the input part: the result mesh's first ones */
-	/* the input part's own interior overhang (mm2, NAN: not measured, the
-	 * output has none) and what the output has beyond it, layer by layer */
-	double part_overhang_mm2, added_overhang_mm2;
 	struct hl_fill frag;         /* beads of the optimised voids, painted solid */
 	struct hl_repair repair;     /* the optimised voids' images mended (layer outputs) */
 	struct hl_slopes slopes;     /* the optimised voids' slopes on their polygons */
@@ -343,7 +343,6 @@ static int hollow_prepare(const struct engine_ctx *ctx, const void *params, void
 	s->layer_mm = ctx->layer_mm;
 	s->part_nv = ctx->mesh->nv;
 	s->part_nt = ctx->mesh->nt;
-	s->part_overhang_mm2 = NAN;
 	s->alpha_deg = ctx->common->alpha_deg;
 	s->map = ctx->want_raster ? ctx->map : NULL;
 	s->antialias = ctx->printer && ctx->printer->kind == PRINTER_RESIN ? ctx->printer->resin.antialias : 1;
@@ -453,11 +452,9 @@ static int hollow_prepare(const struct engine_ctx *ctx, const void *params, void
 					     hollow_mend_reach_mm(&vp), c->opt.wall_mm, !s->map,
 					     vp.threads, &s->repair, e);
 	}
-	if (!rc && stepped(s)) {
+	if (!rc) {
 		s->part_view = (struct mesh){s->out.mesh->v, s->out.mesh->tri, s->part_nv, s->part_nt};
 		rc = slice_new(&s->part_view, &s->part_slicer, e);
-		if (!rc && !(s->part_img = raster_new(s->own->w, s->own->h)))
-			rc = ERR_SET(e, ERR_NOMEM, "hollow: out of memory");
 	}
 	if (rc) {
 		hollow_release(s);
@@ -466,6 +463,32 @@ static int hollow_prepare(const struct engine_ctx *ctx, const void *params, void
 	s->t_prepare = progress_now_s() - t0;
 	*out = s;
 	return 0;
+}
+
+/* s->part_img made w x h (kept when it is) and cleared. */
+static int part_img_for(struct hollow_state *s, int w, int h, struct err *e)
+{
+	if (!s->part_img || s->part_img->w != w || s->part_img->h != h) {
+		raster_free(s->part_img);
+		if (!(s->part_img = raster_new(w, h)))
+			return ERR_SET(e, ERR_NOMEM, "hollow: out of memory");
+	}
+	raster_clear(s->part_img);
+	return 0;
+}
+
+/* The part alone at z_mm drawn into s->part_img (the size of like) through
+ * map with antialias, as the layer beside it: the check's reference. */
+static int draw_part(struct hollow_state *s, double z_mm, const struct raster_map *map,
+		     int antialias, const struct raster *like, struct err *e)
+{
+	int rc = part_img_for(s, like->w, like->h, e);
+
+	if (!rc)
+		rc = slice_at(s->part_slicer, z_mm, &s->part_region, NULL, e);
+	if (!rc)
+		rc = slice_rasterize(&s->part_region, map, antialias, s->part_img, e);
+	return rc;
 }
 
 static int hollow_layer(void *state, struct layer *ly, struct err *e)
@@ -492,13 +515,16 @@ static int hollow_layer(void *state, struct layer *ly, struct err *e)
 			return rc;
 		hl_repair_apply(&s->repair, ly->z_mm, ly->raster);
 		ly->raster_ready = 1;
-		rc = verify_layer(s->ver, ly->raster, e);
+		rc = draw_part(s, ly->z_mm, s->map, s->antialias, ly->raster, e);
+		if (!rc)
+			rc = verify_layer_ref(s->ver, ly->raster, s->part_img, e);
 	} else {
 		raster_clear(s->own);
 		if (stepped(s)) {
 			/* the mesh's stepped voids, carved, as it slices again */
-			raster_clear(s->part_img);
-			rc = slice_at(s->part_slicer, ly->z_mm, &s->part_region, NULL, e);
+			rc = part_img_for(s, s->own->w, s->own->h, e);
+			if (!rc)
+				rc = slice_at(s->part_slicer, ly->z_mm, &s->part_region, NULL, e);
 			if (!rc)
 				rc = hl_layer_draw_stepped(&ly->region, &s->part_region, &s->own_map,
 							   s->antialias, fill ? &s->out.fill : NULL,
@@ -511,9 +537,12 @@ static int hollow_layer(void *state, struct layer *ly, struct err *e)
 			 * accuracy */
 			rc = hl_layer_draw(&ly->region, &s->own_map, 1, fill ? &s->out.fill : NULL,
 					   frag ? &s->frag : NULL, ly->z_mm, 0, 0, s->own, e);
+			if (!rc)
+				rc = draw_part(s, ly->z_mm, &s->own_map, 1, s->own, e);
 		}
+		/* the part's drawing is in part_img either way */
 		if (!rc)
-			rc = verify_layer(s->ver, s->own, e);
+			rc = verify_layer_ref(s->ver, s->own, s->part_img, e);
 	}
 	/* the region handed on (G-code, area metrics) gains the fragments
 	 * and loses the fill too */
@@ -560,68 +589,6 @@ static int verify_offline(struct hollow_state *s, struct err *e)
 	return rc;
 }
 
-/* The input part's own interior overhangs: the plain part (the result
- * mesh's first part_nt triangles: the voids are appended after them) sliced
- * at the output's layers and drawn on the same pixels, through a second
- * checker with the same parameters.  An open scan (the bunny's base) can
- * leave pockets the slicer closes whose ceilings hang; hollowing does not
- * make them and cannot print them away.  The output's excess is counted
- * layer by layer: sum over layers of max(0, output px - part px), a lower
- * bound on the pixels hollowing added (it would miss one added where one of
- * the part's own vanished in the same layer; hollowing only carves inside
- * the part's walls, never into its pockets).  Called only when the output
- * has interior overhangs: otherwise both are 0 and this costs nothing. */
-static int part_overhang(struct hollow_state *s, struct err *e)
-{
-	struct mesh part = {s->out.mesh->v, s->out.mesh->tri, s->part_nv, s->part_nt};
-	struct slicer *sl = NULL;
-	struct verify *v = NULL;
-	struct verify_report rep;
-	struct raster *r = NULL;
-	struct verify_params vp;
-	const struct raster_map *map = s->map ? s->map : &s->own_map;
-	double pa = s->rep.interior_overhang_mm2 / (double)s->rep.interior_overhang_px;
-	long long added = 0;
-	int rc;
-
-	memset(&rep, 0, sizeof rep);
-	verify_params_of(s, &vp);
-	rc = slice_new(&part, &sl, e);
-	if (!rc)
-		rc = verify_new(&vp, &v, e);
-	if (!rc && !(r = raster_new(s->rep.width, s->rep.height)))
-		rc = ERR_SET(e, ERR_NOMEM, "hollow: out of memory");
-	for (int k = 0; k < s->layers_seen && !rc; k++) {
-		struct layer ly;
-		memset(&ly, 0, sizeof ly);
-		paths_init(&ly.region);
-		layer_place(&ly, k, s->layers_seen, s->layer_mm);
-		raster_clear(r);
-		rc = slice_at(sl, ly.z_mm, &ly.region, NULL, e);
-		if (!rc)
-			rc = slice_rasterize(&ly.region, map, s->map ? s->antialias : 1, r, e);
-		if (!rc)
-			rc = verify_layer(v, r, e);
-		paths_fini(&ly.region);
-	}
-	if (!rc)
-		rc = verify_finish(v, &rep, e);
-	if (!rc) {
-		for (int k = 0; k < s->rep.layers; k++) {
-			long long own = k < rep.layers ? rep.overhang_px[k] : 0;
-			if (s->rep.overhang_px[k] > own)
-				added += s->rep.overhang_px[k] - own;
-		}
-		s->part_overhang_mm2 = rep.interior_overhang_mm2;
-		s->added_overhang_mm2 = (double)added * pa;
-	}
-	verify_report_fini(&rep);
-	raster_free(r);
-	verify_free(v);
-	slice_free(sl);
-	return rc;
-}
-
 static int hollow_metrics(void *state, struct metrics *m, struct err *e)
 {
 	struct hollow_state *s = state;
@@ -647,13 +614,6 @@ static int hollow_metrics(void *state, struct metrics *m, struct err *e)
 		rc = verify_finish(s->ver, &s->rep, e);
 		if (rc)
 			return rc;
-		if (s->rep.interior_overhang_px > 0) {
-			rc = part_overhang(s, e);
-			if (rc)
-				return rc;
-		} else {
-			s->part_overhang_mm2 = s->added_overhang_mm2 = 0;
-		}
 		s->verified = 1;
 	}
 	rc |= metrics_int(m, "hollow.voids", (long long)o->voids);
@@ -681,8 +641,7 @@ static int hollow_metrics(void *state, struct metrics *m, struct err *e)
 	rc |= metrics_num(m, "hollow.mended.seconds", s->repair.seconds);
 	rc |= metrics_num(m, "hollow.part_volume_mm3", o->part_volume_mm3);
 	rc |= metrics_num(m, "hollow.interior_overhang_mm2", s->rep.interior_overhang_mm2);
-	rc |= metrics_num(m, "hollow.part_interior_overhang_mm2", s->part_overhang_mm2);
-	rc |= metrics_num(m, "hollow.interior_overhang_added_mm2", s->added_overhang_mm2);
+	rc |= metrics_num(m, "hollow.part_interior_overhang_mm2", s->rep.part_overhang_mm2);
 	rc |= metrics_num(m, "hollow.min_wall_mm", fmin(s->rep.min_wall_mm, s->min_wall_3d_mm));
 	rc |= metrics_num(m, "hollow.min_wall_3d_mm", s->min_wall_3d_mm);
 	rc |= metrics_num(m, "hollow.wall_mm", s->cfg.opt.wall_mm);

@@ -3,9 +3,10 @@
  * Where the solid part itself starts in the air (an overhanging chin's
  * lowest layer) it needs supports whatever fills it: an island of the
  * checked stack touching one of the part's own islands is the part's, any
- * other is one the engine added.  Per layer: the reference's 8-connected
- * solid components over the bounding box of its solid, flooded with an
- * explicit list, O(box pixels).
+ * other is one the engine added.  Per layer: the reference's solid over
+ * the bounding box of its solid, its 8-connected components labelled
+ * there (engine/geom/label.h), those with no pixel over the layer below's
+ * solid marked; O(box pixels), with empty rows skipped a word at a time.
  */
 #include "engine/verify/contact.h"
 
@@ -13,12 +14,13 @@
 
 #include "engine/core/err.h"
 #include "engine/core/mem.h"
+#include "engine/geom/label.h"
 #include "engine/geom/raster.h"
 
 void verify_contact_init(struct verify_contact *c)
 {
 	memset(c, 0, sizeof *c);
-	c->bx1 = c->by1 = -1;
+	c->bx1 = c->by1 = c->cx1 = c->cy1 = -1;
 }
 
 void verify_contact_fini(struct verify_contact *c)
@@ -26,83 +28,117 @@ void verify_contact_fini(struct verify_contact *c)
 	mem_free(c->prev);
 	mem_free(c->cur);
 	mem_free(c->fc);
-	mem_free(c->list);
+	mem_free(c->mask);
+	mem_free(c->lab);
+	mem_free(c->sup);
 	verify_contact_init(c);
 }
 
-/* Flood the component of pixel i0 (solid in cur, not yet in fc's seen
- * bit 2) into c->list; 1 when some pixel has solid below. */
-static int flood(struct verify_contact *c, size_t i0, size_t *len)
+/* Clear rows y0..y1, columns x0..x1 of the w-wide image a (nothing when
+ * x1 < 0). */
+static void clear_box(uint8_t *a, int w, int x0, int y0, int x1, int y1)
 {
-	size_t n = 0, head = 0;
-	int supported = 0, w = c->w, h = c->h;
+	for (int y = y0; x1 >= 0 && y <= y1; y++)
+		memset(a + (size_t)y * (size_t)w + x0, 0, (size_t)(x1 - x0 + 1));
+}
 
-	c->list[n++] = (uint32_t)i0;
-	c->fc[i0] = 2; /* seen */
-	while (head < n) {
-		size_t q = c->list[head++];
-		int qx = (int)(q % (size_t)w), qy = (int)(q / (size_t)w);
-		supported |= c->layers > 0 && c->prev[q];
-		for (int dy = -1; dy <= 1; dy++)
-			for (int dx = -1; dx <= 1; dx++) {
-				int nx = qx + dx, ny = qy + dy;
-				size_t j;
-				if (nx < 0 || ny < 0 || nx >= w || ny >= h)
-					continue;
-				j = (size_t)ny * (size_t)w + (size_t)nx;
-				if (!c->cur[j] || c->fc[j])
-					continue;
-				c->fc[j] = 2;
-				c->list[n++] = (uint32_t)j; /* each pixel once: n <= w h */
-			}
+/* First and last x of row[0..w) with row[x] >= thr (thr >= 1) into *a,
+ * *b; 0 when there is none.  Zero bytes are skipped eight at a time. */
+static int row_span(const uint8_t *row, int w, int thr, int *a, int *b)
+{
+	int x = 0;
+
+	for (;;) {
+		uint64_t word;
+		while (x + 8 <= w) {
+			memcpy(&word, row + x, sizeof word);
+			if (word)
+				break;
+			x += 8;
+		}
+		if (x >= w)
+			return 0;
+		for (int end = x + 8 < w ? x + 8 : w; x < end; x++)
+			if (row[x] >= thr)
+				goto found;
 	}
-	*len = n;
-	return supported || c->layers == 0; /* layer 0 stands on the plate */
+found:
+	*a = x;
+	*b = w - 1;
+	while (row[*b] < thr)
+		(*b)--;
+	return 1;
 }
 
 int verify_contact_layer(struct verify_contact *c, const struct raster *ref, int threshold)
 {
 	size_t n = (size_t)ref->w * (size_t)ref->h;
-	int x0 = ref->w, y0 = ref->h, x1 = -1, y1 = -1;
+	int x0 = ref->w, y0 = ref->h, x1 = -1, y1 = -1, bw, bh;
+	int32_t count = 0;
+	struct err e;
 
 	if (c->layers == 0) {
 		c->w = ref->w;
 		c->h = ref->h;
 		c->prev = mem_calloc(n, 1);
-		c->cur = mem_alloc(n);
+		c->cur = mem_calloc(n, 1);
 		c->fc = mem_calloc(n, 1);
-		c->list = mem_alloc(n * sizeof *c->list);
-		if (!c->prev || !c->cur || !c->fc || !c->list)
+		c->mask = mem_alloc(n);
+		c->lab = mem_alloc(n * sizeof *c->lab);
+		if (!c->prev || !c->cur || !c->fc || !c->mask || !c->lab)
 			return ERR_NOMEM;
 	} else if (ref->w != c->w || ref->h != c->h) {
 		return -1;
 	}
-	/* clear the last layer's marks over its box, threshold this layer */
-	for (int y = c->by0; y <= c->by1; y++)
-		memset(c->fc + (size_t)y * (size_t)c->w + c->bx0, 0, (size_t)(c->bx1 - c->bx0 + 1));
+	/* clear the last layer's marks and cur's stale solid over their boxes */
+	clear_box(c->fc, c->w, c->bx0, c->by0, c->bx1, c->by1);
+	clear_box(c->cur, c->w, c->cx0, c->cy0, c->cx1, c->cy1);
 	for (int y = 0; y < ref->h; y++) {
 		const uint8_t *row = ref->px + (size_t)y * ref->stride;
 		uint8_t *cu = c->cur + (size_t)y * (size_t)c->w;
-		for (int x = 0; x < ref->w; x++) {
+		int a, b;
+		if (!row_span(row, ref->w, threshold, &a, &b))
+			continue;
+		for (int x = a; x <= b; x++)
 			cu[x] = row[x] >= threshold;
-			if (cu[x]) {
-				x0 = x < x0 ? x : x0;
-				x1 = x > x1 ? x : x1;
-				y0 = y < y0 ? y : y0;
-				y1 = y > y1 ? y : y1;
-			}
-		}
+		x0 = a < x0 ? a : x0;
+		x1 = b > x1 ? b : x1;
+		y0 = y < y0 ? y : y0;
+		y1 = y;
 	}
-	/* fc: 2 while flooding (seen), then 1 on the pixels of islands */
-	for (int y = y0; y <= y1; y++)
-		for (int x = x0; x <= x1; x++) {
-			size_t i = (size_t)y * (size_t)c->w + (size_t)x, len;
-			if (!c->cur[i] || c->fc[i])
-				continue;
-			if (!flood(c, i, &len))
-				for (size_t k = 0; k < len; k++)
-					c->fc[c->list[k]] = 1;
-		}
+	if (x1 < 0)
+		goto done;
+	bw = x1 - x0 + 1;
+	bh = y1 - y0 + 1;
+	for (int y = 0; y < bh; y++)
+		memcpy(c->mask + (size_t)y * (size_t)bw,
+		       c->cur + (size_t)(y + y0) * (size_t)c->w + x0, (size_t)bw);
+	err_clear(&e);
+	if (label_components8(c->mask, bw, bh, c->lab, &count, &e))
+		return ERR_NOMEM;
+	if (mem_grow((void **)&c->sup, &c->sup_cap, (size_t)count + 1, 1))
+		return ERR_NOMEM;
+	/* layer 0 stands on the plate: every component is held */
+	memset(c->sup, c->layers == 0, (size_t)count + 1);
+	for (int y = 0; c->layers > 0 && y < bh; y++) {
+		const int32_t *l = c->lab + (size_t)y * (size_t)bw;
+		const uint8_t *pr = c->prev + (size_t)(y + y0) * (size_t)c->w + x0;
+		for (int x = 0; x < bw; x++)
+			if (l[x] && pr[x])
+				c->sup[l[x]] = 1;
+	}
+	for (int y = 0; y < bh; y++) {
+		const int32_t *l = c->lab + (size_t)y * (size_t)bw;
+		uint8_t *f = c->fc + (size_t)(y + y0) * (size_t)c->w + x0;
+		for (int x = 0; x < bw; x++)
+			f[x] = l[x] && !c->sup[l[x]];
+	}
+done:
+	/* cur becomes prev; prev's solid, stale, lies in its box */
+	c->cx0 = c->bx0;
+	c->cy0 = c->by0;
+	c->cx1 = c->bx1;
+	c->cy1 = c->by1;
 	c->bx0 = x0;
 	c->by0 = y0;
 	c->bx1 = x1;

@@ -13,16 +13,21 @@
 struct raster;
 
 /* Per image pixel (w x h, row stride w): `prev` the reference's solid on
- * the layer fed last, `fc` 1 on the pixels of its islands there (solid
- * components, 8-connected, with no solid on the layer below; none on
- * layer 0, which stands on the plate), `cur` and `list` scratch; the box
- * bx0..bx1, by0..by1 bounds the last layer's solid (empty when bx1 < 0).
- * Owned; verify_contact_fini() frees. */
+ * the layer fed last, over the box bx0..bx1, by0..by1 that bounds it
+ * (empty when bx1 < 0; 0 elsewhere), and `fc` 1 on the pixels of its
+ * islands there (solid components, 8-connected, with no solid on the
+ * layer below; none on layer 0, which stands on the plate), 0 elsewhere;
+ * `cur` (whose stale solid lies in cx0..cx1, cy0..cy1), `mask`, `lab`
+ * and `sup` scratch.  Owned; verify_contact_fini() frees. */
 struct verify_contact {
 	int w, h, layers;
 	int bx0, by0, bx1, by1;
+	int cx0, cy0, cx1, cy1;
 	uint8_t *prev, *cur, *fc;
-	uint32_t *list;
+	uint8_t *mask; /* the box's solid, packed (box width a row) */
+	int32_t *lab;  /* its components (label.h) */
+	uint8_t *sup;  /* per component: 1 when some pixel has solid below */
+	size_t sup_cap;
 };
 
 void verify_contact_init(struct verify_contact *c);

@@ -6,7 +6,9 @@
  *  1. void components, 8-connected (so solid walls are 4-connected: a
  *     void pixel that meets the outside only at a pixel corner IS the
  *     outside); each gets a union-find id; those touching the crop edge
- *     are the outside (id VX_OUT);
+ *     are the outside (id VX_OUT); with a reference stack, those holding
+ *     a pixel it holds void are the part's own air (v->air), joined to
+ *     the outside at the end once their overhangs are counted;
  *  2. vertical links: a void pixel above/below a void pixel joins their
  *     components (6-connectivity in 3D);
  *  3. overhangs: solid pixels over void pixels of the previous layer whose
@@ -100,6 +102,7 @@ void verify_free(struct verify *v)
 	mem_free(v->col);
 	mem_free(v->col_id);
 	mem_free(v->enc);
+	mem_free(v->air);
 	mem_free(v->prev_enc);
 	mem_free(v->agg);
 	mem_free(v->isl_lab);
@@ -313,9 +316,12 @@ int verify_crop_solid(const struct crop *c, int x, int y, size_t *idx)
 /* Label void components (8-connected) of the current crop; see the head
  * comment for why 8 and not 4.  The components get union-find ids from
  * v->nuf on, in raster order of their first pixel (label.h); one that
- * touches the crop's border is joined to the outside.  Scratch: v->seed
- * (the void mask). */
-static int label_voids(struct verify *v, uint32_t *ncomp)
+ * touches the crop's border is joined to the outside.  One with a pixel
+ * that ref (the same layer of the solid part, NULL: none) holds void is
+ * the part's own air (a sealed pocket of its own, or a crevice that the
+ * layers' linking reads as sealed): not 2D-enclosed, and marked in
+ * v->air for verify_finish.  Scratch: v->seed (the void mask). */
+static int label_voids(struct verify *v, const struct raster *ref, uint32_t *ncomp)
 {
 	struct crop *c = v->cur;
 	int w = c->w, h = c->h;
@@ -348,10 +354,25 @@ static int label_voids(struct verify *v, uint32_t *ncomp)
 				v->enc[l - 1] = 0;
 		}
 	}
+	if (ref) {
+		if (mem_grow((void **)&v->air, &v->air_cap, v->nuf, 1))
+			return ERR_NOMEM;
+		memset(v->air + v->air_n, 0, v->nuf - v->air_n);
+		v->air_n = v->nuf;
+	}
+	for (int y = 0; ref && y < h; y++) {
+		const uint8_t *row = ref->px + (size_t)(y + c->y0) * ref->stride + c->x0;
+		const int32_t *lr = lab + (size_t)y * (size_t)w;
+		for (int x = 0; x < w; x++)
+			if (lr[x] > 0 && row[x] < v->p.threshold && v->enc[lr[x] - 1]) {
+				v->enc[lr[x] - 1] = 0;
+				v->air[first + (uint32_t)(lr[x] - 1)] = 1;
+			}
+	}
 	for (size_t i = 0; i < np; i++)
 		c->lab[i] = lab[i] > 0 ? first + (uint32_t)(lab[i] - 1) : 0;
 	for (int32_t l = 0; l < n; l++)
-		if (!v->enc[l])
+		if (!v->enc[l] && !(ref && v->air[first + (uint32_t)l]))
 			uf_union(v, first + (uint32_t)l, VX_OUT);
 	v->cur_first = first;
 	*ncomp = (uint32_t)n;
@@ -583,7 +604,7 @@ int verify_layer_ref(struct verify *v, const struct raster *r, const struct rast
 		if (verify_subpx_fits_size(&c->fits, (size_t)c->w * (size_t)c->h, grey))
 			goto nomem;
 		c->any_ok = 0;
-		if (label_voids(v, &ncomp))
+		if (label_voids(v, ref, &ncomp))
 			goto nomem;
 	}
 	/* 2. vertical links (the plate closes the bottom of layer 0); a pair
@@ -733,6 +754,27 @@ int verify_finish(struct verify *v, struct verify_report *out, struct err *e)
 				return ERR_SET(e, ERR_NOMEM, "verify: out of memory");
 		}
 	}
+	/* the part's own air (label_voids): its overhangs are the part's,
+	 * then it is the outside for all that follows */
+	if (v->air_n) {
+		uint8_t *root_air = mem_calloc(v->nuf, 1);
+		if (!root_air)
+			return ERR_SET(e, ERR_NOMEM, "verify: out of memory");
+		for (uint32_t k = 2; k < v->air_n; k++)
+			if (v->air[k])
+				root_air[verify_uf_find(v, k)] = 1;
+		for (size_t k = 0; k < v->ov.n; k++) {
+			uint32_t root = verify_uf_find(v, v->ov.v[k].id);
+			if (root != VX_OUT && root_air[root]) {
+				v->r.part_overhang_mm2 += v->ov.v[k].val * pa;
+				v->ov.v[k].val = 0; /* nor exterior below */
+			}
+		}
+		for (uint32_t k = 2; k < v->air_n; k++)
+			if (v->air[k])
+				uf_union(v, k, VX_OUT);
+		mem_free(root_air);
+	}
 	v->r.layers = v->next;
 	v->r.tolerance_px = v->p.tolerance_px;
 	v->r.width = v->w;
@@ -873,6 +915,7 @@ int verify_report_metrics(const struct verify_report *r, const char *prefix, str
 		rc |= metrics_int(m, KEY("islands_added"), r->islands_added);
 		rc |= metrics_num(m, KEY("island_added_mm2"), r->island_added_mm2);
 		rc |= metrics_int(m, KEY("first_added_island_layer"), r->first_added_island_layer);
+		rc |= metrics_num(m, KEY("part_overhang_mm2"), r->part_overhang_mm2);
 	}
 	rc |= metrics_int(m, KEY("first_solid_layer"), r->first_solid_layer);
 	rc |= metrics_num(m, KEY("min_wall_mm"), r->min_wall_mm);

@@ -77,6 +77,11 @@ struct verify_report {
 	double tolerance_px;          /* the tolerance the check ran with */
 	/* overhangs over voids open to the outside (removable supports) */
 	double exterior_overhang_mm2;
+	/* with a reference stack (verify_layer_ref): overhangs over the
+	 * part's own air that the layers' linking reads as enclosed (a sealed
+	 * pocket of the part, a slanted crevice under thick layers), the
+	 * part's and not the interior's; counted in neither of the two above */
+	double part_overhang_mm2;
 	/* floating islands */
 	long long islands;
 	double island_mm2;
@@ -146,8 +151,10 @@ void verify_free(struct verify *v);
 int verify_layer(struct verify *v, const struct raster *r, struct err *e);
 /* The same with ref, the same layer of a reference stack (the solid part
  * sliced by the same printer, same image size; borrowed for the call),
- * against which islands are told apart: the report's islands_added.  Give
- * a reference on every layer or on none (ERR_FIELD "reference"). */
+ * against which islands are told apart (the report's islands_added) and
+ * the part's own air: a void component with a pixel that ref holds void
+ * is the outside, its overhang counted in part_overhang_mm2.  Give a
+ * reference on every layer or on none (ERR_FIELD "reference"). */
 int verify_layer_ref(struct verify *v, const struct raster *r, const struct raster *ref,
 		     struct err *e);
 

@@ -72,6 +72,11 @@ struct verify {
 	size_t enc_cap;
 	uint8_t *prev_enc;    /* same for the previous layer's components */
 	size_t prev_enc_cap;
+	/* per union-find id: 1 when that layer component holds a pixel the
+	 * reference holds void (the part's own air; verify_layer_ref), joined
+	 * to the outside in verify_finish after its overhangs are counted */
+	uint8_t *air;
+	size_t air_cap, air_n; /* entries allocated, set (the others unread) */
 	uint32_t prev_first, cur_first; /* first component id of each layer */
 	double *agg;          /* per-component scratch */
 	size_t agg_cap;

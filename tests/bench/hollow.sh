@@ -62,7 +62,7 @@ if "com_before_mm" in h:
     extra = " com %+.2f -> %+.2f mm inside_hull %s" % (h["com_before_mm"], h["com_after_mm"], h["com_inside_hull"])
 if h.get("part_interior_overhang_mm2"):
     extra += "  (the part's own: %.4f mm2, added %.4f)" % (
-        h["part_interior_overhang_mm2"], h["interior_overhang_added_mm2"])
+        h["part_interior_overhang_mm2"], h["interior_overhang_mm2"])
 if h.get("voids_dropped_for_fill"):
     extra += "  (optimiser's %d voids + fill: %.1f %%, fill alone kept)" % (
         h["voids_dropped_for_fill"], 100 * h["optimised_and_fill_volume_mm3"] / h["part_volume_mm3"])

@@ -10,7 +10,13 @@
  * (one added island of 1 mm2 on layer 40, besides the chin's); the chin a
  * pixel narrower (still the part's own, within the 1-pixel tolerance);
  * the chin starting 3 layers higher (added: the part starts lower there).
+ *
+ * The reference also names the part's own air: a crevice whose slit
+ * shifts sideways between two layers reads as a sealed pocket without it
+ * (test_crevice).
  */
+#include <math.h>
+
 #include "harness.h"
 
 #include "engine/core/err.h"
@@ -151,8 +157,97 @@ static void test_without_reference(void)
 	raster_free(small);
 }
 
+/* A block [1, 15]^2 x [0, 6] mm with a crevice: on the layers under
+ * z = 3 a slit y in [7.5, 8.5], x < 8 open at the block's side; on the
+ * layer [3.0, 3.1] a slit y in [9.2, 10.2], x in [4, 8] that touches no
+ * pixel of the one below (so the linking reads it as sealed, as a thin
+ * slanted crevice reads under thick layers); solid above.  cavity: also
+ * a box hollowed at x in [5, 8], y in [11, 13.5], z in [1, 4], 0.8 mm
+ * from that slit and 1.5 mm from the block's side. */
+static int crevice_at(int cavity, double x, double y, double z)
+{
+	if (x < 1 || x > 15 || y < 1 || y > 15 || z > 6)
+		return 0;
+	if (z < 3 && y > 7.5 && y < 8.5 && x < 8)
+		return 0;
+	if (z > 3 && z < 3.1 && y > 9.2 && y < 10.2 && x > 4 && x < 8)
+		return 0;
+	return !(cavity && x > 5 && x < 8 && y > 11 && y < 13.5 && z > 1 && z < 4);
+}
+
+static void crevice_layer(struct raster *r, int cavity, int k)
+{
+	double z = (k + 0.5) * LAYER;
+	for (int j = 0; j < N; j++)
+		for (int i = 0; i < N; i++)
+			r->px[(size_t)j * r->stride + (size_t)i] =
+				crevice_at(cavity, (i + 0.5) * PX, (j + 0.5) * PX, z) ? 255 : 0;
+}
+
+static void run_crevice(int cavity, int with_ref, struct verify_report *rep)
+{
+	struct verify_params p = {LAYER, 45, PX, PX, 0, 0, 0, 0};
+	struct verify *v = NULL;
+	struct raster *r = raster_new(N, N), *ref = raster_new(N, N);
+	struct err e;
+
+	err_clear(&e);
+	memset(rep, 0, sizeof *rep);
+	REQUIRE(r && ref);
+	REQUIRE_OK(verify_new(&p, &v, &e), &e);
+	for (int k = 0; k < 60; k++) {
+		crevice_layer(r, cavity, k);
+		crevice_layer(ref, 0, k);
+		REQUIRE_OK(with_ref ? verify_layer_ref(v, r, ref, &e) : verify_layer(v, r, &e), &e);
+	}
+	REQUIRE_OK(verify_finish(v, rep, &e), &e);
+	verify_free(v);
+	raster_free(r);
+	raster_free(ref);
+}
+
+static void test_crevice(void)
+{
+	struct verify_report rep;
+	double alone;
+
+	/* alone, the pocket is an enclosed void (40 x 10 px on one layer)
+	 * with its flat ceiling over it */
+	run_crevice(0, 0, &rep);
+	CHECK_NEAR(rep.enclosed_void_mm3, 0.4, 1e-9);
+	CHECK(rep.interior_overhang_mm2 > 1);
+	CHECK_NEAR(rep.part_overhang_mm2, 0, 1e-12);
+	CHECK_NEAR(rep.min_wall_mm, 3.0, 1e-6); /* to the block's side x = 1 */
+	alone = rep.interior_overhang_mm2;
+	verify_report_fini(&rep);
+	/* against the part itself it is the part's own air: its ceiling is
+	 * the part's overhang, the same area */
+	run_crevice(0, 1, &rep);
+	CHECK_NEAR(rep.part_overhang_mm2, alone, 1e-9);
+	CHECK_EQ_INT(rep.enclosed_void_mm3 == 0, 1);
+	CHECK_EQ_INT(rep.interior_overhang_px, 0);
+	CHECK_EQ_INT(isinf(rep.min_wall_mm), 1);
+	verify_report_fini(&rep);
+	/* a cavity the interior adds stays enclosed (30 x 25 x 30 voxels of
+	 * 0.001 mm3), its wall to the part's air read to the crevice */
+	run_crevice(1, 1, &rep);
+	CHECK_NEAR(rep.enclosed_void_mm3, 22.5, 1e-9);
+	CHECK(rep.interior_overhang_mm2 > 4);
+	CHECK_NEAR(rep.part_overhang_mm2, alone, 1e-9);
+	CHECK_NEAR(rep.min_wall_mm, 0.8, 1e-6);
+	CHECK_EQ_INT(isinf(rep.min_wall_between_mm), 1);
+	verify_report_fini(&rep);
+	/* alone, the crevice is a second cavity 0.8 mm away */
+	run_crevice(1, 0, &rep);
+	CHECK_NEAR(rep.enclosed_void_mm3, 22.9, 1e-9);
+	CHECK_NEAR(rep.min_wall_mm, 1.5, 1e-6);
+	CHECK_NEAR(rep.min_wall_between_mm, 0.8, 1e-6);
+	verify_report_fini(&rep);
+}
+
 int main(void)
 {
+	RUN(test_crevice);
 	RUN(test_part_itself);
 	RUN(test_floating_blob);
 	RUN(test_chin_moved);
