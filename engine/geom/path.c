@@ -246,41 +246,70 @@ int paths_bbox(const struct paths *ps, struct pt2 *lo, struct pt2 *hi)
 	return any;
 }
 
-/* A loop measured once for paths_hole_owners. */
-struct loop_box {
-	double area2; /* twice the signed area, nm^2 */
-	size_t i;     /* its index in the region */
-	struct pt2 lo, hi;
+void paths_measure(const struct paths *ps, struct path_measure *m)
+{
+	for (size_t i = 0; i < ps->n; i++) {
+		struct paths one = {(struct path *)&ps->v[i], 1, 1};
+		m[i].area2_nm2 = (double)path_area2_nm2(&ps->v[i]);
+		if (!paths_bbox(&one, &m[i].lo, &m[i].hi)) {
+			m[i].lo = (struct pt2){1, 1};
+			m[i].hi = (struct pt2){0, 0};
+		}
+	}
+}
+
+double path_measure_mm2(const struct path_measure *m)
+{
+	return m->area2_nm2 * 0.5 / (GEOM_NM_PER_MM * GEOM_NM_PER_MM);
+}
+
+int path_holds(const struct path *p, const struct path_measure *m, struct pt2 q)
+{
+	struct paths one = {(struct path *)p, 1, 1};
+
+	if (q.x < m->lo.x || q.x > m->hi.x || q.y < m->lo.y || q.y > m->hi.y)
+		return 0;
+	return paths_winding(&one, q) != 0;
+}
+
+/* An outer loop of paths_hole_owners: its index and twice its area. */
+struct loop_area {
+	double area2;
+	size_t i;
 };
 
 static int cmp_loop_area(const void *pa, const void *pb)
 {
-	const struct loop_box *a = pa, *b = pb;
+	const struct loop_area *a = pa, *b = pb;
 
 	if (a->area2 != b->area2)
 		return a->area2 < b->area2 ? -1 : 1;
 	return (a->i > b->i) - (a->i < b->i);
 }
 
-int paths_hole_owners(const struct paths *ps, size_t *owner)
+int paths_hole_owners(const struct paths *ps, const struct path_measure *m, size_t *owner)
 {
-	struct loop_box *lb;
+	struct path_measure *own = NULL;
+	struct loop_area *lb;
 	size_t no = 0;
 
 	if (ps->n == 0)
 		return 0;
 	lb = mem_alloc(ps->n * sizeof *lb);
-	if (!lb)
+	if (!m)
+		m = own = mem_alloc(ps->n * sizeof *own);
+	if (!lb || !m) {
+		mem_free(lb);
 		return ERR_NOMEM;
-	/* each area once: the outer loops into lb, the holes marked owner 0
-	 * until their owner is found (paths under 3 points have area 0) */
+	}
+	if (own)
+		paths_measure(ps, own);
+	/* the outer loops into lb, the holes marked owner 0 until their
+	 * owner is found (paths under 3 points have area 0) */
 	for (size_t i = 0; i < ps->n; i++) {
-		struct paths one = {(struct path *)&ps->v[i], 1, 1};
-		lb[no].area2 = (double)path_area2_nm2(&ps->v[i]);
-		lb[no].i = i;
-		owner[i] = lb[no].area2 < 0 ? 0 : SIZE_MAX;
-		if (lb[no].area2 > 0 && paths_bbox(&one, &lb[no].lo, &lb[no].hi))
-			no++;
+		owner[i] = m[i].area2_nm2 < 0 ? 0 : SIZE_MAX;
+		if (m[i].area2_nm2 > 0)
+			lb[no++] = (struct loop_area){m[i].area2_nm2, i};
 	}
 	/* smallest first: the first loop around a hole is its owner */
 	qsort(lb, no, sizeof *lb, cmp_loop_area);
@@ -290,18 +319,14 @@ int paths_hole_owners(const struct paths *ps, size_t *owner)
 			continue;
 		owner[i] = SIZE_MAX;
 		q = ps->v[i].pts[0];
-		for (size_t k = 0; k < no; k++) {
-			const struct loop_box *b = &lb[k];
-			struct paths one = {(struct path *)&ps->v[b->i], 1, 1};
-			if (q.x < b->lo.x || q.x > b->hi.x || q.y < b->lo.y || q.y > b->hi.y)
-				continue;
-			if (paths_winding(&one, q)) {
-				owner[i] = b->i;
+		for (size_t k = 0; k < no; k++)
+			if (path_holds(&ps->v[lb[k].i], &m[lb[k].i], q)) {
+				owner[i] = lb[k].i;
 				break;
 			}
-		}
 	}
 	mem_free(lb);
+	mem_free(own);
 	return 0;
 }
 

@@ -85,16 +85,34 @@ int paths_winding(const struct paths *ps, struct pt2 q);
 /* Bounding box of all points; returns 0 when ps has no points. */
 int paths_bbox(const struct paths *ps, struct pt2 *lo, struct pt2 *hi);
 
+/* One path measured once: twice its signed area (path_area2_nm2 as a
+ * double: > 0 counter-clockwise, < 0 a hole, 0 under 3 points) and its
+ * bounding box (lo > hi for a path without points). */
+struct path_measure {
+	double area2_nm2;
+	struct pt2 lo, hi;
+};
+
+/* m[i] for each path i of ps (m: ps->n entries, caller-owned). */
+void paths_measure(const struct paths *ps, struct path_measure *m);
+
+/* Area in mm^2 of a measured path (signed, as path_area_mm2). */
+double path_measure_mm2(const struct path_measure *m);
+
+/* 1 when q lies in m's box and path p, measured as m, winds around it (a
+ * point on an edge counts, as paths_winding). */
+int path_holds(const struct path *p, const struct path_measure *m, struct pt2 q);
+
 /* The outer loop of each hole of a normalised region.  owner[i] receives,
  * for each clockwise path i (a hole), the index of the smallest
  * counter-clockwise path whose inside holds the hole's first point, and
  * SIZE_MAX for counter-clockwise paths, paths of under 3 points or of zero
- * area, and holes that no loop holds.  Areas and bounding boxes are taken
- * once and the winding test runs only on loops whose box holds the point,
- * so a layer of many voids costs holes x outers box tests, not that many
- * passes over every vertex.  owner has ps->n entries, caller-owned.
- * Returns 0 or ERR_NOMEM (owner then undefined). */
-int paths_hole_owners(const struct paths *ps, size_t *owner);
+ * area, and holes that no loop holds.  m: ps's measures (paths_measure),
+ * or NULL to take them here.  The winding test runs only on loops whose
+ * box holds the point, so a layer of many voids costs holes x outers box
+ * tests, not that many passes over every vertex.  owner has ps->n
+ * entries, caller-owned.  Returns 0 or ERR_NOMEM (owner then undefined). */
+int paths_hole_owners(const struct paths *ps, const struct path_measure *m, size_t *owner);
 
 /* Distance in mm from q to the nearest edge of the closed paths. */
 double paths_distance_mm(const struct paths *ps, struct pt2 q);

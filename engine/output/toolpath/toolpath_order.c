@@ -394,10 +394,9 @@ nomem:
 }
 
 struct island {
-	size_t loop;     /* index of its outer loop in the region */
-	struct pt2 lo, hi;
-	double area;
-	size_t first, n; /* its items in by_island[] */
+	size_t loop;            /* index of its outer loop in the region */
+	struct path_measure m;  /* that loop's area and box */
+	size_t first, n;        /* its items in by_island[] */
 };
 
 /* Index of the island containing q: the smallest outer loop around it
@@ -410,19 +409,18 @@ static size_t locate(const struct paths *region, const struct island *is, size_t
 	double nd = INFINITY;
 
 	for (size_t i = 0; i < ni; i++) {
-		double dx = q.x < is[i].lo.x ? (double)(is[i].lo.x - q.x)
-			    : q.x > is[i].hi.x ? (double)(q.x - is[i].hi.x) : 0;
-		double dy = q.y < is[i].lo.y ? (double)(is[i].lo.y - q.y)
-			    : q.y > is[i].hi.y ? (double)(q.y - is[i].hi.y) : 0;
-		struct paths one;
+		double dx = q.x < is[i].m.lo.x ? (double)(is[i].m.lo.x - q.x)
+			    : q.x > is[i].m.hi.x ? (double)(q.x - is[i].m.hi.x) : 0;
+		double dy = q.y < is[i].m.lo.y ? (double)(is[i].m.lo.y - q.y)
+			    : q.y > is[i].m.hi.y ? (double)(q.y - is[i].m.hi.y) : 0;
 		if (dx * dx + dy * dy < nd) {
 			nd = dx * dx + dy * dy;
 			nearest = i;
 		}
-		if (dx > 0 || dy > 0 || (best != SIZE_MAX && is[i].area >= is[best].area))
+		if (dx > 0 || dy > 0 ||
+		    (best != SIZE_MAX && is[i].m.area2_nm2 >= is[best].m.area2_nm2))
 			continue;
-		one = (struct paths){&region->v[is[i].loop], 1, 1};
-		if (paths_winding(&one, q))
+		if (path_holds(&region->v[is[i].loop], &is[i].m, q))
 			best = i;
 	}
 	return best != SIZE_MAX ? best : nearest;
@@ -435,6 +433,7 @@ int tp_order(const struct tp_config *c, const struct tp_layer_in *in, const stru
 						  TP_ROLE_TOP};
 	struct order o;
 	struct island *is = NULL;
+	struct path_measure *rm = NULL;
 	size_t ni = 0, *owner = NULL, maxdepth = 0;
 	uint32_t *by_island = NULL, *list = NULL, *cursor = NULL;
 	unsigned char *island_done = NULL;
@@ -453,22 +452,20 @@ int tp_order(const struct tp_config *c, const struct tp_layer_in *in, const stru
 	if (rc)
 		goto out;
 	is = mem_calloc(in->region->n + 1, sizeof *is);
+	rm = mem_alloc((in->region->n + 1) * sizeof *rm);
 	owner = mem_calloc(items->npaths, sizeof *owner);
 	by_island = mem_calloc(items->npaths, sizeof *by_island);
 	list = mem_calloc(items->npaths, sizeof *list);
 	cursor = mem_calloc(in->region->n + 1, sizeof *cursor);
 	island_done = mem_calloc(in->region->n + 1, 1);
-	if (!is || !owner || !by_island || !list || !cursor || !island_done)
+	if (!is || !rm || !owner || !by_island || !list || !cursor || !island_done)
 		goto nomem;
+	paths_measure(in->region, rm);
 	for (size_t i = 0; i < in->region->n; i++) {
-		const struct path *p = &in->region->v[i];
-		struct paths one = {(struct path *)p, 1, 1};
-		double a = path_area_mm2(p);
-		if (a <= 0 || p->n < 3)
+		if (rm[i].area2_nm2 <= 0)
 			continue;
 		is[ni].loop = i;
-		is[ni].area = a;
-		paths_bbox(&one, &is[ni].lo, &is[ni].hi);
+		is[ni].m = rm[i];
 		ni++;
 	}
 	/* Skirt first. */
@@ -509,10 +506,10 @@ int tp_order(const struct tp_config *c, const struct tp_layer_in *in, const stru
 			double dx, dy, d;
 			if (island_done[i] || is[i].n == 0)
 				continue;
-			dx = from.x < is[i].lo.x ? (double)(is[i].lo.x - from.x)
-			     : from.x > is[i].hi.x ? (double)(from.x - is[i].hi.x) : 0;
-			dy = from.y < is[i].lo.y ? (double)(is[i].lo.y - from.y)
-			     : from.y > is[i].hi.y ? (double)(from.y - is[i].hi.y) : 0;
+			dx = from.x < is[i].m.lo.x ? (double)(is[i].m.lo.x - from.x)
+			     : from.x > is[i].m.hi.x ? (double)(from.x - is[i].m.hi.x) : 0;
+			dy = from.y < is[i].m.lo.y ? (double)(is[i].m.lo.y - from.y)
+			     : from.y > is[i].m.hi.y ? (double)(from.y - is[i].m.hi.y) : 0;
 			d = dx * dx + dy * dy;
 			if (d < bd) {
 				bd = d;
@@ -573,6 +570,7 @@ out:
 	mem_free(o.tmp);
 	mem_free(o.tmp_w);
 	mem_free(is);
+	mem_free(rm);
 	mem_free(owner);
 	mem_free(by_island);
 	mem_free(list);

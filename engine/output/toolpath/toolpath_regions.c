@@ -30,24 +30,20 @@
  * shrunk past its inradius from self-crossing raw edges, O(n^2) crossings
  * per polygon, so removing them first matters for layers of many small
  * islands (lattice struts).  Each hole goes with the smallest outer loop
- * around it (paths_hole_owners; owner has in->n entries).  kept receives
- * shallow copies (no ownership); returns the number of paths dropped, or
- * (size_t)-1 when out of memory. */
+ * around it (paths_hole_owners).  m, mark and owner: scratch of in->n
+ * entries.  kept receives shallow copies (no ownership); returns the
+ * number of paths dropped, or (size_t)-1 when out of memory. */
 static size_t prune_vanishing(const struct paths *in, double d, struct paths *kept,
-			      unsigned char *mark, size_t *owner)
+			      struct path_measure *m, unsigned char *mark, size_t *owner)
 {
 	size_t dropped = 0;
 
-	if (paths_hole_owners(in, owner))
+	paths_measure(in, m);
+	if (paths_hole_owners(in, m, owner))
 		return (size_t)-1;
-	for (size_t i = 0; i < in->n; i++) {
-		struct paths one = {&in->v[i], 1, 1};
-		struct pt2 lo, hi;
-		mark[i] = 0;
-		if (path_area2_nm2(&in->v[i]) > 0 && paths_bbox(&one, &lo, &hi) &&
-		    ((double)(hi.x - lo.x) <= 2 * d || (double)(hi.y - lo.y) <= 2 * d))
-			mark[i] = 1;
-	}
+	for (size_t i = 0; i < in->n; i++)
+		mark[i] = m[i].area2_nm2 > 0 && ((double)(m[i].hi.x - m[i].lo.x) <= 2 * d ||
+						 (double)(m[i].hi.y - m[i].lo.y) <= 2 * d);
 	for (size_t i = 0; i < in->n; i++)
 		if (owner[i] != SIZE_MAX) /* a hole: as its outer loop */
 			mark[i] = mark[owner[i]];
@@ -64,6 +60,7 @@ static size_t prune_vanishing(const struct paths *in, double d, struct paths *ke
 static int offset(const struct paths *in, double delta_nm, struct paths *out, struct err *e)
 {
 	struct paths kept;
+	struct path_measure *m;
 	unsigned char *mark;
 	size_t *owner;
 	int rc;
@@ -75,11 +72,13 @@ static int offset(const struct paths *in, double delta_nm, struct paths *out, st
 	if (delta_nm >= 0)
 		return clip_offset(in, delta_nm, CLIP_JOIN_MITER, 3.0, 0, out, e);
 	kept.v = mem_alloc(in->n * sizeof *kept.v);
+	m = mem_alloc(in->n * sizeof *m);
 	mark = mem_alloc(in->n);
 	owner = mem_alloc(in->n * sizeof *owner);
-	if (!kept.v || !mark || !owner ||
-	    prune_vanishing(in, -delta_nm, &kept, mark, owner) == (size_t)-1) {
+	if (!kept.v || !m || !mark || !owner ||
+	    prune_vanishing(in, -delta_nm, &kept, m, mark, owner) == (size_t)-1) {
 		mem_free(kept.v);
+		mem_free(m);
 		mem_free(mark);
 		mem_free(owner);
 		return ERR_SET(e, ERR_NOMEM, "out of memory offsetting a region");
@@ -92,6 +91,7 @@ static int offset(const struct paths *in, double delta_nm, struct paths *out, st
 		rc = clip_offset(&kept, delta_nm, CLIP_JOIN_MITER, 3.0, 0, out, e);
 	}
 	mem_free(kept.v);
+	mem_free(m);
 	mem_free(mark);
 	mem_free(owner);
 	return rc;
@@ -233,21 +233,26 @@ static int skin_of(const struct tp_config *c, const struct tp_layer_in *in, cons
  * smallest outer loop containing it (paths_hole_owners). */
 static int drop_small(struct paths *ps, double min_mm2, struct err *e)
 {
+	struct path_measure *m;
 	unsigned char *keep;
 	size_t *owner;
 	size_t k = 0;
 
 	if (ps->n == 0)
 		return 0;
+	m = mem_alloc(ps->n * sizeof *m);
 	keep = mem_calloc(ps->n, 1);
 	owner = mem_alloc(ps->n * sizeof *owner);
-	if (!keep || !owner || paths_hole_owners(ps, owner)) {
+	if (m)
+		paths_measure(ps, m);
+	if (!m || !keep || !owner || paths_hole_owners(ps, m, owner)) {
+		mem_free(m);
 		mem_free(keep);
 		mem_free(owner);
 		return ERR_SET(e, ERR_NOMEM, "out of memory computing skins");
 	}
 	for (size_t i = 0; i < ps->n; i++)
-		keep[i] = path_area_mm2(&ps->v[i]) >= min_mm2;
+		keep[i] = path_measure_mm2(&m[i]) >= min_mm2;
 	for (size_t i = 0; i < ps->n; i++)
 		if (owner[i] != SIZE_MAX)
 			keep[i] = keep[owner[i]];
@@ -258,6 +263,7 @@ static int drop_small(struct paths *ps, double min_mm2, struct err *e)
 			path_fini(&ps->v[i]);
 	}
 	ps->n = k;
+	mem_free(m);
 	mem_free(keep);
 	mem_free(owner);
 	return 0;

@@ -57,20 +57,6 @@ static int push(struct thin_buf *b, struct pt2 p, int64_t w)
 	return 0;
 }
 
-static int path_contains(const struct path *p, struct pt2 q)
-{
-	struct paths one = {(struct path *)p, 1, 1};
-
-	return paths_winding(&one, q) != 0;
-}
-
-/* A piece of tp_thin's input, measured once. */
-struct piece_box {
-	double area_mm2;  /* signed (holes < 0); 0 for a piece without points */
-	double holes_mm2; /* summed signed areas of the holes it owns (<= 0) */
-	struct pt2 lo, hi;
-};
-
 /* Centre p between the walls: *c and the local width *w_nm. */
 static void centre(struct tp_index *ix, struct pt2 p, int64_t max_w, struct pt2 *c,
 		   int64_t *w_nm)
@@ -429,7 +415,8 @@ int tp_thin(const struct paths *pieces, enum tp_role role, int64_t min_w_nm, int
 	size_t chain_cap = 0;
 	unsigned char *printed = NULL;
 	size_t *owner = NULL, *pown = NULL, sides_cap = 0;
-	struct piece_box *pa = NULL;
+	struct path_measure *pm = NULL; /* the pieces' */
+	double *holes_mm2 = NULL;       /* per outer piece: its holes' summed area (<= 0) */
 	struct side *sides = NULL;
 	/* Pieces below this area are offset noise (corner slivers of the
 	 * mitred coverage), neither printed nor reported. */
@@ -448,18 +435,15 @@ int tp_thin(const struct paths *pieces, enum tp_role role, int64_t min_w_nm, int
 		goto out;
 	printed = mem_calloc(pieces->n, 1);
 	owner = mem_alloc((sliver.n ? sliver.n : 1) * sizeof *owner);
-	pa = mem_calloc(pieces->n, sizeof *pa);
+	pm = mem_alloc(pieces->n * sizeof *pm);
+	holes_mm2 = mem_calloc(pieces->n, sizeof *holes_mm2);
 	pown = mem_alloc(pieces->n * sizeof *pown);
-	if (!printed || !owner || !pa || !pown || paths_hole_owners(&sliver, owner) ||
-	    paths_hole_owners(pieces, pown)) {
+	if (pm)
+		paths_measure(pieces, pm);
+	if (!printed || !owner || !pm || !holes_mm2 || !pown ||
+	    paths_hole_owners(&sliver, NULL, owner) || paths_hole_owners(pieces, pm, pown)) {
 		rc = ERR_SET(e, ERR_NOMEM, "out of memory planning thin walls");
 		goto out;
-	}
-	for (size_t k = 0; k < pieces->n; k++) {
-		struct paths one = {&pieces->v[k], 1, 1};
-		pa[k].area_mm2 = path_area_mm2(&pieces->v[k]);
-		if (!paths_bbox(&one, &pa[k].lo, &pa[k].hi))
-			pa[k].area_mm2 = 0;
 	}
 	for (size_t i = 0; i < sliver.n; i++) {
 		const struct path *o = &sliver.v[i];
@@ -530,10 +514,7 @@ int tp_thin(const struct paths *pieces, enum tp_role role, int64_t min_w_nm, int
 			goto out;
 		/* Credit the piece this sliver came from. */
 		for (size_t k = 0; added && k < pieces->n; k++) {
-			const struct path *pc = &pieces->v[k];
-			struct pt2 q = o->pts[0];
-			if (pa[k].area_mm2 > 0 && q.x >= pa[k].lo.x && q.x <= pa[k].hi.x &&
-			    q.y >= pa[k].lo.y && q.y <= pa[k].hi.y && path_contains(pc, q)) {
+			if (pm[k].area2_nm2 > 0 && path_holds(&pieces->v[k], &pm[k], o->pts[0])) {
 				if (!printed[k])
 					items->thin_regions++;
 				printed[k] = 1;
@@ -545,10 +526,10 @@ int tp_thin(const struct paths *pieces, enum tp_role role, int64_t min_w_nm, int
 	 * with its smallest outer loop). */
 	for (size_t j = 0; j < pieces->n; j++)
 		if (pown[j] != SIZE_MAX)
-			pa[pown[j]].holes_mm2 += pa[j].area_mm2;
+			holes_mm2[pown[j]] += path_measure_mm2(&pm[j]);
 	for (size_t k = 0; k < pieces->n; k++) {
-		double a = pa[k].area_mm2 + pa[k].holes_mm2;
-		if (printed[k] || pa[k].area_mm2 < noise_mm2)
+		double a = path_measure_mm2(&pm[k]) + holes_mm2[k];
+		if (printed[k] || path_measure_mm2(&pm[k]) < noise_mm2)
 			continue;
 		items->thin_dropped++;
 		items->thin_dropped_mm2 += a > 0 ? a : 0;
@@ -556,7 +537,8 @@ int tp_thin(const struct paths *pieces, enum tp_role role, int64_t min_w_nm, int
 out:
 	mem_free(printed);
 	mem_free(owner);
-	mem_free(pa);
+	mem_free(pm);
+	mem_free(holes_mm2);
 	mem_free(pown);
 	mem_free(sides);
 	mem_free(chain);

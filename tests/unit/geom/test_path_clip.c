@@ -72,7 +72,7 @@ static void test_hole_owners(void)
 		square(&ps, -4.5 + 1.5 * k, 32, 1.2, 1);
 		square(&ps, -4.4 + 1.5 * k, 32.1, 0.5, 0);
 	}
-	CHECK_EQ_INT(paths_hole_owners(&ps, owner), 0);
+	CHECK_EQ_INT(paths_hole_owners(&ps, NULL, owner), 0);
 	CHECK(owner[0] == 1);
 	CHECK(owner[1] == SIZE_MAX && owner[2] == SIZE_MAX && owner[5] == SIZE_MAX);
 	CHECK(owner[3] == 2);
@@ -83,6 +83,39 @@ static void test_hole_owners(void)
 		CHECK(owner[i] == owner_brute(&ps, i));
 	for (size_t k = 0; k < 20; k++)
 		CHECK(owner[9 + 2 * k] == 8 + 2 * k);
+	/* measured once, given: the same owners; each measure as the path's
+	 * own area and box, and path_holds as the winding test */
+	{
+		struct path_measure m[64];
+		size_t owner2[64];
+		paths_measure(&ps, m);
+		CHECK_EQ_INT(paths_hole_owners(&ps, m, owner2), 0);
+		for (size_t i = 0; i < ps.n; i++) {
+			struct paths one = {&ps.v[i], 1, 1};
+			struct pt2 lo, hi;
+			CHECK(owner2[i] == owner[i]);
+			CHECK_NEAR(path_measure_mm2(&m[i]), path_area_mm2(&ps.v[i]), 0);
+			if (paths_bbox(&one, &lo, &hi))
+				CHECK(m[i].lo.x == lo.x && m[i].lo.y == lo.y && m[i].hi.x == hi.x &&
+				      m[i].hi.y == hi.y);
+			else
+				CHECK(m[i].lo.x > m[i].hi.x); /* the empty path: no box */
+		}
+		CHECK_NEAR(path_measure_mm2(&m[1]), 1600, 1e-9);
+		CHECK_NEAR(path_measure_mm2(&m[0]), -100, 1e-9);
+		for (int k = 0; k < 200; k++) {
+			/* points on a grid over the layer, the on-edge ones too */
+			struct pt2 q = {geom_mm_to_nm(-6 + 0.25 * (k % 20) * 3),
+					geom_mm_to_nm(-6 + 0.25 * (k / 20) * 3)};
+			for (size_t i = 0; i < ps.n; i++) {
+				struct paths one = {&ps.v[i], 1, 1};
+				CHECK_EQ_INT(path_holds(&ps.v[i], &m[i], q),
+					     ps.v[i].n > 0 && paths_winding(&one, q) != 0);
+			}
+		}
+		CHECK_EQ_INT(path_holds(&ps.v[1], &m[1], ps.v[1].pts[0]), 1);
+		CHECK_EQ_INT(path_holds(&ps.v[7], &m[7], (struct pt2){0, 0}), 0);
+	}
 	paths_fini(&ps);
 }
 
