@@ -73,3 +73,32 @@ double raster_coverage_px(const struct raster *r)
 	}
 	return (double)sum / 255.0;
 }
+
+int raster_row_span(const uint8_t *row, int w, int thr, int *x0, int *x1)
+{
+	int x = 0, b;
+
+	for (;;) {
+		uint64_t word;
+		int end;
+		while (x + 8 <= w) {
+			memcpy(&word, row + x, sizeof word);
+			if (word)
+				break;
+			x += 8;
+		}
+		if (x >= w)
+			return 0;
+		end = x + 8 < w ? x + 8 : w;
+		while (x < end && row[x] < thr)
+			x++;
+		if (x < end)
+			break;
+	}
+	b = w - 1;
+	while (row[b] < thr)
+		b--;
+	*x0 = x;
+	*x1 = b;
+	return 1;
+}

@@ -47,4 +47,9 @@ double raster_map_pixel_area_mm2(const struct raster_map *m);
 /* Sum of pixel values / 255, i.e. the covered area in pixels. */
 double raster_coverage_px(const struct raster *r);
 
+/* The first and last x of row[0..w) with row[x] >= thr (thr >= 1) into
+ * *x0, *x1; returns 0 (both untouched) when there is none.  Zero bytes
+ * are skipped eight at a time: most of a layer image is empty. */
+int raster_row_span(const uint8_t *row, int w, int thr, int *x0, int *x1);
+
 #endif

@@ -42,34 +42,6 @@ static void clear_box(uint8_t *a, int w, int x0, int y0, int x1, int y1)
 		memset(a + (size_t)y * (size_t)w + x0, 0, (size_t)(x1 - x0 + 1));
 }
 
-/* First and last x of row[0..w) with row[x] >= thr (thr >= 1) into *a,
- * *b; 0 when there is none.  Zero bytes are skipped eight at a time. */
-static int row_span(const uint8_t *row, int w, int thr, int *a, int *b)
-{
-	int x = 0;
-
-	for (;;) {
-		uint64_t word;
-		while (x + 8 <= w) {
-			memcpy(&word, row + x, sizeof word);
-			if (word)
-				break;
-			x += 8;
-		}
-		if (x >= w)
-			return 0;
-		for (int end = x + 8 < w ? x + 8 : w; x < end; x++)
-			if (row[x] >= thr)
-				goto found;
-	}
-found:
-	*a = x;
-	*b = w - 1;
-	while (row[*b] < thr)
-		(*b)--;
-	return 1;
-}
-
 int verify_contact_layer(struct verify_contact *c, const struct raster *ref, int threshold)
 {
 	size_t n = (size_t)ref->w * (size_t)ref->h;
@@ -97,7 +69,7 @@ int verify_contact_layer(struct verify_contact *c, const struct raster *ref, int
 		const uint8_t *row = ref->px + (size_t)y * ref->stride;
 		uint8_t *cu = c->cur + (size_t)y * (size_t)c->w;
 		int a, b;
-		if (!row_span(row, ref->w, threshold, &a, &b))
+		if (!raster_row_span(row, ref->w, threshold, &a, &b))
 			continue;
 		for (int x = a; x <= b; x++)
 			cu[x] = row[x] >= threshold;

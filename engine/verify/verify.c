@@ -51,6 +51,7 @@
 #include "engine/core/metrics.h"
 #include "engine/geom/edt.h"
 #include "engine/geom/label.h"
+#include "engine/geom/raster.h"
 #include "engine/verify/between.h"
 #include "engine/verify/contact.h"
 #include "engine/verify/fins.h"
@@ -434,28 +435,6 @@ int verify_layer(struct verify *v, const struct raster *r, struct err *e)
 	return verify_layer_ref(v, r, NULL, e);
 }
 
-/* First x in row[0..w) with row[x] >= thr (thr >= 1), or -1: zero bytes
- * are skipped eight at a time (most of a layer image is empty). */
-static int row_first_at_least(const uint8_t *row, int w, int thr)
-{
-	int x = 0;
-
-	for (;;) {
-		uint64_t word;
-		while (x + 8 <= w) {
-			memcpy(&word, row + x, sizeof word);
-			if (word)
-				break;
-			x += 8;
-		}
-		if (x >= w)
-			return -1;
-		for (int end = x + 8 < w ? x + 8 : w; x < end; x++)
-			if (row[x] >= thr)
-				return x;
-	}
-}
-
 /* Join each void pixel of crop c (this layer) with what lies under it
  * in crop pc (the previous layer): its void component, or the outside
  * where pc has no pixel there; and each void pixel of pc outside c with
@@ -556,12 +535,9 @@ int verify_layer_ref(struct verify *v, const struct raster *r, const struct rast
 	 * pixel, the stretch between them unread */
 	for (int y = 0; y < r->h; y++) {
 		const uint8_t *row = r->px + (size_t)y * r->stride;
-		int a = row_first_at_least(row, r->w, v->p.threshold), b;
-		if (a < 0)
+		int a, b;
+		if (!raster_row_span(row, r->w, v->p.threshold, &a, &b))
 			continue;
-		b = r->w - 1;
-		while (row[b] < v->p.threshold)
-			b--;
 		x0 = a < x0 ? a : x0;
 		x1 = b > x1 ? b : x1;
 		y0 = y < y0 ? y : y0;

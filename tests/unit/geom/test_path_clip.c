@@ -1,4 +1,6 @@
 /* test_path_clip.c - integer paths and the Clipper shim. */
+#include <string.h>
+
 #include "harness.h"
 
 #include "engine/core/err.h"
@@ -164,6 +166,39 @@ static void test_clip(void)
 	paths_fini(&out);
 }
 
+/* raster_row_span against a plain scan, on rows of every length 1..40
+ * with one or two marks at every place (values under, at and over the
+ * threshold) */
+static void test_row_span(void)
+{
+	uint8_t row[40];
+	int a = -7, b = -7;
+
+	memset(row, 0, sizeof row);
+	CHECK_EQ_INT(raster_row_span(row, 40, 128, &a, &b), 0);
+	CHECK(a == -7 && b == -7);
+	for (int w = 1; w <= 40; w++)
+		for (int i = 0; i < w; i++)
+			for (int j = i; j < w; j++)
+				for (int v = 0; v < 3; v++) {
+					int ea = -1, eb = -1, got;
+					memset(row, 0, sizeof row);
+					row[i] = v == 0 ? 127 : v == 1 ? 128 : 255;
+					row[j] = 200;
+					if (w < 40)
+						row[w] = 255; /* past the row: unread */
+					for (int x = 0; x < w; x++)
+						if (row[x] >= 128) {
+							ea = ea < 0 ? x : ea;
+							eb = x;
+						}
+					got = raster_row_span(row, w, 128, &a, &b);
+					CHECK_EQ_INT(got, ea >= 0);
+					if (got)
+						CHECK(a == ea && b == eb);
+				}
+}
+
 static void test_raster_map(void)
 {
 	/* 0.05 mm pixels, column = x / 0.05, row = (10 - y) / 0.05 */
@@ -184,6 +219,7 @@ int main(void)
 	RUN(test_area_winding);
 	RUN(test_hole_owners);
 	RUN(test_clip);
+	RUN(test_row_span);
 	RUN(test_raster_map);
 	return harness_report();
 }

@@ -48,16 +48,31 @@ static int solid_at(enum shape s, double x, double y, double z)
 	return pillar || chin || bridge;
 }
 
-static void fill(struct raster *r, enum shape s, int k)
+/* Layer k of a solid given by at(arg, x, y, z) (mm), sampled at pixel and
+ * layer centres into r. */
+static void draw(struct raster *r, int (*at)(int, double, double, double), int arg, int k)
 {
 	double z = (k + 0.5) * LAYER;
 	for (int j = 0; j < N; j++)
 		for (int i = 0; i < N; i++)
 			r->px[(size_t)j * r->stride + (size_t)i] =
-				solid_at(s, (i + 0.5) * PX, (j + 0.5) * PX, z) ? 255 : 0;
+				at(arg, (i + 0.5) * PX, (j + 0.5) * PX, z) ? 255 : 0;
 }
 
-static void run_pair(enum shape s, struct verify_report *rep)
+static int shape_at(int s, double x, double y, double z)
+{
+	return solid_at((enum shape)s, x, y, z);
+}
+
+static void fill(struct raster *r, enum shape s, int k)
+{
+	draw(r, shape_at, (int)s, k);
+}
+
+/* The stack of layers layers of at(arg, ...) checked, against the same
+ * layers of at(ref_arg, ...) when with_ref; *rep replaced. */
+static void run_stack(int (*at)(int, double, double, double), int arg, int ref_arg, int layers,
+		      int with_ref, struct verify_report *rep)
 {
 	struct verify_params p = {LAYER, 45, PX, PX, 0, 0, 0, 0};
 	struct verify *v = NULL;
@@ -68,15 +83,20 @@ static void run_pair(enum shape s, struct verify_report *rep)
 	memset(rep, 0, sizeof *rep);
 	REQUIRE(r && ref);
 	REQUIRE_OK(verify_new(&p, &v, &e), &e);
-	for (int k = 0; k < LAYERS; k++) {
-		fill(r, s, k);
-		fill(ref, REF, k);
-		REQUIRE_OK(verify_layer_ref(v, r, ref, &e), &e);
+	for (int k = 0; k < layers; k++) {
+		draw(r, at, arg, k);
+		draw(ref, at, ref_arg, k);
+		REQUIRE_OK(with_ref ? verify_layer_ref(v, r, ref, &e) : verify_layer(v, r, &e), &e);
 	}
 	REQUIRE_OK(verify_finish(v, rep, &e), &e);
 	verify_free(v);
 	raster_free(r);
 	raster_free(ref);
+}
+
+static void run_pair(enum shape s, struct verify_report *rep)
+{
+	run_stack(shape_at, (int)s, REF, LAYERS, 1, rep);
 }
 
 static void test_part_itself(void)
@@ -175,35 +195,9 @@ static int crevice_at(int cavity, double x, double y, double z)
 	return !(cavity && x > 5 && x < 8 && y > 11 && y < 13.5 && z > 1 && z < 4);
 }
 
-static void crevice_layer(struct raster *r, int cavity, int k)
-{
-	double z = (k + 0.5) * LAYER;
-	for (int j = 0; j < N; j++)
-		for (int i = 0; i < N; i++)
-			r->px[(size_t)j * r->stride + (size_t)i] =
-				crevice_at(cavity, (i + 0.5) * PX, (j + 0.5) * PX, z) ? 255 : 0;
-}
-
 static void run_crevice(int cavity, int with_ref, struct verify_report *rep)
 {
-	struct verify_params p = {LAYER, 45, PX, PX, 0, 0, 0, 0};
-	struct verify *v = NULL;
-	struct raster *r = raster_new(N, N), *ref = raster_new(N, N);
-	struct err e;
-
-	err_clear(&e);
-	memset(rep, 0, sizeof *rep);
-	REQUIRE(r && ref);
-	REQUIRE_OK(verify_new(&p, &v, &e), &e);
-	for (int k = 0; k < 60; k++) {
-		crevice_layer(r, cavity, k);
-		crevice_layer(ref, 0, k);
-		REQUIRE_OK(with_ref ? verify_layer_ref(v, r, ref, &e) : verify_layer(v, r, &e), &e);
-	}
-	REQUIRE_OK(verify_finish(v, rep, &e), &e);
-	verify_free(v);
-	raster_free(r);
-	raster_free(ref);
+	run_stack(crevice_at, cavity, 0, 60, with_ref, rep);
 }
 
 static void test_crevice(void)
