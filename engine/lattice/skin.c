@@ -4,6 +4,7 @@
 #include "engine/core/err.h"
 #include "engine/core/mem.h"
 #include "engine/geom/clip.h"
+#include "engine/geom/vec.h"
 #include "engine/slice/erode.h"
 #include "engine/slice/layer.h"
 #include "engine/slice/slice.h"
@@ -12,7 +13,7 @@
 
 struct lattice_skin {
 	struct slicer *part;    /* the part at the layer being printed */
-	struct slicer *ahead;   /* the eroder's own source, running ahead */
+	struct slice_mid_source ahead; /* the eroder's own slices, running ahead (slicer owned) */
 	struct slice_eroder *eroder;
 	double layer_mm;
 	int last_k;
@@ -21,19 +22,12 @@ struct lattice_skin {
 	double area_mm2;
 };
 
-static int ahead_layer(void *ctx, int k, struct paths *region, struct err *e)
-{
-	struct lattice_skin *s = ctx;
-	return slice_at(s->ahead, (k + 0.5) * s->layer_mm, region, NULL, e);
-}
-
 int lattice_skin_new(const struct mesh *m, double shell_mm, double pixel_mm, double layer_mm,
 		     double z_top_mm, double x0, double y0, double x1, double y1,
 		     struct lattice_skin **out, struct err *e)
 {
 	struct lattice_skin *s = mem_calloc(1, sizeof *s);
-	struct slice_erode_params ep;
-	struct slice_erode_source src;
+	struct box3 bb = {{x0, y0, 0}, {x1, y1, z_top_mm}};
 	int rc;
 
 	if (!s)
@@ -44,19 +38,10 @@ int lattice_skin_new(const struct mesh *m, double shell_mm, double pixel_mm, dou
 	paths_init(&s->cavity);
 	paths_init(&s->shell);
 	paths_init(&s->tmp);
-	src.layer = ahead_layer;
-	src.ctx = s;
-	memset(&ep, 0, sizeof ep);
-	ep.r_mm = shell_mm;
-	ep.pixel_mm = pixel_mm;
-	ep.layer_mm = layer_mm;
-	ep.layer_count = layer_count_for(z_top_mm, layer_mm);
-	ep.x0_mm = x0;
-	ep.y0_mm = y0;
-	ep.x1_mm = x1;
-	ep.y1_mm = y1;
-	if ((rc = slice_new(m, &s->part, e)) != 0 || (rc = slice_new(m, &s->ahead, e)) != 0 ||
-	    (rc = slice_erode_new(&ep, &src, &s->eroder, e)) != 0) {
+	if ((rc = slice_new(m, &s->part, e)) != 0 ||
+	    (rc = slice_erode_mesh_new(m, shell_mm, pixel_mm, layer_mm,
+				       layer_count_for(z_top_mm, layer_mm), &bb, &s->ahead,
+				       &s->eroder, e)) != 0) {
 		lattice_skin_free(s);
 		return rc;
 	}
@@ -70,7 +55,7 @@ void lattice_skin_free(struct lattice_skin *s)
 		return;
 	slice_erode_free(s->eroder);
 	slice_free(s->part);
-	slice_free(s->ahead);
+	slice_free(s->ahead.slicer);
 	paths_fini(&s->region);
 	paths_fini(&s->cavity);
 	paths_fini(&s->shell);

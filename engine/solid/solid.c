@@ -47,30 +47,17 @@ struct solid_state {
 static int setup_shell(struct solid_state *s, const struct engine_ctx *ctx,
 		       const struct solid_params *p, struct err *e)
 {
-	struct slice_erode_params ep;
-	struct slice_erode_source src = {slice_mid_layer, &s->src};
 	const struct box3 *bb = &ctx->report->bbox;
-	int rc;
 
 	s->shell_mm = ctx->common->shell_mm;
 	s->shell_pixel_mm = p->shell_pixel_mm;
 	if (s->shell_pixel_mm <= 0)
 		s->shell_pixel_mm = ctx->map ? sqrt(raster_map_pixel_area_mm2(ctx->map))
 					     : SOLID_FDM_SHELL_PIXEL_MM;
-	s->src.layer_mm = s->layer_mm;
-	rc = slice_new(ctx->mesh, &s->src.slicer, e);
-	if (rc)
-		return rc;
-	memset(&ep, 0, sizeof ep);
-	ep.r_mm = s->shell_mm;
-	ep.pixel_mm = s->shell_pixel_mm;
-	ep.layer_mm = s->layer_mm;
-	ep.layer_count = layer_count_for(bb->hi.z, s->layer_mm);
-	ep.x0_mm = bb->lo.x;
-	ep.y0_mm = bb->lo.y;
-	ep.x1_mm = bb->hi.x;
-	ep.y1_mm = bb->hi.y;
-	return slice_erode_new(&ep, &src, &s->eroder, e);
+	/* solid_release frees the eroder and the slicer, also on error */
+	return slice_erode_mesh_new(ctx->mesh, s->shell_mm, s->shell_pixel_mm, s->layer_mm,
+				    layer_count_for(bb->hi.z, s->layer_mm), bb, &s->src,
+				    &s->eroder, e);
 }
 
 static void solid_release(void *state);

@@ -408,7 +408,7 @@ static int round_voids(const struct round_in *in, struct hl_opt_stats *o, struct
 		       size_t *nvout, struct err *e)
 {
 	const struct hl_opt_params *c = in->c;
-	struct slicer *ss = NULL;
+	struct slice_mid_source sc = {NULL, 0}; /* the eroder's slices (its slicer owned) */
 	struct slice_eroder *er = NULL;
 	struct mesh_bvh *bvh = NULL;
 	struct hl_slice *sl = NULL;
@@ -425,24 +425,10 @@ static int round_voids(const struct round_in *in, struct hl_opt_stats *o, struct
 	paths_init(&tmp);
 	for (size_t i = 0; i < in->solid->nv; i++)
 		box3_add(&bb, in->solid->v[i]);
-	rc = slice_new(in->solid, &ss, e);
-	if (rc)
-		goto out;
 	{
-		struct slice_erode_params ep;
-		struct slice_mid_source sc = {ss, c->stack_layer_mm};
-		struct slice_erode_source src = {slice_mid_layer, &sc};
-		memset(&ep, 0, sizeof ep);
-		ep.r_mm = in->wall;
-		ep.pixel_mm = c->pixel_mm;
-		ep.layer_mm = c->stack_layer_mm;
-		ep.layer_count = in->stack_count;
-		ep.x0_mm = bb.lo.x;
-		ep.y0_mm = bb.lo.y;
-		ep.x1_mm = bb.hi.x;
-		ep.y1_mm = bb.hi.y;
 		/* sc lives on this stack frame for the whole erosion below */
-		rc = slice_erode_new(&ep, &src, &er, e);
+		rc = slice_erode_mesh_new(in->solid, in->wall, c->pixel_mm, c->stack_layer_mm,
+					  in->stack_count, &bb, &sc, &er, e);
 		if (rc)
 			goto out;
 		if (in->plan_tmax > 0) {
@@ -566,7 +552,7 @@ out:
 	mem_free(pre);
 	mesh_bvh_free(bvh);
 	slice_erode_free(er);
-	slice_free(ss);
+	slice_free(sc.slicer);
 	paths_fini(&reg);
 	paths_fini(&tmp);
 	return rc;
