@@ -1,6 +1,5 @@
-/* opt_int.h - internals of the paper's optimiser (engine/hollow/opt/):
- * the data model and the steps rounds.c chains.  Not for use outside
- * engine/hollow/opt/ (opt.h is the optimiser's face).
+/* opt_int.h - internals of the paper's optimiser (engine/hollow/opt/, whose
+ * face is opt.h): the data model and the steps rounds.c chains.
  *
  * Paper 004 (Wang et al., "Support-Free Hollowing", TVCG 2018): method and
  * derivations in docs/hollow.md.  Printer frame, mm, z up (d = +z).  A void
@@ -35,6 +34,8 @@ struct hl_loop {
 void hl_loop_fini(struct hl_loop *l);
 /* Move src into dst (src left empty). */
 void hl_loop_move(struct hl_loop *dst, struct hl_loop *src);
+/* 1 when (x, y) is inside loop xy (n vertices, any orientation; poles.c). */
+int hl_loop_inside(const double *xy, size_t n, double x, double y);
 
 /* All loops of one slice. */
 struct hl_slice {
@@ -277,12 +278,11 @@ double hl_reach_slope(double alpha_rad);
  * between the two loops (see start.c).  0 or ERR_NOMEM. */
 int hl_void_support_start(const struct hl_void *v, double reach_slope, double *l, struct err *e);
 
-/* Rebuild v's strips top-down where its start puts the vertices, and set
- * v->start (restrip.c; reach_slope as above, block: clearance at offset 0).
- * A pair of loops with no strip whose cross edges stay within reach ends
- * the void: it keeps the loops above and *first is the index (in v's
- * loops before the call) of the lowest kept, else 0.  Returns 0, 1 when
- * fewer than two loops are left (v unusable), or a negative err_code. */
+/* Rebuild v's strips top-down where its start puts the vertices, and set v->start (restrip.c;
+ * reach_slope as above, block: clearance at offset 0).  A pair of loops with no strip whose
+ * cross edges stay within reach ends the void: it keeps the loops above, *first the index (in
+ * v's loops before the call) of the lowest kept, else 0.  Returns 0, 1 when fewer than two
+ * loops are left (v unusable), or a negative err_code. */
 int hl_void_restrip(struct hl_void *v, double reach_slope, const struct hl_block *block,
 		    size_t *first, struct err *e);
 

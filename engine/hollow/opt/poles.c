@@ -33,8 +33,7 @@ static int edge_crosses(const double *xy, size_t i, size_t j, double x, double y
 	return (yi > y) != (yj > y) && x < (xj - xi) * (y - yi) / (yj - yi) + xi;
 }
 
-/* Crossing-number point-in-polygon for the loop xy (n vertices). */
-static int inside_loop(const double *xy, size_t n, double x, double y)
+int hl_loop_inside(const double *xy, size_t n, double x, double y)
 {
 	int in = 0;
 
@@ -44,7 +43,7 @@ static int inside_loop(const double *xy, size_t n, double x, double y)
 }
 
 /* The loop's edges by horizontal slab: inside_slabs() tests only the
- * edges whose y-range meets the query's slab, with inside_loop()'s
+ * edges whose y-range meets the query's slab, with hl_loop_inside()'s
  * edge_crosses(), so the answer is the same (an edge that does
  * not span y adds no crossing) in O(edges per slab) instead of O(n).
  * A loop of fewer than 64 vertices, or one whose edges would fill more
@@ -122,14 +121,14 @@ static void slabs_fini(struct slabs *S)
 	memset(S, 0, sizeof *S);
 }
 
-/* inside_loop(xy, n, x, y) through S. */
+/* hl_loop_inside(xy, n, x, y) through S. */
 static int inside_slabs(const struct slabs *S, const double *xy, size_t n, double x, double y)
 {
 	size_t k;
 	int in = 0;
 
 	if (!S->ns)
-		return inside_loop(xy, n, x, y);
+		return hl_loop_inside(xy, n, x, y);
 	if (y < S->y0 || y > S->y0 + (double)S->ns / S->inv_h)
 		return 0; /* no edge spans y */
 	k = slab_of(S, y);

@@ -62,21 +62,6 @@ static int ray_disc(double wx, double wy, double rx, double ry, double D, double
 	return 1;
 }
 
-/* Is (x, y) inside polygon q (n vertices, any orientation)?  Crossing
- * number; a collapsed polygon contains nothing. */
-static int inside(const double *q, size_t n, double x, double y)
-{
-	int c = 0;
-
-	for (size_t i = 0, j = n - 1; i < n; j = i++) {
-		double yi = q[2 * i + 1], yj = q[2 * j + 1];
-		if ((yi > y) != (yj > y) &&
-		    x < q[2 * j] + (q[2 * i] - q[2 * j]) * (y - yj) / (yi - yj))
-			c = !c;
-	}
-	return c;
-}
-
 /* One strip's problem: lower loop (ids a0.., na), upper positions Q. */
 struct rs {
 	const struct hl_void *v;
@@ -235,7 +220,7 @@ static int restrip_pair(struct hl_void *v, size_t k, const double *Q, double rea
 			x1 = fmax(x1, v->p[2 * i]);
 			y0 = fmin(y0, v->p[2 * i + 1]);
 			y1 = fmax(y1, v->p[2 * i + 1]);
-			flr[i] = (unsigned char)inside(Q, nb, v->p[2 * i], v->p[2 * i + 1]);
+			flr[i] = (unsigned char)hl_loop_inside(Q, nb, v->p[2 * i], v->p[2 * i + 1]);
 		}
 		r = fmax(3.0, 0.25 * fmax(x1 - x0, y1 - y0));
 		s.floor2 = r * r;
