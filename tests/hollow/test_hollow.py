@@ -318,6 +318,25 @@ class HollowTest(unittest.TestCase):
             plain = json.load(f)["gcode"]["thin_dropped_mm2"]
         self.assertLess(m["gcode"]["thin_dropped_mm2"], plain + 100, m["gcode"])
 
+    def test_check_reads_the_parts_own_air(self):
+        # The check reads each layer against the plain part drawn beside
+        # it.  Under 0.2 mm layers on the 0.05 mm grid a slanted crevice of
+        # the camel (layer 228) is a slit whose pixels lie over no void of
+        # the layer below: linked alone it read as a sealed void 0.35 mm
+        # from the outside, so a 1 mm wall was reported as 0.35 mm.
+        # Against the part it is the part's own air: the wall reads the
+        # designed 1 mm less the pixel, and the enclosed void is exactly the
+        # fill's.
+        m = hollow(self.tmp.name, "camel.off", fmt="gcode", rounds=0, up="y", height_mm=50,
+                   wall_mm=1.0, wall_next_mm=0.8)
+        h, v = m["hollow"], m["hollow"]["verify"]
+        self.assertGreaterEqual(h["min_wall_mm"], 0.95, v)
+        self.assertGreaterEqual(v["min_wall_vertical_mm"], 0.95, v)
+        self.assertAlmostEqual(v["enclosed_void_mm3"], h["fill_volume_mm3"],
+                               delta=1e-6 * h["fill_volume_mm3"])
+        self.assertEqual(h["interior_overhang_mm2"], 0.0, v)
+        self.assertEqual(v["islands_added"], 0, v)
+
     def test_optimiser_time_budget(self):
         # a budget spent before any solve: no solver iteration, and no void
         # but support-free starts (the first round may have begun); the
