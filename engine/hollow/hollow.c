@@ -159,7 +159,8 @@ struct hollow_state {
 	 * (verify_layer_ref: the part's own air and islands), and the outer
 	 * surface of a stepped mesh */
 	struct mesh part_view;       /* out.mesh's first part_nv, part_nt */
-	struct slicer *part_slicer;  /* on part_view, which it points to */
+	struct slicer *part_slicer;  /* on part_view, which it points to; NULL when
+				      * out.mesh is the part alone (no optimised voids) */
 	struct raster *part_img;     /* its drawing, the checked raster's size */
 	struct paths part_region;    /* its section */
 	struct raster *own;          /* verification raster when the output has none */
@@ -452,7 +453,7 @@ static int hollow_prepare(const struct engine_ctx *ctx, const void *params, void
 					     hollow_mend_reach_mm(&vp), c->opt.wall_mm, !s->map,
 					     vp.threads, &s->repair, e);
 	}
-	if (!rc) {
+	if (!rc && s->out.mesh->nt != s->part_nt) {
 		s->part_view = (struct mesh){s->out.mesh->v, s->out.mesh->tri, s->part_nv, s->part_nt};
 		rc = slice_new(&s->part_view, &s->part_slicer, e);
 	}
@@ -477,17 +478,23 @@ static int part_img_for(struct hollow_state *s, int w, int h, struct err *e)
 	return 0;
 }
 
-/* The part alone at z_mm drawn into s->part_img (the size of like) through
- * map with antialias, as the layer beside it: the check's reference. */
-static int draw_part(struct hollow_state *s, double z_mm, const struct raster_map *map,
-		     int antialias, const struct raster *like, struct err *e)
+/* The part alone at layer ly drawn into s->part_img (the size of like)
+ * through map with antialias, as the layer beside it: the check's
+ * reference.  ly->region, the output mesh's section, is the part's own
+ * when that mesh is the part alone; else the part is sliced apart. */
+static int draw_part(struct hollow_state *s, const struct layer *ly,
+		     const struct raster_map *map, int antialias, const struct raster *like,
+		     struct err *e)
 {
+	const struct paths *part = &ly->region;
 	int rc = part_img_for(s, like->w, like->h, e);
 
+	if (!rc && s->part_slicer) {
+		rc = slice_at(s->part_slicer, ly->z_mm, &s->part_region, NULL, e);
+		part = &s->part_region;
+	}
 	if (!rc)
-		rc = slice_at(s->part_slicer, z_mm, &s->part_region, NULL, e);
-	if (!rc)
-		rc = slice_rasterize(&s->part_region, map, antialias, s->part_img, e);
+		rc = slice_rasterize(part, map, antialias, s->part_img, e);
 	return rc;
 }
 
@@ -515,7 +522,7 @@ static int hollow_layer(void *state, struct layer *ly, struct err *e)
 			return rc;
 		hl_repair_apply(&s->repair, ly->z_mm, ly->raster);
 		ly->raster_ready = 1;
-		rc = draw_part(s, ly->z_mm, s->map, s->antialias, ly->raster, e);
+		rc = draw_part(s, ly, s->map, s->antialias, ly->raster, e);
 		if (!rc)
 			rc = verify_layer_ref(s->ver, ly->raster, s->part_img, e);
 	} else {
@@ -538,7 +545,7 @@ static int hollow_layer(void *state, struct layer *ly, struct err *e)
 			rc = hl_layer_draw(&ly->region, &s->own_map, 1, fill ? &s->out.fill : NULL,
 					   frag ? &s->frag : NULL, ly->z_mm, 0, 0, s->own, e);
 			if (!rc)
-				rc = draw_part(s, ly->z_mm, &s->own_map, 1, s->own, e);
+				rc = draw_part(s, ly, &s->own_map, 1, s->own, e);
 		}
 		/* the part's drawing is in part_img either way */
 		if (!rc)
