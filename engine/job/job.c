@@ -159,6 +159,12 @@ int job_spec_validate(const struct job_spec *js, struct err *e)
 				 js->printer.name,
 				 js->printer.kind == PRINTER_RESIN ? "resin" : "FDM");
 	}
+	/* a G-code job's layer height is checked against the nozzle here,
+	 * before the engine's work (minutes for some), not when the writer opens */
+	rc = out_check_layers(js->format, &js->printer,
+			      c->layer_mm > 0 ? c->layer_mm : printer_layer_mm(&js->printer), e);
+	if (rc)
+		return rc;
 	if ((js->format == OUT_SL1 || js->format == OUT_SL1S) &&
 	    strcmp(js->printer.resin.model, js->format == OUT_SL1 ? "SL1" : "SL1S") != 0)
 		return ERR_FIELD(e, "printer", "format %s needs printer model %s, '%s' is a %s",

@@ -3,6 +3,8 @@
 #include "engine/core/err.h"
 #include "engine/core/mem.h"
 #include "engine/output/writer.h"
+#include "engine/output/printer/printer.h"
+#include "engine/output/toolpath/toolpath.h"
 
 #include <ctype.h>
 #include <stdio.h>
@@ -75,6 +77,13 @@ int out_format_is_mesh(enum out_format f)
 const char *out_format_default_printer(enum out_format f)
 {
 	return f < OUT_FORMAT_COUNT ? formats[f].printer : NULL;
+}
+int out_check_layers(enum out_format f, const struct printer *p, double layer_mm,
+		     struct err *e)
+{
+	if (f != OUT_GCODE || p->kind != PRINTER_FDM)
+		return 0;
+	return tp_config_check(&p->fdm, layer_mm, e);
 }
 
 struct out_writer {

@@ -36,6 +36,11 @@ int out_format_is_raster(enum out_format f);         /* sl1, sl1s, zip */
 int out_format_is_mesh(enum out_format f);           /* stl, obj */
 /* Profile used when the job names none: sl1, sl1s, sl1 (zip), generic-fdm. */
 const char *out_format_default_printer(enum out_format f);
+/* Can format f write layers of layer_mm (mm) for printer p, before any
+ * work is done for them?  G-code: p's nozzle and line width must allow
+ * that height (tp_config_check); other formats: 0.  0 or ERR_PARAM. */
+int out_check_layers(enum out_format f, const struct printer *p, double layer_mm,
+		     struct err *e);
 
 /* Longest name out_job_dir() writes (without the NUL). */
 #define OUT_JOB_DIR_MAX 40

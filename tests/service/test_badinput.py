@@ -72,7 +72,13 @@ def test_json_errors():
               "display_px_x"),
              ({"printer": "generic-resin", "format": "zip", "params": {"display_mm_y": 1}},
               "display_mm_y"),
-             ({"params": {"display_px_x": 3840}}, "display_px_x")]
+             ({"params": {"display_px_x": 3840}}, "display_px_x"),
+             # a G-code layer the nozzle cannot print: refused when posted,
+             # not when the writer opens after the engine's work
+             ({"format": "gcode", "printer": "generic-fdm", "params": {"layer_mm": 0.4}},
+              "layer_mm"),
+             ({"format": "gcode", "printer": "generic-fdm", "params": {"nozzle_mm": 0.2}},
+              "layer_mm")]
     for extra, field in cases:
         body = {"mesh_id": S["mesh"]}
         body.update(extra)

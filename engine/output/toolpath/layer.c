@@ -12,8 +12,7 @@
 #include <math.h>
 #include <string.h>
 
-int tp_config_init(struct tp_config *c, const struct fdm_printer *f, double layer_mm,
-		   struct err *e)
+int tp_config_check(const struct fdm_printer *f, double layer_mm, struct err *e)
 {
 	double hmax = layer_mm > f->first_layer_mm ? layer_mm : f->first_layer_mm;
 
@@ -26,6 +25,16 @@ int tp_config_init(struct tp_config *c, const struct fdm_printer *f, double laye
 		return ERR_FIELD(e, "layer_mm",
 				 "layer_mm = %g needs a line width above it (line_width_mm = %g)",
 				 hmax, f->line_width_mm);
+	return 0;
+}
+
+int tp_config_init(struct tp_config *c, const struct fdm_printer *f, double layer_mm,
+		   struct err *e)
+{
+	int rc = tp_config_check(f, layer_mm, e);
+
+	if (rc)
+		return rc;
 	memset(c, 0, sizeof *c);
 	c->width_nm = geom_mm_to_nm(f->line_width_mm);
 	c->nozzle_nm = geom_mm_to_nm(f->nozzle_mm);

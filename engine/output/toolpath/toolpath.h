@@ -56,9 +56,14 @@ struct tp_config {
 	struct pt2 bed_lo, bed_hi;     /* printable bed, nm */
 };
 
+/* Can printer f print layers of layer_mm (mm; the first layer is f's own
+ * first_layer_mm)?  At most 80 % of the nozzle, under the line width.
+ * 0, or ERR_PARAM (field "layer_mm") saying which limit it passes. */
+int tp_config_check(const struct fdm_printer *f, double layer_mm, struct err *e);
+
 /* Derive c from printer f and the layer height the job prints with.
  * ERR_PARAM (field "layer_mm") when that height cannot be printed with
- * f's nozzle and line width. */
+ * f's nozzle and line width (tp_config_check). */
 int tp_config_init(struct tp_config *c, const struct fdm_printer *f, double layer_mm,
 		   struct err *e);
 
