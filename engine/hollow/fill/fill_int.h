@@ -148,18 +148,11 @@ struct hl_win {
 	/* D squared: F's squared inside distance (to not_free), mm^2.  w, r:
 	 * born. */
 	float *free_d2_mm2;
-	/* F's ridge where D >= birth: where a void may be born; then the
-	 * pixels born.  w, r: born. */
+	/* F's ridge where D >= birth: where a void may be born.  w, r: born. */
 	uint8_t *ridge;
 	/* Squared distance to the nearest pixel off the ridge, mm^2 (a ridge
 	 * pixel within dg of one turns void).  w, r: born. */
 	float *off_ridge_d2_mm2;
-	/* 1 = born, but within wall + dg of another piece of the layer's
-	 * births (births_apart): void in V(k) as handed down (layer k - 1 is
-	 * designed as if it were born), left out of layer k's runs unless
-	 * layer k - 1 cannot hold it up (topdown.c).  w: born (zeroed at its
-	 * start); r: topdown.c. */
-	uint8_t *born_near;
 
 	/* ---- per-step scratch: each step fills these before it reads them */
 	/* Mask.  grow: E u not C(k) (seeds of support_d2_mm2); keep-apart:
@@ -174,9 +167,8 @@ struct hl_win {
 	/* Labels.  keep-apart: the components of V(k + 1) (seeds of
 	 * near_void), then, lean only, the bisector pixels marked 1 or 2 by
 	 * side (seeds of bisector_side); vertical walls: the floor patches;
-	 * born: the components of C(k), then the pieces of the births;
-	 * islands: the solid components of layer k + 1.  8-connected
-	 * components, label_components8(). */
+	 * born: the components of C(k); islands: the solid components of
+	 * layer k + 1.  8-connected components, label_components8(). */
 	int32_t *step_label;
 	/* Feature indices of hl_grid_nearest() (its seeds go in step_mask).
 	 * w, r: keep-apart. */

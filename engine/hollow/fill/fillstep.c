@@ -37,7 +37,6 @@ void hl_win_fini(struct hl_win *s)
 	mem_free(s->free_d2_mm2);
 	mem_free(s->ridge);
 	mem_free(s->off_ridge_d2_mm2);
-	mem_free(s->born_near);
 	mem_free(s->step_mask);
 	mem_free(s->step_label);
 	mem_free(s->nearest_index);
@@ -72,7 +71,6 @@ int hl_win_init(struct hl_win *s, size_t np)
 	s->free_d2_mm2 = mem_alloc(nf);
 	s->ridge = mem_alloc(np);
 	s->off_ridge_d2_mm2 = mem_alloc(nf);
-	s->born_near = mem_alloc(np);
 	s->step_mask = mem_alloc(np);
 	s->step_label = mem_alloc(ni);
 	s->nearest_index = mem_alloc(ni);
@@ -81,7 +79,7 @@ int hl_win_init(struct hl_win *s, size_t np)
 	       s->support_d2_mm2 && s->keep && s->fin_steps && s->fin_queue && s->near_void &&
 	       s->near_void_d2_mm2 && s->bisector_d2_mm2 && s->bisector_side &&
 	       s->recent_void_d2_mm2 && s->not_free && s->free_d2_mm2 && s->ridge &&
-	       s->off_ridge_d2_mm2 && s->born_near && s->step_mask && s->step_label && s->nearest_index;
+	       s->off_ridge_d2_mm2 && s->step_mask && s->step_label && s->nearest_index;
 }
 
 /* Squared distance transform of seed (nonzero), or all INFINITY when
@@ -364,82 +362,6 @@ static int ridge(const float *d2, const uint8_t *allow, int ww, int wh, double d
 }
 
 /*
- * Births of one layer apart (s->born_near: 1 where a born pixel of
- * s->ridge lies within far of another piece; s->step_label: the births'
- * pieces).  F keeps far = wall + dg from the voids already there, but not
- * one birth of the layer from another: two pieces of F's ridge a pinch
- * apart (a tube's section narrowing between two wider parts: the 30 mm
- * trefoil knot) were born 0.465 mm apart, a wall of 0.42 mm for wall_next
- * 0.8, which keep-apart widens only from the next layer down.  A born
- * pixel within far of a pixel of another 8-connected piece is marked, on
- * both pieces alike (no order); topdown.c leaves the marked pixels out of
- * the layer it writes, so what is written keeps far between the pieces
- * (walls of at least far - 1 px >= wall between pixels), while the layers
- * below are designed as before.  Pixels are bucketed in cells at least far
- * wide, so each is compared only with those of the 3 x 3 cells round it.
- * 0 or ERR_NOMEM.
- */
-static int births_apart(struct hl_win *s, int ww, int wh, const struct hl_geo *g, double far,
-			struct err *e)
-{
-	size_t np = (size_t)ww * (size_t)wh;
-	int32_t nc = 0, nb = 0, *pix = NULL, *head = NULL, *next = NULL;
-	int cw = (int)ceil(far / g->px), chh = (int)ceil(far / g->py), ncx, ncy, rc;
-	uint8_t *drop = NULL;
-
-	rc = label_components8(s->ridge, ww, wh, s->step_label, &nc, e);
-	if (rc || nc < 2)
-		return rc;
-	cw = cw < 1 ? 1 : cw;
-	chh = chh < 1 ? 1 : chh;
-	ncx = ww / cw + 1;
-	ncy = wh / chh + 1;
-	for (size_t i = 0; i < np; i++)
-		nb += s->step_label[i] > 0;
-	pix = mem_alloc((size_t)nb * sizeof *pix);
-	next = mem_alloc((size_t)nb * sizeof *next);
-	drop = mem_calloc((size_t)nb, 1);
-	head = mem_alloc((size_t)ncx * (size_t)ncy * sizeof *head);
-	if (!pix || !next || !drop || !head) {
-		rc = ERR_SET(e, ERR_NOMEM, "hollow: out of memory (fill births)");
-		goto out;
-	}
-	for (size_t i = 0; i < (size_t)ncx * (size_t)ncy; i++)
-		head[i] = -1;
-	nb = 0;
-	for (size_t i = 0; i < np; i++)
-		if (s->step_label[i] > 0) {
-			int cell = ((int)(i / (size_t)ww) / chh) * ncx + (int)(i % (size_t)ww) / cw;
-			pix[nb] = (int32_t)i;
-			next[nb] = head[cell];
-			head[cell] = nb++;
-		}
-	for (int32_t q = 0; q < nb; q++) {
-		int x = pix[q] % ww, y = pix[q] / ww, gx = x / cw, gy = y / chh;
-		int32_t lab = s->step_label[pix[q]];
-		for (int yy = gy - 1; yy <= gy + 1 && !drop[q]; yy++)
-			for (int xx = gx - 1; xx <= gx + 1 && !drop[q]; xx++) {
-				if (xx < 0 || yy < 0 || xx >= ncx || yy >= ncy)
-					continue;
-				for (int32_t t = head[yy * ncx + xx]; t >= 0 && !drop[q]; t = next[t]) {
-					double dx = (pix[t] % ww - x) * g->px;
-					double dy = (pix[t] / ww - y) * g->py;
-					drop[q] = s->step_label[pix[t]] != lab &&
-						  dx * dx + dy * dy <= far * far;
-				}
-			}
-	}
-	for (int32_t q = 0; q < nb; q++)
-		s->born_near[pix[q]] = drop[q];
-out:
-	mem_free(pix);
-	mem_free(next);
-	mem_free(drop);
-	mem_free(head);
-	return rc;
-}
-
-/*
  * New voids (on s->void_out, after keep_apart).  F = pixels of C(k) farther
  * than wall + dg from every void of layers k .. k + mv (s->last_void holds
  * each pixel's last void layer; s->recent_void_d2_mm2), or farther than
@@ -452,9 +374,7 @@ out:
  * ceiling collapses to.  Each born pixel lies within dg of a pixel of the
  * ridge's complement (s->off_ridge_d2_mm2), solid in layers k and k + 1
  * (pixels that do not stay solid), so the flat ceiling of the new void
- * spans at most 2 dg: the verifier's rule holds.  Born pixels within far
- * of another piece of the births are marked in s->born_near
- * (births_apart()).  Below, hl_step_grow()
+ * spans at most 2 dg: the verifier's rule holds.  Below, hl_step_grow()
  * widens it by dd per layer: a ceiling at the design slope, like the
  * paper's voids.  O(pixels).
  */
@@ -466,7 +386,6 @@ int hl_step_born(struct hl_win *s, int ww, int wh, const struct hl_geo *g, int k
 	uint8_t *occ;
 	int any = 0, anyf = 0, anyb, rc;
 
-	memset(s->born_near, 0, np);
 	/* step_mask, three times: the void of layers k .. k + mv, F, off the
 	 * ridge; step_label: the components of C(k) */
 	for (size_t i = 0; i < np; i++) {
@@ -509,13 +428,8 @@ int hl_step_born(struct hl_win *s, int ww, int wh, const struct hl_geo *g, int k
 	rc = dist2(s, s->step_mask, 1, ww, wh, g->px, g->py, s->off_ridge_d2_mm2, e);
 	if (rc)
 		return rc;
-	for (size_t i = 0; i < np; i++) /* ridge := the births */
-		s->ridge[i] = s->ridge[i] && s->off_ridge_d2_mm2[i] <= g->dg * g->dg;
-	rc = births_apart(s, ww, wh, g, far, e);
-	if (rc)
-		return rc;
 	for (size_t i = 0; i < np; i++)
-		if (s->ridge[i]) {
+		if (s->ridge[i] && s->off_ridge_d2_mm2[i] <= g->dg * g->dg) {
 			s->void_out[i] = 1;
 			s->sig_out_mm[i] = INFINITY;
 		}

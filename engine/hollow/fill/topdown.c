@@ -373,56 +373,6 @@ int hl_fill_grid(const struct vec3 *pts, size_t nv, const struct raster_map *m, 
 	return 0;
 }
 
-/* ---- births left out of their layer (hl_win.born_near) ---- */
-
-/* Pixels of layer k + 1 (grid indices: y w + x) left out of its runs:
- * born within wall + dg of another birth of the layer, void in the state
- * the layers below were designed from. */
-struct hl_trim {
-	int32_t *px;
-	size_t n, cap;
-};
-
-/* Of t (layer k + 1's left-out pixels), keep out those layer k holds up:
- * solid in layer k, or with a solid pixel centre of layer k within dg
- * (void_k: layer k's void on its window x0, y0, ww x wh, row stride ww;
- * NULL or outside it: solid); the others go back into the void (a birth
- * too near another, as it was designed).  Then write layer k + 1's runs
- * (*l) from V(k + 1) (vup: the grid, w wide; its box bx0..bx1, by0..by1)
- * less what stays out.  vup is left as it was.  0 or ERR_NOMEM. */
-static int trim_write(struct hl_trim *t, uint8_t *vup, int w, int bx0, int by0, int bx1, int by1,
-		      const uint8_t *void_k, int x0, int y0, int ww, int wh, const struct hl_geo *g,
-		      struct hl_fill_layer *l, struct err *e)
-{
-	int rx = (int)floor(g->dg / g->px), ry = (int)floor(g->dg / g->py), rc;
-	size_t cap = 0, keep = 0;
-
-	for (size_t q = 0; q < t->n; q++) {
-		int x = t->px[q] % w - x0, y = t->px[q] / w - y0, held = 0;
-		if (!void_k || x < 0 || y < 0 || x >= ww || y >= wh ||
-		    !void_k[(size_t)y * (size_t)ww + (size_t)x])
-			held = 1;
-		for (int dy = -ry; dy <= ry && !held; dy++)
-			for (int dx = -rx; dx <= rx && !held; dx++) {
-				int xx = x + dx, yy = y + dy;
-				if (dx * g->px * dx * g->px + dy * g->py * dy * g->py > g->dg * g->dg)
-					continue;
-				held = xx < 0 || yy < 0 || xx >= ww || yy >= wh ||
-				       !void_k[(size_t)yy * (size_t)ww + (size_t)xx];
-			}
-		if (held)
-			t->px[keep++] = t->px[q];
-	}
-	t->n = keep;
-	for (size_t q = 0; q < t->n; q++)
-		vup[t->px[q]] = 0;
-	rc = hl_grid_runs(vup, w, bx0, by0, bx1, by1, &l->run, &l->n, &cap, e);
-	for (size_t q = 0; q < t->n; q++)
-		vup[t->px[q]] = 1;
-	t->n = 0;
-	return rc;
-}
-
 int hl_fill_build(const struct mesh *part, const struct mesh *solid, const struct hl_fill_params *c,
 		  struct progress *prog, double f0, double f1, struct hl_fill *f, struct err *e)
 {
@@ -436,7 +386,6 @@ int hl_fill_build(const struct mesh *part, const struct mesh *solid, const struc
 	uint8_t *vup = NULL;
 	float *sig = NULL;
 	int32_t *lastv = NULL; /* per grid pixel: the lowest layer so far where it is void */
-	struct hl_trim trim = {NULL, 0, 0}; /* layer k + 1's births left out */
 	int px0 = 0, py0 = 0, px1 = 0, py1 = 0, pad, rc = 0, n;
 	double L = c->layer_mm;
 
@@ -492,6 +441,7 @@ int hl_fill_build(const struct mesh *part, const struct mesh *solid, const struc
 	rc = offset_stack(part, solid, c, &gm, r.w, r.h, n, C, e);
 	for (int k = n - 1; !rc && k >= 0; k--) {
 		int x0 = INT32_MAX, y0 = INT32_MAX, x1 = -1, y1 = -1, ww = 0, wh = 0;
+		size_t cap = 0;
 		if (prog && k % 16 == 0) {
 			rc = progress_update(prog, f0 + (f1 - f0) * (n - k) / n, e);
 			if (rc)
@@ -540,25 +490,15 @@ int hl_fill_build(const struct mesh *part, const struct mesh *solid, const struc
 			}
 			if (!rc)
 				rc = hl_step_islands(&s, ww, wh, e);
-		}
-		/* layer k + 1 is written now that layer k is known (what of its
-		 * births stays out depends on what layer k holds up) */
-		if (!rc && k + 1 < n)
-			rc = trim_write(&trim, vup, r.w, px0, py0, px1, py1, x1 >= 0 ? s.void_out : NULL,
-					x0, y0, ww, wh, &g, &r.layer[k + 1], e);
-		for (int y = 0; !rc && x1 >= 0 && y < wh; y++)
-			for (int x = 0; x < ww; x++) {
-				size_t i = (size_t)y * (size_t)ww + (size_t)x;
-				void *arr = trim.px;
-				if (!s.void_out[i] || !s.born_near[i])
-					continue;
-				if (mem_grow(&arr, &trim.cap, trim.n + 1, sizeof *trim.px)) {
-					rc = ERR_SET(e, ERR_NOMEM, "hollow: out of memory (fill births)");
-					break;
-				}
-				trim.px = arr;
-				trim.px[trim.n++] = (y + y0) * r.w + (x + x0);
+			if (!rc)
+				rc = hl_grid_runs(s.void_out, ww, 0, 0, ww, wh, &r.layer[k].run,
+						  &r.layer[k].n, &cap, e);
+			for (size_t i = 0; !rc && i < r.layer[k].n; i++) {
+				r.layer[k].run[i].y += y0;
+				r.layer[k].run[i].x0 += x0;
+				r.layer[k].run[i].x1 += x0;
 			}
+		}
 		/* the state for layer k - 1: V(k) and the core's inside distance */
 		for (int y = py0; y < py1; y++) {
 			memset(vup + (size_t)y * (size_t)r.w + px0, 0, (size_t)(px1 - px0));
@@ -586,10 +526,6 @@ int hl_fill_build(const struct mesh *part, const struct mesh *solid, const struc
 		C[k].run = NULL;
 		C[k].n = 0;
 	}
-	/* layer 0 stands on the plate: its births near others stay out */
-	if (!rc && n > 0)
-		rc = trim_write(&trim, vup, r.w, px0, py0, px1, py1, NULL, 0, 0, 0, 0, &g,
-				&r.layer[0], e);
 	if (!rc)
 		rc = hl_fill_components(&r, c->min_void_mm3, g.px * g.py, 0, e);
 	if (!rc) {
@@ -604,7 +540,6 @@ out:
 	mem_free(vup);
 	mem_free(sig);
 	mem_free(lastv);
-	mem_free(trim.px);
 	hl_win_fini(&s);
 	hl_fill_fini(&r);
 	return rc;
