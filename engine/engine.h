@@ -137,6 +137,10 @@ const struct param_desc *job_spec_param(const struct job_spec *js, const char *k
  * known before reading the input. */
 int job_spec_validate(const struct job_spec *js, struct err *e);
 
+/* The layer height the job prints with (mm): its layer_mm, or its
+ * printer's when that is 0 (auto). */
+double job_spec_layer_mm(const struct job_spec *js);
+
 /* Run a job end to end, streaming the output to out.  m receives the
  * metrics (docs/metrics.md); progress/cancel through hooks (may be NULL). */
 int engine_run(const struct job_spec *js, struct sink *out, const struct progress_hooks *hooks,

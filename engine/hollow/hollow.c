@@ -478,21 +478,31 @@ static int part_img_for(struct hollow_state *s, int w, int h, struct err *e)
 	return 0;
 }
 
+/* The part alone at layer ly (*part): ly->region, the output mesh's
+ * section, when that mesh is the part alone (no part_slicer); else the
+ * part sliced apart into s->part_region. */
+static int part_section(struct hollow_state *s, const struct layer *ly, const struct paths **part,
+			struct err *e)
+{
+	*part = &ly->region;
+	if (!s->part_slicer)
+		return 0;
+	*part = &s->part_region;
+	return slice_at(s->part_slicer, ly->z_mm, &s->part_region, NULL, e);
+}
+
 /* The part alone at layer ly drawn into s->part_img (the size of like)
  * through map with antialias, as the layer beside it: the check's
- * reference.  ly->region, the output mesh's section, is the part's own
- * when that mesh is the part alone; else the part is sliced apart. */
+ * reference. */
 static int draw_part(struct hollow_state *s, const struct layer *ly,
 		     const struct raster_map *map, int antialias, const struct raster *like,
 		     struct err *e)
 {
-	const struct paths *part = &ly->region;
+	const struct paths *part = NULL;
 	int rc = part_img_for(s, like->w, like->h, e);
 
-	if (!rc && s->part_slicer) {
-		rc = slice_at(s->part_slicer, ly->z_mm, &s->part_region, NULL, e);
-		part = &s->part_region;
-	}
+	if (!rc)
+		rc = part_section(s, ly, &part, e);
 	if (!rc)
 		rc = slice_rasterize(part, map, antialias, s->part_img, e);
 	return rc;
@@ -529,11 +539,12 @@ static int hollow_layer(void *state, struct layer *ly, struct err *e)
 		raster_clear(s->own);
 		if (stepped(s)) {
 			/* the mesh's stepped voids, carved, as it slices again */
+			const struct paths *part = NULL;
 			rc = part_img_for(s, s->own->w, s->own->h, e);
 			if (!rc)
-				rc = slice_at(s->part_slicer, ly->z_mm, &s->part_region, NULL, e);
+				rc = part_section(s, ly, &part, e);
 			if (!rc)
-				rc = hl_layer_draw_stepped(&ly->region, &s->part_region, &s->own_map,
+				rc = hl_layer_draw_stepped(&ly->region, part, &s->own_map,
 							   s->antialias, fill ? &s->out.fill : NULL,
 							   frag ? &s->frag : NULL, ly->z_mm, 0, 0,
 							   s->own, s->part_img, e);

@@ -128,6 +128,11 @@ const struct param_desc *job_spec_param(const struct job_spec *js, const char *k
 	return d;
 }
 
+double job_spec_layer_mm(const struct job_spec *js)
+{
+	return js->common.layer_mm > 0 ? js->common.layer_mm : printer_layer_mm(&js->printer);
+}
+
 int job_spec_validate(const struct job_spec *js, struct err *e)
 {
 	const struct common_params *c = &js->common;
@@ -161,8 +166,7 @@ int job_spec_validate(const struct job_spec *js, struct err *e)
 	}
 	/* a G-code job's layer height is checked against the nozzle here,
 	 * before the engine's work (minutes for some), not when the writer opens */
-	rc = out_check_layers(js->format, &js->printer,
-			      c->layer_mm > 0 ? c->layer_mm : printer_layer_mm(&js->printer), e);
+	rc = out_check_layers(js->format, &js->printer, job_spec_layer_mm(js), e);
 	if (rc)
 		return rc;
 	if ((js->format == OUT_SL1 || js->format == OUT_SL1S) &&

@@ -282,7 +282,7 @@ int engine_run(const struct job_spec *js, struct sink *out, const struct progres
 		return rc;
 	progress_init(&prog, hooks);
 	threads = js->threads > 0 ? js->threads : pipeline_cpu_count();
-	layer_mm = js->common.layer_mm > 0 ? js->common.layer_mm : printer_layer_mm(&js->printer);
+	layer_mm = job_spec_layer_mm(js);
 	share = ops->prepare_share < 0 ? 0 : ops->prepare_share > 0.95 ? 0.95 : ops->prepare_share;
 
 	/* 1. Input. */
