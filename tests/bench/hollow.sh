@@ -12,7 +12,8 @@
 # (rounds<=8, fill=false; also with section 6's smoothing and with adaptive
 # slices); each run capped at CAP_S (300)
 # seconds, reported; then what round growth would give on a 50 mm ball
-# (hollow_axisym.py, a model).  HOLLOW_MODELS="camel:y femur:z" picks models.
+# (hollow_axisym.py, a model); two parts whose fill gives birth to voids side
+# by side (knot, mushroom, 30 mm).  HOLLOW_MODELS="camel:y femur:z" picks models.
 # large: also alpha 30, the standing objective on the letter P (50 and
 # 100 mm tall) and the fill alone on that ball.
 set -uo pipefail
@@ -130,6 +131,12 @@ if [ -z "${HOLLOW_MODELS:-}" ]; then
 	echo "paper's own models (Table 1: Dragon 66.56 %, Rabbit 73.47 %):"
 	run_one ChineseDragon-10kv.off z 45 lightweight 8 true 55.5 || status=1
 	run_one bunny.stl y 45 lightweight 8 true 50 || status=1
+	# voids born side by side in one layer, 30 mm, the fill alone: the
+	# walls between them at the birth layer (docs/hollow.md 4.2, "walls
+	# between voids"; the "between" column, wall_next 0.8)
+	echo "voids born side by side (30 mm, fill alone):"
+	run_one knot1.off z 45 lightweight 0 true 30 || status=1
+	run_one mushroom.off z 45 lightweight 0 true 30 || status=1
 fi
 # the paper's optimiser alone (fill=false, rounds <= 8): what its voids
 # hollow without the top-down fill (docs/hollow.md, "Known limits" 1)

@@ -3,7 +3,8 @@
  * transform on the exact Euclidean feature transform of geom/edt.h) and
  * the per-layer steps (fillstep.c, fillwall.c) that make the void of
  * print layer k from that of layer k + 1 on a window of the fill's grid;
- * topdown.c drives them top-down.  Rules and measurements: docs/hollow.md
+ * topdown.c drives them top-down, then groups the runs into 3D voids and
+ * apart.c keeps two voids wall_next apart.  Rules and measurements: docs/hollow.md
  * "Top-down fill".  Not for use outside engine/hollow/fill/.
  */
 #ifndef INFILLD_HOLLOW_FILL_INT_H
@@ -38,6 +39,28 @@ void hl_grid_paint(uint8_t *mask, int w, const struct hl_span *runs, size_t n, u
 int hl_grid_nearest(const int32_t *lab, int w, int h, double px_mm, double py_mm, float *d2,
 		    int32_t *near, uint8_t *seed, int32_t *idx, struct edt_scratch *es,
 		    struct err *e);
+
+/* ---- grouping and walls between voids (topdown.c, apart.c) ---- */
+
+/* Union-find over f's runs: each run's comp becomes the global index (layer
+ * by layer, runs in order) of the first run of its 3D component.  Runs of
+ * one layer join where they overlap in a row's neighbour row (diag 0:
+ * 4-connected, the fill's own grouping) or also touch at a corner (diag 1:
+ * 8-connected, the verifier's); runs of consecutive layers where they
+ * overlap.  *runs: how many runs f holds.  0, ERR_NOMEM or ERR_LIMIT. */
+int hl_fill_label(struct hl_fill *f, int diag, size_t *runs, struct err *e);
+
+/* Walls between voids, read in 3D (apart.c): in every layer, turn solid
+ * the void pixels of two different 3D components (diag 1 grouping) whose
+ * pixel centres lie closer than wall_mm + min(px, py) (the verifier's
+ * min_wall_between_mm under wall_mm), within half of that of the Voronoi
+ * boundary between them, where the layer below is solid there; regroup
+ * and repeat while that cuts.  *cut: pixels turned solid; *thin: pixels
+ * left void too near another void for want of solid below (the last
+ * round's).  px, py: pitches (mm); threads: the EDTs'.  0, ERR_NOMEM,
+ * ERR_LIMIT or an EDT error. */
+int hl_fill_apart(struct hl_fill *f, double wall_mm, double px, double py, int threads,
+		  long *cut, long *thin, struct err *e);
 
 /* ---- the per-layer steps (fillstep.c, fillwall.c) ---- */
 

@@ -233,14 +233,16 @@ static void run_union(struct hl_span **at, uint32_t a, uint32_t b)
 }
 
 /* Link the runs of row list A (sorted by x) with those of B that overlap
- * in x; ia, ib: their global indices. */
+ * in x, or (diag 1) touch at a corner; ia, ib: their global indices.
+ * Touching at a corner is overlap of the runs each lengthened by one
+ * pixel to the right, so one merge pass serves both. */
 static void link_rows(struct hl_span **at, const struct hl_span *A, size_t na, uint32_t ia,
-		      const struct hl_span *B, size_t nb, uint32_t ib)
+		      const struct hl_span *B, size_t nb, uint32_t ib, int diag)
 {
 	size_t i = 0, j = 0;
 
 	while (i < na && j < nb) {
-		if (A[i].x0 <= B[j].x1 && B[j].x0 <= A[i].x1)
+		if (A[i].x0 <= B[j].x1 + diag && B[j].x0 <= A[i].x1 + diag)
 			run_union(at, ia + (uint32_t)i, ib + (uint32_t)j);
 		if (A[i].x1 < B[j].x1)
 			i++;
@@ -261,25 +263,23 @@ static void row_starts(const struct hl_span *r, size_t n, int h, size_t *rs)
 	}
 }
 
-int hl_fill_components(struct hl_fill *f, double min_mm3, double px_area_mm2, int keep_small,
-		       struct err *e)
+int hl_fill_label(struct hl_fill *f, int diag, size_t *runs, struct err *e)
 {
 	size_t total = 0, *rs0 = NULL, *rs1 = NULL;
 	struct hl_span **at = NULL;
-	double *vol = NULL;
 	uint32_t *off = NULL;
 	int rc = 0;
 
 	for (int k = 0; k < f->n; k++)
 		total += f->layer[k].n;
+	*runs = total;
 	if (total >= UINT32_MAX - 1)
 		return ERR_SET(e, ERR_LIMIT, "hollow: fill too fragmented (%zu runs)", total);
 	at = mem_alloc((total + 1) * sizeof *at);
-	vol = mem_calloc(total + 1, sizeof *vol);
 	off = mem_alloc(((size_t)f->n + 1) * sizeof *off);
 	rs0 = mem_alloc(((size_t)f->h + 1) * sizeof *rs0);
 	rs1 = mem_alloc(((size_t)f->h + 1) * sizeof *rs1);
-	if (!at || !vol || !off || !rs0 || !rs1) {
+	if (!at || !off || !rs0 || !rs1) {
 		rc = ERR_SET(e, ERR_NOMEM, "hollow: out of memory grouping the fill");
 		goto out;
 	}
@@ -304,30 +304,55 @@ int hl_fill_components(struct hl_fill *f, double min_mm3, double px_area_mm2, in
 				continue;
 			if (y + 1 < f->h)
 				link_rows(at, L->run + a, na, off[k] + (uint32_t)a, L->run + rs0[y + 1],
-					  rs0[y + 2] - rs0[y + 1], off[k] + (uint32_t)rs0[y + 1]);
+					  rs0[y + 2] - rs0[y + 1], off[k] + (uint32_t)rs0[y + 1], diag);
 			if (U)
 				link_rows(at, L->run + a, na, off[k] + (uint32_t)a, U->run + rs1[y],
-					  rs1[y + 1] - rs1[y], off[k + 1] + (uint32_t)rs1[y]);
+					  rs1[y + 1] - rs1[y], off[k + 1] + (uint32_t)rs1[y], 0);
 		}
 	}
 	for (size_t i = 0; i < total; i++)
 		at[i]->comp = run_root(at, (uint32_t)i); /* every comp a root */
-	for (size_t i = 0; i < total; i++)
-		vol[at[i]->comp] += (at[i]->x1 - at[i]->x0 + 1) * px_area_mm2 * f->layer_mm;
+out:
+	mem_free(at);
+	mem_free(off);
+	mem_free(rs0);
+	mem_free(rs1);
+	return rc;
+}
+
+int hl_fill_components(struct hl_fill *f, double min_mm3, double px_area_mm2, int keep_small,
+		       struct err *e)
+{
+	size_t total = 0;
+	double *vol = NULL;
+	int rc = hl_fill_label(f, 0, &total, e);
+
+	if (rc)
+		return rc;
+	vol = mem_calloc(total + 1, sizeof *vol);
+	if (!vol)
+		return ERR_SET(e, ERR_NOMEM, "hollow: out of memory grouping the fill");
+	for (int k = 0; k < f->n; k++)
+		for (size_t i = 0; i < f->layer[k].n; i++) {
+			const struct hl_span *r = &f->layer[k].run[i];
+			vol[r->comp] += (r->x1 - r->x0 + 1) * px_area_mm2 * f->layer_mm;
+		}
 	f->voids = f->voids_small = 0;
 	f->volume_mm3 = 0;
-	for (size_t i = 0; i < total; i++) {
-		if (at[i]->comp != i)
-			continue;
-		if ((vol[i] < min_mm3) != (keep_small != 0)) {
-			f->voids_small++;
-		} else {
-			f->voids++;
-			f->volume_mm3 += vol[i];
+	total = 0;
+	for (int k = 0; k < f->n; k++)
+		for (size_t i = 0; i < f->layer[k].n; i++, total++) {
+			if (f->layer[k].run[i].comp != total)
+				continue;
+			if ((vol[total] < min_mm3) != (keep_small != 0)) {
+				f->voids_small++;
+			} else {
+				f->voids++;
+				f->volume_mm3 += vol[total];
+			}
 		}
-	}
-	/* drop the other components' runs; every comp is a root now, so
-	 * compacting keeps it valid */
+	/* drop the other components' runs; every comp is a root's global
+	 * index, which compacting leaves as it is */
 	for (int k = 0; k < f->n; k++) {
 		struct hl_fill_layer *L = &f->layer[k];
 		size_t w = 0;
@@ -336,13 +361,8 @@ int hl_fill_components(struct hl_fill *f, double min_mm3, double px_area_mm2, in
 				L->run[w++] = L->run[i];
 		L->n = w;
 	}
-out:
-	mem_free(at);
 	mem_free(vol);
-	mem_free(off);
-	mem_free(rs0);
-	mem_free(rs1);
-	return rc;
+	return 0;
 }
 
 int hl_fill_grid(const struct vec3 *pts, size_t nv, const struct raster_map *m, struct hl_fill *f,
@@ -526,8 +546,18 @@ int hl_fill_build(const struct mesh *part, const struct mesh *solid, const struc
 		C[k].run = NULL;
 		C[k].n = 0;
 	}
+	/* small voids dropped first (no wall is cut for them), then the
+	 * walls between the rest, then what the cuts left too small */
 	if (!rc)
 		rc = hl_fill_components(&r, c->min_void_mm3, g.px * g.py, 0, e);
+	if (!rc)
+		rc = hl_fill_apart(&r, g.wall, g.px, g.py, c->threads, &r.apart_cut_px,
+				   &r.apart_thin_px, e);
+	if (!rc && r.apart_cut_px) {
+		size_t dropped = r.voids_small;
+		rc = hl_fill_components(&r, c->min_void_mm3, g.px * g.py, 0, e);
+		r.voids_small += dropped;
+	}
 	if (!rc) {
 		hl_fill_fini(f);
 		*f = r;

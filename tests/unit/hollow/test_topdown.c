@@ -12,7 +12,9 @@
  *  - components: one void per box; min_void_mm3 between two boxes' voids
  *    keeps the larger one pixel for pixel and drops the smaller;
  *  - keep_set: no void pixel centre on the wrong side of the half-plane;
- *  - a rotated map builds nothing.
+ *  - a rotated map builds nothing;
+ *  - births of one layer: two voids of a layer keep wall_next between
+ *    their pixels (a notched bar, two ridge pieces a pinch apart).
  * Grid: 0.05 mm pixels and 0.05 mm layers (the brief's SL1-like pitch);
  * pixel centres of image column u are at (u + 0.5 - B) PX mm (B = the
  * map's offset).  Frame: printer frame, mm, z up from the plate.
@@ -492,6 +494,150 @@ static void test_threads_same(void)
 	mem_free(m.tri);
 }
 
+
+/* The prism z0..z1 (mm) of a bar 8 x 2.9 mm with a notch 0.1 mm long and
+ * 0.2 mm deep half way along one long side, appended to m (arrays sized by
+ * the caller: 16 vertices, 28 triangles).  Less the 1 mm wall, its
+ * section is a band 0.9 mm wide pinched to 0.7 at the notch: F's ridge
+ * (inside distance >= wall_next / 2 = 0.4 mm) stops a few tenths of a
+ * millimetre either side of the pinch, two pieces in one layer. */
+static void add_notched_bar(struct mesh *m, double z0, double z1)
+{
+	static const double c[8][2] = {{0, 0},     {3.95, 0}, {3.95, 0.08}, {4.05, 0.08},
+				       {4.05, 0},  {8, 0},    {8, 2.9},    {0, 2.9}};
+	/* the outline (counter-clockwise from above) in six triangles */
+	static const uint32_t cap[6][3] = {{0, 1, 2}, {0, 2, 7}, {2, 3, 7},
+					   {3, 6, 7}, {3, 4, 5}, {3, 5, 6}};
+	uint32_t v0 = (uint32_t)m->nv;
+
+	for (int l = 0; l < 2; l++)
+		for (int i = 0; i < 8; i++)
+			m->v[m->nv++] = (struct vec3){c[i][0], c[i][1], l ? z1 : z0};
+	for (int t = 0; t < 6; t++) {
+		uint32_t *q = m->tri + 3 * m->nt++;
+		q[0] = v0 + cap[t][0]; /* bottom: facing down */
+		q[1] = v0 + cap[t][2];
+		q[2] = v0 + cap[t][1];
+		q = m->tri + 3 * m->nt++;
+		q[0] = v0 + 8 + cap[t][0];
+		q[1] = v0 + 8 + cap[t][1];
+		q[2] = v0 + 8 + cap[t][2];
+	}
+	for (uint32_t i = 0; i < 8; i++) {
+		uint32_t j = (i + 1) % 8, *q = m->tri + 3 * m->nt++;
+		q[0] = v0 + i;
+		q[1] = v0 + j;
+		q[2] = v0 + 8 + j;
+		q = m->tri + 3 * m->nt++;
+		q[0] = v0 + i;
+		q[1] = v0 + 8 + j;
+		q[2] = v0 + 8 + i;
+	}
+}
+
+/* Smallest distance (mm) between the pixel centres of two different
+ * 8-connected void components of one layer, over every layer of f
+ * (INFINITY when no layer holds two); *layer: where. */
+static double closest_components(const struct hl_fill *f, const uint8_t *v, int *layer)
+{
+	size_t np = (size_t)f->w * (size_t)f->h;
+	int32_t *lab = mem_alloc(np * sizeof *lab);
+	size_t *st = mem_alloc(np * sizeof *st);
+	double best = INFINITY;
+
+	*layer = -1;
+	if (!lab || !st) {
+		mem_free(lab);
+		mem_free(st);
+		return -1;
+	}
+	for (int k = 0; k < f->n; k++) {
+		const uint8_t *l = v + (size_t)k * np;
+		int nc = 0;
+		memset(lab, 0, np * sizeof *lab);
+		for (size_t s0 = 0; s0 < np; s0++) {
+			size_t n = 0;
+			if (!l[s0] || lab[s0])
+				continue;
+			lab[s0] = ++nc;
+			st[n++] = s0;
+			while (n) {
+				size_t i = st[--n];
+				int x = (int)(i % (size_t)f->w), y = (int)(i / (size_t)f->w);
+				for (int dy = -1; dy <= 1; dy++)
+					for (int dx = -1; dx <= 1; dx++) {
+						int xx = x + dx, yy = y + dy;
+						size_t j = (size_t)yy * (size_t)f->w + (size_t)xx;
+						if (xx < 0 || yy < 0 || xx >= f->w || yy >= f->h ||
+						    !l[j] || lab[j])
+							continue;
+						lab[j] = nc;
+						st[n++] = j;
+					}
+			}
+		}
+		if (nc < 2)
+			continue;
+		for (size_t i = 0; i < np; i++)
+			for (size_t j = i + 1; lab[i] && j < np; j++)
+				if (lab[j] && lab[j] != lab[i]) {
+					double d = hypot((double)((int)(i % (size_t)f->w) -
+								  (int)(j % (size_t)f->w)) * PX,
+							 (double)((int)(i / (size_t)f->w) -
+								  (int)(j / (size_t)f->w)) * PX);
+					if (d < best) {
+						best = d;
+						*layer = k;
+					}
+				}
+	}
+	mem_free(lab);
+	mem_free(st);
+	return best;
+}
+
+static void test_births_apart(void)
+{
+	/* a bar 3 mm tall with a shallow notch (add_notched_bar): at the top
+	 * of C the ridge of F lies in two pieces about 0.55 mm apart in one
+	 * layer (the fill before births kept apart made two voids there, a
+	 * 0.50 mm wall for wall_next 0.8).  Every two voids of a layer keep
+	 * wall_next between their pixels (centres wall_next + a pixel apart,
+	 * brute force over every layer); the ridge's two pieces still make
+	 * two voids (each written less its near end at the layer of birth) */
+	struct hl_fill_params p;
+	struct hl_fill f;
+	struct mesh m;
+	struct err e;
+	uint8_t *v;
+	size_t count = 0;
+	double d;
+	int layer;
+
+	memset(&f, 0, sizeof f);
+	err_clear(&e);
+	m.v = mem_alloc(16 * sizeof *m.v);
+	m.tri = mem_alloc(28 * 3 * sizeof *m.tri);
+	m.nv = m.nt = 0;
+	REQUIRE(m.v && m.tri);
+	add_notched_bar(&m, 0, 3);
+	params(&p, 0);
+	REQUIRE_OK(hl_fill_build(&m, NULL, &p, NULL, 0, 1, &f, &e), &e);
+	v = voxels(&f, &count);
+	REQUIRE(v);
+	CHECK_NUM(count, >, 0);
+	CHECK_EQ_INT(rule_breaks(&f, v, LAYER * tan(ALPHA_DEG * M_PI / 180) + 1e-9, NULL), 0);
+	d = closest_components(&f, v, &layer);
+	CHECK_EQ_INT(f.voids, 2);
+	CHECK_NUM(d, >=, p.wall_next_mm + PX - 1e-9);
+	if (d < p.wall_next_mm + PX)
+		fprintf(stderr, "  two voids %.3f mm apart in layer %d\n", d, layer);
+	hl_fill_fini(&f);
+	mem_free(v);
+	mem_free(m.v);
+	mem_free(m.tri);
+}
+
 int main(void)
 {
 	RUN(test_box);
@@ -499,5 +645,6 @@ int main(void)
 	RUN(test_two_boxes_min_void);
 	RUN(test_keep_half_plane);
 	RUN(test_rotated_map_empty);
+	RUN(test_births_apart);
 	return harness_report();
 }
