@@ -677,7 +677,7 @@ static int hollow_metrics(void *state, struct metrics *m, struct err *e)
 	rc |= metrics_int(m, "hollow.voids_fill", (long long)o->fill.voids);
 	rc |= metrics_num(m, "hollow.fill_volume_mm3", o->fill.volume_mm3);
 	rc |= metrics_int(m, "hollow.fill_walls_cut_px", o->fill.apart_cut_px);
-	rc |= metrics_int(m, "hollow.fill_walls_thin_px", o->fill.apart_thin_px);
+	rc |= metrics_int(m, "hollow.fill_walls_left_layers", o->fill.apart_left_layers);
 	rc |= metrics_int(m, "hollow.voids_fallback", (long long)o->voids_fallback);
 	rc |= metrics_int(m, "hollow.groups_failed", (long long)o->opt.groups_failed);
 	rc |= metrics_int(m, "hollow.groups_small", (long long)o->opt.groups_small);

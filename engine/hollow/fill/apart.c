@@ -25,9 +25,10 @@
 #include "engine/core/mem.h"
 #include "engine/geom/edt.h"
 
-/* Rounds: a void cut in two by the pass is two voids, whose wall the next
- * round reads, and a cut whose one side cannot be cut (void below) leaves
- * the boundary nearer the other side, which the next round cuts again. */
+/* Rounds at most: a void cut in two by the pass is two voids, whose wall
+ * the next round reads, and a cut whose one side cannot be cut (void
+ * below) leaves the boundary nearer the other side, which the next round
+ * cuts again. */
 #define APART_ROUNDS 8
 
 /* The scratch of one layer's window (ww x wh, row stride ww). */
@@ -167,13 +168,23 @@ static int conflict_box(const struct hl_fill_layer *L, const size_t *rs, int h, 
 	return any;
 }
 
+/* rows[y] = the first run of row y in L (rows[h] = L->n). */
+static void row_index(const struct hl_fill_layer *L, int h, size_t *rows)
+{
+	for (size_t i = 0, y = 0; y <= (size_t)h; y++) {
+		while (i < L->n && (size_t)L->run[i].y < y)
+			i++;
+		rows[y] = i;
+	}
+}
+
 /* One layer k: mark the boundary pixels between two components whose
  * nearest void pixels lie closer than lim (mm, centres), turn solid the
- * void pixels within (lim + 1 px) / 2 of them that stand over solid, and
- * rebuild the layer's runs.  *cut: pixels turned solid; *thin: pixels
- * that stay void for want of solid below.  0, ERR_NOMEM or an EDT error. */
+ * void pixels nearer than (lim + max(px, py)) / 2 to them that stand over
+ * solid, and rebuild the layer's runs (strictly nearer than that, within 1e-12 mm^2).
+ * *cut: pixels turned solid.  0, ERR_NOMEM or an EDT error. */
 static int apart_layer(struct hl_fill *f, int k, double px, double py, double lim,
-		       struct apart_win *a, long *cut, long *thin, struct err *e)
+		       struct apart_win *a, long *cut, struct err *e)
 {
 	static const int dir[4][2] = {{1, 0}, {0, 1}, {1, 1}, {-1, 1}};
 	struct hl_fill_layer *L = &f->layer[k];
@@ -185,11 +196,7 @@ static int apart_layer(struct hl_fill *f, int k, double px, double py, double li
 	double half = 0.5 * (lim + fmax(px, py));
 	int rpx = (int)ceil(lim / fmin(px, py)) + 2;
 
-	for (size_t i = 0, y = 0; y <= (size_t)f->h; y++) {
-		while (i < L->n && (size_t)L->run[i].y < y)
-			i++;
-		a->rows[y] = i;
-	}
+	row_index(L, f->h, a->rows);
 	if (!conflict_box(L, a->rows, f->h, px, py, lim, &x0, &y0, &x1, &y1))
 		return 0; /* no two components within lim */
 	/* the pixels of every near pair, the boundary between them and the
@@ -252,12 +259,11 @@ static int apart_layer(struct hl_fill *f, int k, double px, double py, double li
 	/* seed, again: the layer's void after the cut */
 	for (size_t i = 0; i < np; i++) {
 		a->seed[i] = a->lab[i] != 0;
-		if (!a->seed[i] || a->d2[i] >= half * half)
+		/* (a pixel at exactly half stays: 1e-12 mm^2 off the float) */
+		if (!a->seed[i] || (double)a->d2[i] >= half * half - 1e-12)
 			continue;
-		if (a->below[i]) {
-			(*thin)++;
-			continue;
-		}
+		if (a->below[i])
+			continue; /* held up by nothing: the next round may cut it */
 		a->seed[i] = 0;
 		(*cut)++;
 	}
@@ -313,62 +319,44 @@ fail:
 }
 
 int hl_fill_apart(struct hl_fill *f, double wall_mm, double px, double py, int threads,
-		  long *cut, long *thin, struct err *e)
+		  long *cut, long *left, struct err *e)
 {
 	struct apart_win a;
-	int rc = 0;
+	int rc = 0, x0, y0, x1, y1;
 	double lim = wall_mm + fmin(px, py);
-	size_t runs, ncomp = 0;
-	uint8_t *redo = NULL; /* layers to read (again) */
-	long *thin_k = NULL;  /* each layer's pixels left thin, when last read */
+	size_t runs;
+	long c0 = -1;
 
-	*cut = *thin = 0;
+	*cut = *left = 0;
 	memset(&a, 0, sizeof a);
 	edt_scratch_init(&a.es);
 	a.es.threads = threads;
 	if (f->n < 1 || f->w < 1 || f->h < 1)
 		goto out;
 	a.rows = mem_alloc(((size_t)f->h + 1) * sizeof *a.rows);
-	redo = mem_alloc((size_t)f->n);
-	thin_k = mem_calloc((size_t)f->n, sizeof *thin_k);
-	if (!a.rows || !redo || !thin_k) {
+	if (!a.rows) {
 		rc = ERR_SET(e, ERR_NOMEM, "hollow: out of memory (walls between voids)");
 		goto out;
 	}
-	memset(redo, 1, (size_t)f->n);
-	for (int round = 0; !rc && round < APART_ROUNDS; round++) {
-		long c0 = *cut;
-		size_t comps = 0, g = 0;
+	/* rounds while the last one cut: regrouped, since a void cut in two
+	 * is two voids; every layer read again (the run scan costs little
+	 * where nothing is near).  Bottom-up: a layer is cut on the layer
+	 * below as already cut, so a wall too thin over many layers is cut
+	 * from its foot up in one round. */
+	for (int round = 0; !rc && round < APART_ROUNDS && *cut != c0; round++) {
+		c0 = *cut;
 		rc = hl_fill_label(f, 1, &runs, e);
-		for (int k = 0; k < f->n; k++)
-			for (size_t i = 0; i < f->layer[k].n; i++, g++)
-				comps += f->layer[k].run[i].comp == g;
-		/* a void cut in two is two voids whose wall any layer may hold:
-		 * read every layer again; else only the layers cut last round */
-		if (comps != ncomp)
-			memset(redo, 1, (size_t)f->n);
-		ncomp = comps;
-		/* bottom-up: a layer is cut on the layer below as already
-		 * cut, so a too-thin wall standing over many layers is cut
-		 * from its foot up in one round */
-		for (int k = 0; !rc && k < f->n; k++) {
-			long ck = *cut;
-			if (!redo[k])
-				continue;
-			thin_k[k] = 0;
-			rc = apart_layer(f, k, px, py, lim, &a, cut, &thin_k[k], e);
-			/* again next round: cut (the boundary moved), or left
-			 * thin (the layer below may be cut by then) */
-			redo[k] = *cut > ck || thin_k[k] > 0;
-		}
-		if (*cut == c0)
-			break;
+		for (int k = 0; !rc && k < f->n; k++)
+			rc = apart_layer(f, k, px, py, lim, &a, cut, e);
 	}
-	for (int k = 0; k < f->n; k++)
-		*thin += thin_k[k];
+	/* what is left: layers still holding two voids nearer than lim */
+	if (!rc)
+		rc = hl_fill_label(f, 1, &runs, e);
+	for (int k = 0; !rc && k < f->n; k++) {
+		row_index(&f->layer[k], f->h, a.rows);
+		*left += conflict_box(&f->layer[k], a.rows, f->h, px, py, lim, &x0, &y0, &x1, &y1);
+	}
 out:
-	mem_free(redo);
-	mem_free(thin_k);
 	win_fini(&a);
 	return rc;
 }

@@ -62,8 +62,8 @@ struct hl_fill {
 	double volume_mm3;   /* of the kept components */
 	long apart_cut_px;   /* void pixels turned solid to keep two voids
 			      * wall_next apart (hl_fill_build; 0 for fragments) */
-	long apart_thin_px;  /* void pixels too near another void that stayed
-			      * void: no solid under them (docs/hollow.md 4.2) */
+	long apart_left_layers; /* layers where two voids still lie nearer than
+				 * wall_next (docs/hollow.md 4.2) */
 };
 
 void hl_fill_fini(struct hl_fill *f);
@@ -76,7 +76,7 @@ void hl_fill_fini(struct hl_fill *f);
  * layers of c->layer_mm.  Consecutive layers obey the overhang rule
  * (docs/hollow.md).  Components under c->min_void_mm3 are dropped; two
  * voids keep c->wall_next_mm apart in every layer where the layer below
- * allows (apart.c; f->apart_cut_px, f->apart_thin_px).
+ * allows (apart.c; f->apart_cut_px, f->apart_left_layers).
  * prog (may be NULL) advances from f0 to f1 and can cancel.
  * Returns 0 (f replaced; left empty when the map is not axis-aligned),
  * ERR_NOMEM, ERR_LIMIT, ERR_CANCELLED or a slicer error. */

@@ -50,17 +50,19 @@ int hl_grid_nearest(const int32_t *lab, int w, int h, double px_mm, double py_mm
  * overlap.  *runs: how many runs f holds.  0, ERR_NOMEM or ERR_LIMIT. */
 int hl_fill_label(struct hl_fill *f, int diag, size_t *runs, struct err *e);
 
-/* Walls between voids, read in 3D (apart.c): in every layer, turn solid
- * the void pixels of two different 3D components (diag 1 grouping) whose
- * pixel centres lie closer than wall_mm + min(px, py) (the verifier's
- * min_wall_between_mm under wall_mm), within half of that of the Voronoi
- * boundary between them, where the layer below is solid there; regroup
- * and repeat while that cuts.  *cut: pixels turned solid; *thin: pixels
- * left void too near another void for want of solid below (the last
- * round's).  px, py: pitches (mm); threads: the EDTs'.  0, ERR_NOMEM,
- * ERR_LIMIT or an EDT error. */
+/* Walls between voids, read in 3D (apart.c): in every layer where two
+ * void pixels of different 3D components (diag 1 grouping) lie closer
+ * than lim = wall_mm + min(px, py) (pixel centres: the verifier's
+ * min_wall_between_mm under wall_mm), turn solid the void pixels nearer
+ * than (lim + max(px, py)) / 2 to the pixels astride the Voronoi boundary
+ * between such components, where the layer below is solid there; layers
+ * bottom-up; regroup and repeat while a round cuts (8 rounds at most).
+ * *cut: pixels turned solid; *left: layers that still hold two
+ * components nearer than lim.  px, py: pitches (mm); threads: the EDTs'.
+ * Each run's comp ends as its diag 1 group.  0, ERR_NOMEM, ERR_LIMIT or
+ * an EDT error. */
 int hl_fill_apart(struct hl_fill *f, double wall_mm, double px, double py, int threads,
-		  long *cut, long *thin, struct err *e);
+		  long *cut, long *left, struct err *e);
 
 /* ---- the per-layer steps (fillstep.c, fillwall.c) ---- */
 

@@ -552,7 +552,7 @@ int hl_fill_build(const struct mesh *part, const struct mesh *solid, const struc
 		rc = hl_fill_components(&r, c->min_void_mm3, g.px * g.py, 0, e);
 	if (!rc)
 		rc = hl_fill_apart(&r, g.wall, g.px, g.py, c->threads, &r.apart_cut_px,
-				   &r.apart_thin_px, e);
+				   &r.apart_left_layers, e);
 	if (!rc && r.apart_cut_px) {
 		size_t dropped = r.voids_small;
 		rc = hl_fill_components(&r, c->min_void_mm3, g.px * g.py, 0, e);

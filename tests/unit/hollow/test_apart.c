@@ -8,7 +8,9 @@
  *    lie closer than wall + 1 px (pixel centres);
  *  - voids far from any other, in the rows of a cut or not, keep every
  *    pixel; pieces of one void, however close, keep every pixel;
- *  - a wall too thin over every layer is cut from its foot up;
+ *  - a wall too thin over every layer is cut from its foot up; a wall
+ *    along the rows is found (near pairs on two rows only); two squares
+ *    touching at a corner are one void;
  *  - the runs stay row-major, disjoint and maximal.
  * Grid: 0.05 mm pixels; wall 0.3 mm, so wall + 1 px = 7 px.
  */
@@ -160,12 +162,12 @@ static int same_rect(int k, int x0, int y0, int x1, int y1)
 	return 1;
 }
 
-static void run_apart(struct hl_fill *f, long *cut, long *thin)
+static void run_apart(struct hl_fill *f, long *cut, long *left)
 {
 	struct err e;
 
 	err_clear(&e);
-	REQUIRE_OK(hl_fill_apart(f, WALL, PX, PX, 1, cut, thin, &e), &e);
+	REQUIRE_OK(hl_fill_apart(f, WALL, PX, PX, 1, cut, left, &e), &e);
 	CHECK(masks_from_fill(f));
 }
 
@@ -175,7 +177,7 @@ static void run_apart(struct hl_fill *f, long *cut, long *thin)
 static void test_births_side_by_side(void)
 {
 	struct hl_fill f;
-	long cut, thin, removed;
+	long cut, left, removed;
 	double d;
 
 	memset(masks, 0, sizeof masks);
@@ -190,17 +192,20 @@ static void test_births_side_by_side(void)
 	rect(2, 56, 10, 60, 12); /* D: in the cut's rows, 16 px right of B */
 	REQUIRE(fill_from_masks(&f));
 	CHECK_NUM(closest_pair_px(), <, 7);
-	run_apart(&f, &cut, &thin);
+	run_apart(&f, &cut, &left);
 	d = closest_pair_px();
 	CHECK_NUM(d, >=, WALL / PX + 1 - 1e-9);
 	check_cuts_held(&removed);
 	CHECK_EQ_INT(removed, cut);
 	CHECK_NUM(cut, >, 0);
-	CHECK_EQ_INT(thin, 0);
-	/* about half the wall from each side, not the whole wall from one
-	 * (cut within (wall + 1 px) / 2 + 1/2 px of the pixels astride the
-	 * boundary, so up to 3 px more wall than the 7 px needed) */
-	CHECK(masks[2][(size_t)15 * W + 20] == 0 && masks[2][(size_t)15 * W + 24] == 0);
+	CHECK_EQ_INT(left, 0);
+	/* about half the wall from each side, not the whole wall from one:
+	 * cut nearer than (wall + 1 px) / 2 + 1/2 px = 4 px to the pixels
+	 * astride the boundary, x 21 .. 23 here (x 22 is as near to A as to
+	 * B, and the tie goes either way from row to row): A keeps x <= 17,
+	 * B x >= 28, 11 px apart where 7 are needed */
+	CHECK(masks[2][(size_t)15 * W + 18] == 0 && masks[2][(size_t)15 * W + 27] == 0);
+	CHECK(masks[2][(size_t)15 * W + 17] == 1 && masks[2][(size_t)15 * W + 28] == 1);
 	CHECK(d <= 7 + 4);
 	CHECK(same_rect(2, 50, 40, 55, 45) && same_rect(1, 50, 40, 55, 45));
 	CHECK(same_rect(2, 56, 10, 60, 12));
@@ -213,7 +218,7 @@ static void test_births_side_by_side(void)
 static void test_one_void_untouched(void)
 {
 	struct hl_fill f;
-	long cut, thin;
+	long cut, left;
 
 	memset(masks, 0, sizeof masks);
 	rect(2, 5, 5, 20, 30);
@@ -221,9 +226,9 @@ static void test_one_void_untouched(void)
 	rect(1, 5, 5, 40, 30);
 	rect(0, 5, 5, 40, 30);
 	REQUIRE(fill_from_masks(&f));
-	run_apart(&f, &cut, &thin);
+	run_apart(&f, &cut, &left);
 	CHECK_EQ_INT(cut, 0);
-	CHECK_EQ_INT(thin, 0);
+	CHECK_EQ_INT(left, 0);
 	CHECK(!memcmp(masks, before, sizeof masks));
 	hl_fill_fini(&f);
 }
@@ -233,7 +238,7 @@ static void test_one_void_untouched(void)
 static void test_wall_cut_from_foot(void)
 {
 	struct hl_fill f;
-	long cut, thin, removed;
+	long cut, left, removed;
 
 	memset(masks, 0, sizeof masks);
 	for (int k = 0; k < NL; k++) {
@@ -241,11 +246,11 @@ static void test_wall_cut_from_foot(void)
 		rect(k, 24, 5, 40, 30);
 	}
 	REQUIRE(fill_from_masks(&f));
-	run_apart(&f, &cut, &thin);
+	run_apart(&f, &cut, &left);
 	CHECK_NUM(closest_pair_px(), >=, WALL / PX + 1 - 1e-9);
 	check_cuts_held(&removed);
 	CHECK_EQ_INT(removed, cut);
-	CHECK_EQ_INT(thin, 0);
+	CHECK_EQ_INT(left, 0);
 	hl_fill_fini(&f);
 }
 
@@ -254,7 +259,7 @@ static void test_wall_cut_from_foot(void)
 static void test_one_side_held(void)
 {
 	struct hl_fill f;
-	long cut, thin, removed;
+	long cut, left, removed;
 
 	memset(masks, 0, sizeof masks);
 	rect(2, 5, 5, 20, 30); /* A */
@@ -262,12 +267,59 @@ static void test_one_side_held(void)
 	rect(0, 5, 5, 20, 30);
 	rect(2, 24, 5, 40, 30); /* B: the top layer only */
 	REQUIRE(fill_from_masks(&f));
-	run_apart(&f, &cut, &thin);
+	run_apart(&f, &cut, &left);
 	check_cuts_held(&removed);
 	CHECK_EQ_INT(removed, cut);
 	CHECK(same_rect(2, 5, 5, 20, 30)); /* A whole */
 	CHECK_NUM(closest_pair_px(), >=, WALL / PX + 1 - 1e-9);
-	CHECK_EQ_INT(thin, 0); /* within the rounds, the boundary moved off A */
+	CHECK_EQ_INT(left, 0); /* within the rounds, the boundary moved off A */
+	hl_fill_fini(&f);
+}
+
+/* Two voids one above the other in the grid (a wall along the rows):
+ * every near pair lies on two different rows. */
+static void test_wall_along_rows(void)
+{
+	struct hl_fill f;
+	long cut, left, removed;
+
+	memset(masks, 0, sizeof masks);
+	rect(2, 5, 5, 40, 15);
+	rect(2, 5, 19, 40, 30);
+	for (int k = 0; k < 2; k++) {
+		rect(k, 5, 5, 40, 12);
+		rect(k, 5, 23, 40, 30);
+	}
+	REQUIRE(fill_from_masks(&f));
+	CHECK_NUM(closest_pair_px(), <, 7);
+	run_apart(&f, &cut, &left);
+	CHECK_NUM(closest_pair_px(), >=, WALL / PX + 1 - 1e-9);
+	check_cuts_held(&removed);
+	CHECK_EQ_INT(removed, cut);
+	CHECK_NUM(cut, >, 0);
+	CHECK_EQ_INT(left, 0);
+	hl_fill_fini(&f);
+}
+
+/* Two squares of the top layer that touch at one corner are one void
+ * (8-connected, as the verifier reads it): nothing is cut, though each
+ * goes down on its own. */
+static void test_corner_is_one_void(void)
+{
+	struct hl_fill f;
+	long cut, left;
+
+	memset(masks, 0, sizeof masks);
+	for (int k = 0; k < NL; k++) {
+		rect(k, 5, 5, 15, 15);
+		rect(k, 16, 16, 26, 26);
+	}
+	rect(0, 5, 30, 9, 34); /* far: 15 rows from both */
+	REQUIRE(fill_from_masks(&f));
+	run_apart(&f, &cut, &left);
+	CHECK_EQ_INT(cut, 0);
+	CHECK_EQ_INT(left, 0);
+	CHECK(!memcmp(masks, before, sizeof masks));
 	hl_fill_fini(&f);
 }
 
@@ -277,5 +329,7 @@ int main(void)
 	RUN(test_one_void_untouched);
 	RUN(test_wall_cut_from_foot);
 	RUN(test_one_side_held);
+	RUN(test_wall_along_rows);
+	RUN(test_corner_is_one_void);
 	return harness_report();
 }
