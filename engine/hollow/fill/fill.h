@@ -23,7 +23,8 @@ struct vec3;
 /* One run of set pixels: row y, columns x0..x1 inclusive (grid pixels). */
 struct hl_span {
 	int32_t y, x0, x1;
-	uint32_t comp; /* 3D component id (hl_fill_components), 0 before */
+	uint32_t comp; /* 3D component id (the last grouping: hl_fill_components,
+			* or hl_fill_build's walls pass), 0 before any */
 };
 
 struct hl_fill_params {
