@@ -171,6 +171,21 @@ static void run_apart(struct hl_fill *f, long *cut, long *left)
 	CHECK(masks_from_fill(f));
 }
 
+/* The pass on masks as they are: nothing to cut, nothing left, every
+ * pixel as it was. */
+static void expect_untouched(void)
+{
+	struct hl_fill f;
+	long cut, left;
+
+	REQUIRE(fill_from_masks(&f));
+	run_apart(&f, &cut, &left);
+	CHECK_EQ_INT(cut, 0);
+	CHECK_EQ_INT(left, 0);
+	CHECK(!memcmp(masks, before, sizeof masks));
+	hl_fill_fini(&f);
+}
+
 /* Two voids born side by side in the top layer, 4 px apart (centres),
  * each over its own narrower void below; a third void in rows outside
  * the cut and a fourth beside the cut's rows, both far from the rest. */
@@ -217,20 +232,12 @@ static void test_births_side_by_side(void)
  * the layer below) stay as they are. */
 static void test_one_void_untouched(void)
 {
-	struct hl_fill f;
-	long cut, left;
-
 	memset(masks, 0, sizeof masks);
 	rect(2, 5, 5, 20, 30);
 	rect(2, 24, 5, 40, 30);
 	rect(1, 5, 5, 40, 30);
 	rect(0, 5, 5, 40, 30);
-	REQUIRE(fill_from_masks(&f));
-	run_apart(&f, &cut, &left);
-	CHECK_EQ_INT(cut, 0);
-	CHECK_EQ_INT(left, 0);
-	CHECK(!memcmp(masks, before, sizeof masks));
-	hl_fill_fini(&f);
+	expect_untouched();
 }
 
 /* Two voids 3 px apart in every layer: cut in layer 0 (the plate
@@ -306,21 +313,13 @@ static void test_wall_along_rows(void)
  * goes down on its own. */
 static void test_corner_is_one_void(void)
 {
-	struct hl_fill f;
-	long cut, left;
-
 	memset(masks, 0, sizeof masks);
 	for (int k = 0; k < NL; k++) {
 		rect(k, 5, 5, 15, 15);
 		rect(k, 16, 16, 26, 26);
 	}
 	rect(0, 5, 30, 9, 34); /* far: 15 rows from both */
-	REQUIRE(fill_from_masks(&f));
-	run_apart(&f, &cut, &left);
-	CHECK_EQ_INT(cut, 0);
-	CHECK_EQ_INT(left, 0);
-	CHECK(!memcmp(masks, before, sizeof masks));
-	hl_fill_fini(&f);
+	expect_untouched();
 }
 
 int main(void)
