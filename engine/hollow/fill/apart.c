@@ -168,23 +168,14 @@ static int conflict_box(const struct hl_fill_layer *L, const size_t *rs, int h, 
 	return any;
 }
 
-/* rows[y] = the first run of row y in L (rows[h] = L->n). */
-static void row_index(const struct hl_fill_layer *L, int h, size_t *rows)
-{
-	for (size_t i = 0, y = 0; y <= (size_t)h; y++) {
-		while (i < L->n && (size_t)L->run[i].y < y)
-			i++;
-		rows[y] = i;
-	}
-}
-
 /* One layer k: mark the boundary pixels between two components whose
  * nearest void pixels lie closer than lim (mm, centres), turn solid the
  * void pixels nearer than (lim + max(px, py)) / 2 to them that stand over
  * solid, and rebuild the layer's runs (strictly nearer than that, within 1e-12 mm^2).
- * *cut: pixels turned solid.  0, ERR_NOMEM or an EDT error. */
+ * *crowded: 1 when the layer held two components within lim (before the
+ * cut), else 0; *cut: pixels turned solid.  0, ERR_NOMEM or an EDT error. */
 static int apart_layer(struct hl_fill *f, int k, double px, double py, double lim,
-		       struct apart_win *a, long *cut, struct err *e)
+		       struct apart_win *a, int *crowded, long *cut, struct err *e)
 {
 	static const int dir[4][2] = {{1, 0}, {0, 1}, {1, 1}, {-1, 1}};
 	struct hl_fill_layer *L = &f->layer[k];
@@ -196,8 +187,9 @@ static int apart_layer(struct hl_fill *f, int k, double px, double py, double li
 	double half = 0.5 * (lim + fmax(px, py));
 	int rpx = (int)ceil(lim / fmin(px, py)) + 2;
 
-	row_index(L, f->h, a->rows);
-	if (!conflict_box(L, a->rows, f->h, px, py, lim, &x0, &y0, &x1, &y1))
+	hl_grid_row_starts(L->run, L->n, f->h, a->rows);
+	*crowded = conflict_box(L, a->rows, f->h, px, py, lim, &x0, &y0, &x1, &y1);
+	if (!*crowded)
 		return 0; /* no two components within lim */
 	/* the pixels of every near pair, the boundary between them and the
 	 * void pixels nearer to it than they are */
@@ -345,16 +337,25 @@ int hl_fill_apart(struct hl_fill *f, double wall_mm, double px, double py, int t
 	 * from its foot up in one round. */
 	for (int round = 0; !rc && round < APART_ROUNDS && *cut != c0; round++) {
 		c0 = *cut;
+		*left = 0;
 		rc = hl_fill_label(f, 1, &runs, e);
-		for (int k = 0; !rc && k < f->n; k++)
-			rc = apart_layer(f, k, px, py, lim, &a, cut, e);
+		for (int k = 0; !rc && k < f->n; k++) {
+			int crowded = 0;
+			rc = apart_layer(f, k, px, py, lim, &a, &crowded, cut, e);
+			*left += crowded;
+		}
 	}
-	/* what is left: layers still holding two voids nearer than lim */
-	if (!rc)
+	/* what is left: layers still holding two voids nearer than lim.  A
+	 * round that cut nothing read them on the fill as it stands; after
+	 * the last round's cuts, regroup and read them again */
+	if (!rc && *cut != c0) {
+		*left = 0;
 		rc = hl_fill_label(f, 1, &runs, e);
-	for (int k = 0; !rc && k < f->n; k++) {
-		row_index(&f->layer[k], f->h, a.rows);
-		*left += conflict_box(&f->layer[k], a.rows, f->h, px, py, lim, &x0, &y0, &x1, &y1);
+		for (int k = 0; !rc && k < f->n; k++) {
+			const struct hl_fill_layer *L = &f->layer[k];
+			hl_grid_row_starts(L->run, L->n, f->h, a.rows);
+			*left += conflict_box(L, a.rows, f->h, px, py, lim, &x0, &y0, &x1, &y1);
+		}
 	}
 out:
 	win_fini(&a);

@@ -26,6 +26,10 @@ struct err;
 int hl_grid_runs(const uint8_t *mask, int w, int x0, int y0, int x1, int y1,
 		 struct hl_span **runs, size_t *n, size_t *cap, struct err *e);
 
+/* rs[y] = the index of the first run of row y (rs[h] = n) in r[0..n), a
+ * row-major run list of rows 0 .. h - 1. */
+void hl_grid_row_starts(const struct hl_span *r, size_t n, int h, size_t *rs);
+
 /* Set mask[y * w + x] = val for every pixel of runs[0..n). */
 void hl_grid_paint(uint8_t *mask, int w, const struct hl_span *runs, size_t n, uint8_t val);
 

@@ -40,6 +40,17 @@ int hl_grid_runs(const uint8_t *mask, int w, int x0, int y0, int x1, int y1,
 	return 0;
 }
 
+void hl_grid_row_starts(const struct hl_span *r, size_t n, int h, size_t *rs)
+{
+	size_t i = 0;
+
+	for (int y = 0; y <= h; y++) {
+		while (i < n && r[i].y < y)
+			i++;
+		rs[y] = i;
+	}
+}
+
 void hl_grid_paint(uint8_t *mask, int w, const struct hl_span *runs, size_t n, uint8_t val)
 {
 	for (size_t i = 0; i < n; i++)

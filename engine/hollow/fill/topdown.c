@@ -251,18 +251,6 @@ static void link_rows(struct hl_span **at, const struct hl_span *A, size_t na, u
 	}
 }
 
-/* First run of each row y (rs[y], rs[h] = n) of a row-major run list. */
-static void row_starts(const struct hl_span *r, size_t n, int h, size_t *rs)
-{
-	size_t i = 0;
-
-	for (int y = 0; y <= h; y++) {
-		while (i < n && r[i].y < y)
-			i++;
-		rs[y] = i;
-	}
-}
-
 int hl_fill_label(struct hl_fill *f, int diag, size_t *runs, struct err *e)
 {
 	size_t total = 0, *rs0 = NULL, *rs1 = NULL;
@@ -295,9 +283,9 @@ int hl_fill_label(struct hl_fill *f, int diag, size_t *runs, struct err *e)
 	off[f->n] = (uint32_t)total;
 	for (int k = 0; k < f->n; k++) {
 		const struct hl_fill_layer *L = &f->layer[k], *U = k + 1 < f->n ? &f->layer[k + 1] : NULL;
-		row_starts(L->run, L->n, f->h, rs0);
+		hl_grid_row_starts(L->run, L->n, f->h, rs0);
 		if (U)
-			row_starts(U->run, U->n, f->h, rs1);
+			hl_grid_row_starts(U->run, U->n, f->h, rs1);
 		for (int y = 0; y < f->h; y++) {
 			size_t a = rs0[y], na = rs0[y + 1] - a;
 			if (!na)
