@@ -135,44 +135,6 @@ static int note_over(void *ctx, int x, int y, double far_mm)
 	return 0;
 }
 
-/* Islands the mending made in layer k + 1 (above; above_drawn as drawn
- * before it was mended): a solid component (gray >= VERIFY_THRESHOLD,
- * 8-connected, the verifier's islands) holding a mended pixel with no
- * solid pixel of layer k (cur) under any of its pixels gets its mended
- * pixels' gray under them.  lab: w h scratch.  0 or ERR_NOMEM. */
-static int hold_islands(struct raster *cur, const struct raster *above,
-			const struct raster *above_drawn, int32_t *lab, struct err *e)
-{
-	size_t np = (size_t)cur->w * (size_t)cur->h;
-	uint8_t *mask = mem_alloc(np), *need = NULL;
-	int32_t count = 0;
-	int rc;
-
-	if (!mask)
-		return ERR_SET(e, ERR_NOMEM, "hollow: out of memory (mending layers)");
-	for (size_t i = 0; i < np; i++)
-		mask[i] = above->px[i] >= VERIFY_THRESHOLD;
-	rc = label_components8(mask, cur->w, cur->h, lab, &count, e);
-	if (!rc && !(need = mem_calloc((size_t)count + 1, 1)))
-		rc = ERR_SET(e, ERR_NOMEM, "hollow: out of memory (mending layers)");
-	if (!rc) {
-		/* need: 1 = holds a mended pixel, 2 = and stands on layer k */
-		for (size_t i = 0; i < np; i++)
-			if (lab[i] && above->px[i] != above_drawn->px[i])
-				need[lab[i]] = 1;
-		for (size_t i = 0; i < np; i++)
-			if (lab[i] && need[lab[i]] && cur->px[i] >= VERIFY_THRESHOLD)
-				need[lab[i]] = 2;
-		for (size_t i = 0; i < np; i++)
-			if (lab[i] && need[lab[i]] == 1 && above->px[i] != above_drawn->px[i] &&
-			    above->px[i] > cur->px[i])
-				cur->px[i] = above->px[i];
-	}
-	mem_free(need);
-	mem_free(mask);
-	return rc;
-}
-
 /* The part alone at one layer, drawn when first needed: img's pixels
  * (255 = wholly inside the part) are where solid may be added. */
 struct inside {
@@ -195,6 +157,62 @@ static int inside_draw(struct inside *in, struct err *e)
 	if (!rc)
 		rc = slice_rasterize(in->region, in->map, in->antialias, in->img, e);
 	in->ready = !rc;
+	return rc;
+}
+
+/* Islands of layer k + 1 (above; above_drawn as drawn before it was
+ * mended): a solid component (gray >= VERIFY_THRESHOLD, 8-connected, the
+ * verifier's islands) with no solid pixel of layer k (cur) under any of
+ * its pixels.  One that holds a mended pixel gets its mended pixels' gray
+ * under them (the mending made it).  One drawn so (a speck of a collapsed
+ * top's gray, docs/hollow.md 3.8) gets its own gray under its pixels where
+ * the part alone is wholly solid at layer k (in: drawn here when such an
+ * island is found): over the void, not over the part's outside, whose own
+ * islands need external supports and stay as they are.  lab: w h scratch.
+ * 0, ERR_NOMEM or inside_draw's error. */
+static int hold_islands(struct raster *cur, const struct raster *above,
+			const struct raster *above_drawn, struct inside *in, int32_t *lab,
+			struct err *e)
+{
+	size_t np = (size_t)cur->w * (size_t)cur->h;
+	uint8_t *mask = mem_alloc(np), *need = NULL;
+	int32_t count = 0;
+	int rc, drawn = 0;
+
+	if (!mask)
+		return ERR_SET(e, ERR_NOMEM, "hollow: out of memory (mending layers)");
+	for (size_t i = 0; i < np; i++)
+		mask[i] = above->px[i] >= VERIFY_THRESHOLD;
+	rc = label_components8(mask, cur->w, cur->h, lab, &count, e);
+	if (!rc && !(need = mem_calloc((size_t)count + 1, 1)))
+		rc = ERR_SET(e, ERR_NOMEM, "hollow: out of memory (mending layers)");
+	if (!rc) {
+		/* need: 1 = drawn, 2 = holds a mended pixel, 3 = stands on
+		 * layer k */
+		for (size_t i = 0; i < np; i++)
+			if (lab[i] && !need[lab[i]])
+				need[lab[i]] = 1;
+		for (size_t i = 0; i < np; i++)
+			if (lab[i] && above->px[i] != above_drawn->px[i])
+				need[lab[i]] = 2;
+		for (size_t i = 0; i < np; i++)
+			if (lab[i] && cur->px[i] >= VERIFY_THRESHOLD)
+				need[lab[i]] = 3;
+		for (int32_t c = 1; c <= count && !drawn; c++)
+			drawn = need[c] == 1;
+		if (drawn)
+			rc = inside_draw(in, e);
+	}
+	for (size_t i = 0; !rc && i < np; i++) {
+		int c = need && lab[i] ? need[lab[i]] : 0;
+		if (above->px[i] <= cur->px[i])
+			continue;
+		if ((c == 2 && above->px[i] != above_drawn->px[i]) ||
+		    (c == 1 && in->img->px[i] == 255))
+			cur->px[i] = above->px[i];
+	}
+	mem_free(need);
+	mem_free(mask);
 	return rc;
 }
 
@@ -259,10 +277,11 @@ static int read_over(const struct raster *cur, const struct raster *above, int o
 }
 
 /* Mend layer k (cur, drawn; crop pixel (0, 0) is image pixel (ox, oy))
- * under layer k + 1 (above, final): first the
- * islands the mending of above made (hold_islands), then passes of
- * verify_far_pixels, raising each pixel read over, or when that was not
- * enough its neighbours, to above's gray where the part is wholly solid.
+ * under layer k + 1 (above, final): first the islands of above, those
+ * the mending made and those drawn over the void (hold_islands), then
+ * passes of verify_far_pixels, raising each pixel read over, or when that
+ * was not enough its neighbours, to above's gray where the part is wholly
+ * solid.
  * *left: 1 when a pixel still reads over. */
 static int mend_layer(struct raster *cur, const struct raster *above,
 		      const struct raster *above_drawn, int ox, int oy, struct inside *in,
@@ -277,9 +296,7 @@ static int mend_layer(struct raster *cur, const struct raster *above,
 	int rc = 0;
 
 	*left = 0;
-	/* islands only where above was mended */
-	if (memcmp(above->px, above_drawn->px, (size_t)cur->w * (size_t)cur->h) != 0)
-		rc = hold_islands(cur, above, above_drawn, lab, e);
+	rc = hold_islands(cur, above, above_drawn, in, lab, e);
 	if (rc)
 		return rc;
 	/* a check, then a raise, HL_REPAIR_PASSES times; a last check */
