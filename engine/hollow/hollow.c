@@ -38,6 +38,7 @@ struct hollow_params {
 	double margin_deg;
 	int fill;
 	int lean_walls;
+	int mitre_corners;
 	double optimise_work;
 	double optimise_s;
 };
@@ -119,6 +120,13 @@ static const struct param_desc hollow_desc[] = {
 	 .help = "Fill: a wall between two voids leans at alpha over the larger and ends on the "
 		 "smaller one's floor (more volume removed; one-pixel bumps along the leaning walls' "
 		 "undersides); false: it stands vertical down to a floor (docs/hollow.md)."},
+	{.name = "mitre_corners", .type = PARAM_BOOL,
+	 .offset = offsetof(struct hollow_params, mitre_corners), .min = 0, .max = 1, .def = 1,
+	 .unit = "",
+	 .help = "Fill, with lean_walls: a void's convex corners grow square, one pixel a layer "
+		 "along both axes, where the exact support rule allows (more volume removed: the "
+		 "50 mm ball 72.2 -> 76.7 % at SL1 pitch); false: every front grows round, a "
+		 "diamond at SL1 pitch (docs/hollow.md 4.3)."},
 	{.name = "optimise_work", .type = PARAM_NUM,
 	 .offset = offsetof(struct hollow_params, optimise_work), .min = 0, .max = 86400,
 	 .def = HOLLOW_WORK_REF_S, .unit = "ref s",
@@ -377,6 +385,7 @@ static int hollow_prepare(const struct engine_ctx *ctx, const void *params, void
 	 * stepped void surfaces (hmesh.h) */
 	c->fill = p->fill;
 	c->fill_lean = p->lean_walls;
+	c->fill_corners = p->mitre_corners;
 	/* a mesh output for a resin printer is designed on that printer's
 	 * pixels: sliced again, it gives the very pixels checked here */
 	if (!ctx->want_raster && !ctx->want_region && ctx->printer &&

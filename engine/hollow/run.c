@@ -37,6 +37,7 @@ static void fill_params(const struct hl_config *c, struct hl_fill_params *p)
 	p->margin_rad = c->opt.margin_rad;
 	p->min_void_mm3 = c->opt.min_void_mm3;
 	p->lean = c->fill_lean;
+	p->corners = c->fill_corners;
 	p->map = c->fill_map;
 	p->threads = c->opt.threads;
 }

@@ -26,6 +26,7 @@ struct hl_config {
 				    * layer for stability) */
 	int fill;                  /* top-down fill of what the optimiser left */
 	int fill_lean;             /* fill: walls between voids lean (else they stand) */
+	int fill_corners;          /* fill: convex void corners grow square (with fill_lean) */
 	struct raster_map fill_map; /* printer mm -> pixels of the images the verifier reads */
 	int fill_map_set;          /* fill_map is set (else no fill) */
 };

@@ -7,15 +7,17 @@
 # sliver_mm3: those of them standing free, not attached to thicker solid) and
 # shelves (shelf_mm3: 1-2 layers thick between voids), time,
 # peak RSS.  Paper's Table 1: 53-77 % reduction, 17-60 min.
-# normal: the top-down fill alone (rounds=0 fill=true), the default
-# pipeline (optimiser rounds<=8, then the fill) and the optimiser alone
-# (rounds<=8, fill=false; also with section 6's smoothing and with adaptive
-# slices); each run capped at CAP_S (300)
-# seconds, reported; then what round growth would give on a 50 mm ball
-# (hollow_axisym.py, a model); two parts whose fill gives birth to voids side
-# by side (knot, mushroom, 30 mm).  HOLLOW_MODELS="camel:y femur:z" picks models.
-# large: also alpha 30, the standing objective on the letter P (50 and
-# 100 mm tall) and the fill alone on that ball.
+# normal: the top-down fill alone (rounds=0 fill=true), again with every
+# front grown round (mitre_corners=false), the default pipeline (optimiser
+# rounds<=8, then the fill) and the optimiser alone (rounds<=8, fill=false;
+# also with section 6's smoothing and with adaptive slices); each run capped
+# at CAP_S (300) seconds, reported; then what round growth would give on a
+# 50 mm ball (hollow_axisym.py, a model) and the fill alone on that ball
+# (SL1, mitred and round; G-code); two parts whose fill gives birth to voids
+# side by side (knot, mushroom, 30 mm).  HOLLOW_MODELS="camel:y femur:z"
+# picks models.
+# large: also alpha 30 and the standing objective on the letter P (50 and
+# 100 mm tall).
 set -uo pipefail
 BUILD=${1:?usage: hollow.sh BUILD [normal|large]}
 MODE=${2:-normal}
@@ -118,6 +120,13 @@ fi
 for m in "${MODELS[@]}"; do
 	set -- $m
 	run_one "$1" "$2" 45 lightweight 0 true || status=1
+done
+# the same with every front grown round (mitre_corners=false): what the
+# voids' square corners add (docs/hollow.md 4.3)
+echo "fill alone, fronts grown round (mitre_corners=false):"
+for m in "${MODELS[@]}"; do
+	set -- $m
+	run_one "$1" "$2" 45 lightweight 0 true 50 round mitre_corners=false || status=1
 done
 for m in "${MODELS[@]}"; do
 	set -- $m
@@ -263,10 +272,16 @@ print("  %.1f %% in %d voids, interior overhang %g mm2 (slope excess %.3f px), i
 PY
 	rm -f "$TMP/ball_fdm.gcode"
 fi
-if [ "$MODE" = large ]; then
+if [ -z "${HOLLOW_MODELS:-}" ]; then
+	# the ball at the SL1's pitch, the fill alone: corners mitred (the
+	# default) and every front round (docs/hollow.md 4.3)
+	echo "50 mm ball, SL1, the fill alone (mitred corners, then round fronts):"
 	[ -s "$TMP/ball.stl" ] ||
 		python3 "$(dirname "$0")/hollow_axisym.py" --write-ball "$TMP/ball.stl" 25 >/dev/null
 	run_one "$TMP/ball.stl" z 45 lightweight 0 true || status=1
+	run_one "$TMP/ball.stl" z 45 lightweight 0 true 50 round mitre_corners=false || status=1
+fi
+if [ "$MODE" = large ]; then
 	for m in "camel y" "armadillo y"; do
 		set -- $m
 		run_one "$1" "$2" 30 lightweight 0 true || status=1

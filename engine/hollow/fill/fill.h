@@ -37,6 +37,8 @@ struct hl_fill_params {
 	double margin_rad;   /* safety subtracted from alpha in the design shrink */
 	double min_void_mm3; /* smaller 3D components are turned solid */
 	int lean;            /* walls between voids lean at the design slope (else stand) */
+	int corners;         /* with lean: convex void corners grow square where the rule
+			      * allows (hl_step_prune) */
 	struct raster_map map; /* printer mm -> pixels of the images the verifier reads */
 	/* keep to a half-plane: a pixel centre (x, y) (printer mm) may be void
 	 * only where keep[0] x + keep[1] y < keep[2] (stability) */

@@ -226,6 +226,7 @@ struct hl_geo {
 	int mv;       /* layers in wall_next: the vertical wall between voids */
 	double lone;  /* a new void beside others keeps wall + dg + lone from them */
 	int lean;     /* walls between voids lean at the design slope (else stand) */
+	int corners;  /* lean: convex void corners grow square (hl_step_prune) */
 	double half;  /* lean: a void pixel centre from the bisector pixels, wall / 2 / cos */
 	double px, py, pmax;
 };

@@ -1,8 +1,9 @@
 /* fillwall.c - leaning walls between the top-down fill's voids
  * (`lean_walls`, on by default; fill_int.h, docs/hollow.md "Top-down
  * fill"): keep-apart that moves the wall between two voids towards the
- * smaller one by dd per layer, and the pruning of the pixels such a
- * moving wall would leave behind.
+ * smaller one by dd per layer, the pruning of the pixels such a moving
+ * wall would leave behind, and the voids' convex corners grown square
+ * (`mitre_corners`).
  */
 #include "engine/hollow/fill/fill_int.h"
 
@@ -120,6 +121,9 @@ out:
 /* The solid 8-neighbours of pixel (x, y) (outside the window: solid), as
  * the number of 8-connected groups they make on the ring round it:
  * turning a pixel with at most one group void disconnects nothing. */
+static const int HL_RING[8][2] = {{1, 0},  {1, 1},   {0, 1},  {-1, 1},
+				 {-1, 0}, {-1, -1}, {0, -1}, {1, -1}};
+
 static int ring_groups(const uint8_t *v, int ww, int wh, int x, int y)
 {
 	static const int ring[8][2] = {{1, 0},  {1, 1},   {0, 1},  {-1, 1},
@@ -144,24 +148,64 @@ static int ring_groups(const uint8_t *v, int ww, int wh, int x, int y)
 	return groups ? groups : 1;
 }
 
+/* Would turning pixel (x, y) of v (1 = void; outside the window: solid)
+ * void leave a solid 8-neighbour of it with 4 or more void 8-neighbours
+ * (a tooth of solid pointing into the void)?  A square void's corner
+ * leaves 3 at most. */
+static int makes_tooth(const uint8_t *v, int ww, int wh, int x, int y)
+{
+	int tooth = 0;
+
+	for (int j = 0; j < 8 && !tooth; j++) {
+		int qx = x + HL_RING[j][0], qy = y + HL_RING[j][1], n = 0;
+		if (qx < 0 || qy < 0 || qx >= ww || qy >= wh || v[(size_t)qy * (size_t)ww + (size_t)qx])
+			continue;
+		for (int t = 0; t < 8; t++) {
+			int ux = qx + HL_RING[t][0], uy = qy + HL_RING[t][1];
+			if (ux < 0 || uy < 0 || ux >= ww || uy >= wh)
+				continue;
+			n += (ux == x && uy == y) || v[(size_t)uy * (size_t)ww + (size_t)ux];
+		}
+		tooth = n >= 4;
+	}
+	return tooth;
+}
+
 /*
  * Prune (on s->void_out, after keep-apart and the vertical walls; lean
  * walls only).  A pixel hl_step_grow() kept solid (R, or a bridge:
  * s->keep) because the pixel above had no solid of layer k within dg may
- * have some now: the wall band keep-apart added.  Kept anyway, it is left behind by the
- * moving wall: the next layer keeps it as R again and its bridge to the
+ * have some now: the wall band keep-apart added.  Kept anyway, it is left
+ * behind by the moving wall: the next layer keeps it as R again and its bridge to the
  * wall grows, an icicle a pixel wide under the leaning wall (the cow, 50
- * mm: fin_mm3 2.09 without this).  It turns void, pixel by pixel on the
- * current state, where
+ * mm: fin_mm3 2.09 without this).
+ * Corners (g->corners): a pixel of E, solid above, within sqrt 2 dg of
+ * V(k + 1) is a candidate too.  Growth keeps it solid because it lies
+ * farther than dd from V(k + 1), but the rule asks only that the solid
+ * of layer k + 1 lie within dg of layer k's: beside a void's convex
+ * corner (a concave corner of the solid, held by both its faces) the
+ * pixel diagonal to the corner may turn void, and the corner grows
+ * square, one pixel a layer along both axes (at SL1 pitch, 1.06 px
+ * allowed, round growth bounds a void by axis-aligned edges advancing a
+ * pixel a layer and diagonal ones advancing 0.71 px; mitred, the
+ * axis-aligned edges also lengthen by a pixel at each end a layer, and
+ * the void tends to a square with chamfered corners).  It is taken only
+ * where no solid 8-neighbour of it is left with 4 or more void
+ * 8-neighbours (makes_tooth): along a diagonal front every other pixel
+ * could go, and the solid teeth left between them stood to the floor as
+ * pillars a pixel wide (the 50 mm ball: 95 mm3 of slivers).
+ * A candidate turns void, pixel by pixel on the current state, where
  *   - its solid 8-neighbours make at most one group (nothing is cut
  *     off: a cut-off pixel would stand to the floor as an island);
- *   - it would pass keep-apart as void and is not a floor under a void
- *     of layers k + 2 .. k + mv (the vertical walls' rule);
+ *   - it would pass keep-apart as void (within dg of V(k + 1), sqrt 2 dg
+ *     for a corner, and far enough from the bisector) and is not a
+ *     floor under a void of layers k + 2 .. k + mv (the vertical walls'
+ *     rule);
  *   - every solid pixel of layer k + 1 within dg of it that is void
  *     below (itself included) keeps another solid pixel of layer k
  *     within dg: the rule of hl_step_grow() holds.
  * Repeated until nothing changes (icicles peel from their tips), at most
- * 32 passes.  O(R pixels x (dg / pixel)^4) per pass.
+ * 32 passes.  O(candidates x (dg / pixel)^4) per pass.
  */
 int hl_step_prune(struct hl_win *s, int ww, int wh, const struct hl_geo *g, int k)
 {
@@ -175,10 +219,11 @@ int hl_step_prune(struct hl_win *s, int ww, int wh, const struct hl_geo *g, int 
 				size_t i = (size_t)y * (size_t)ww + (size_t)x;
 				int ok = 1;
 				double h;
+				int corner = g->corners && s->keep[i] == HL_KEEP_E;
 				if (s->void_out[i] || !s->region[i] || s->void_above[i] ||
-				    (s->keep[i] != HL_KEEP_R && s->keep[i] != HL_KEEP_BRIDGE))
+				    (s->keep[i] != HL_KEEP_R && s->keep[i] != HL_KEEP_BRIDGE && !corner))
 					continue;
-				if (s->near_void_d2_mm2[i] > dg2 ||
+				if (s->near_void_d2_mm2[i] > (corner ? 2 * dg2 : dg2) ||
 				    (s->last_void[i] >= k + 2 && s->last_void[i] <= k + g->mv))
 					continue;
 				h = s->bisector_side[i] == 2 ? g->half + g->dd : g->half - g->dd;
@@ -212,6 +257,8 @@ int hl_step_prune(struct hl_win *s, int ww, int wh, const struct hl_geo *g, int 
 							}
 						ok = sup;
 					}
+				if (ok && corner)
+					ok = !makes_tooth(s->void_out, ww, wh, x, y);
 				if (!ok)
 					continue;
 				s->void_out[i] = 1;

@@ -427,6 +427,7 @@ int hl_fill_build(const struct mesh *part, const struct mesh *solid, const struc
 	g.birth = 0.5 * g.wall;
 	g.lone = HL_FILL_LONE_MM;
 	g.lean = c->lean;
+	g.corners = c->corners;
 	g.half = 0.5 * g.wall / cos(c->alpha_rad - c->margin_rad);
 	pad = (int)ceil((g.wall + 2 * g.dg + 2 * g.pmax) / fmin(g.px, g.py)) + 2;
 	gm = *m;

@@ -639,6 +639,109 @@ static void test_births_apart(void)
 	mem_free(m.tri);
 }
 
+/* A prism of ns sides round the z axis through (c, c): circumradius r,
+ * height h (mm), normals out; 0 when out of memory. */
+static int prism(struct mesh *m, int ns, double c, double r, double h)
+{
+	m->v = mem_alloc((size_t)(2 * ns + 2) * sizeof *m->v);
+	m->tri = mem_alloc((size_t)(4 * ns) * 3 * sizeof *m->tri);
+	m->nv = m->nt = 0;
+	if (!m->v || !m->tri)
+		return 0;
+	for (int i = 0; i < ns; i++) {
+		double a = 2 * M_PI * i / ns;
+		m->v[2 * i] = (struct vec3){c + r * cos(a), c + r * sin(a), 0};
+		m->v[2 * i + 1] = (struct vec3){c + r * cos(a), c + r * sin(a), h};
+	}
+	m->v[2 * ns] = (struct vec3){c, c, 0};
+	m->v[2 * ns + 1] = (struct vec3){c, c, h};
+	m->nv = (size_t)(2 * ns + 2);
+	for (int i = 0; i < ns; i++) {
+		uint32_t a0 = (uint32_t)(2 * i), a1 = a0 + 1, b0 = (uint32_t)(2 * ((i + 1) % ns)),
+			 b1 = b0 + 1, t[4][3] = {{a0, b0, b1}, {a0, b1, a1},
+						 {(uint32_t)(2 * ns), b0, a0},
+						 {(uint32_t)(2 * ns + 1), a1, b1}};
+		for (int j = 0; j < 4; j++) {
+			uint32_t *q = m->tri + 3 * m->nt++;
+			q[0] = t[j][0];
+			q[1] = t[j][1];
+			q[2] = t[j][2];
+		}
+	}
+	return 1;
+}
+
+/* Mitred corners (p.corners): in a cylinder the void is born under the
+ * flat top of the interior, a blob of 20 pixels round its centre, and
+ * grows down.  Round growth on these pixels (dg = 1 px a layer) advances
+ * a front one pixel a layer along the axes and one diagonal step (0.71
+ * px) across them; a void's convex corner may also grow square and keep
+ * the rule (the solid beside it is a concave corner, held by both
+ * faces), so with corners the section L layers down holds at least the
+ * square (2 L - 1)^2 and a quarter more than round growth's.  Both fills
+ * are re-checked by brute force: the rule on every front pixel, the wall
+ * to the prism's faces, one void. */
+static void test_mitre_corners(void)
+{
+	enum { NS = 64, L = 12 };
+	const double c = 3.5, r = 3, h = 4, ri = r * cos(M_PI / NS);
+	struct hl_fill_params p;
+	struct hl_fill f;
+	struct mesh m;
+	struct err e;
+	double dg = LAYER * tan(ALPHA_DEG * M_PI / 180), vol[2];
+	size_t sect[2];
+
+	err_clear(&e);
+	REQUIRE(prism(&m, NS, c, r, h));
+	for (int corners = 0; corners <= 1; corners++) {
+		uint8_t *v;
+		size_t count = 0, np, front = 0;
+		int top = -1;
+		double wmin = INFINITY;
+		memset(&f, 0, sizeof f);
+		params(&p, 0.5);
+		p.corners = corners;
+		REQUIRE_OK(hl_fill_build(&m, NULL, &p, NULL, 0, 1, &f, &e), &e);
+		v = voxels(&f, &count);
+		REQUIRE(v);
+		REQUIRE(count > 0);
+		np = (size_t)f.w * (size_t)f.h;
+		for (int k = 0; k < f.n; k++)
+			for (int y = 0; y < f.h; y++)
+				for (int x = 0; x < f.w; x++) {
+					double X = cx_mm(&f, x) - c, Y = cy_mm(&f, y) - c;
+					double Z = (k + 0.5) * LAYER, d = fmin(Z, h - Z);
+					if (!v[(size_t)k * np + (size_t)y * (size_t)f.w + (size_t)x])
+						continue;
+					top = k > top ? k : top;
+					for (int i = 0; i < NS; i++) {
+						double a = 2 * M_PI * (i + 0.5) / NS;
+						d = fmin(d, ri - (X * cos(a) + Y * sin(a)));
+					}
+					wmin = fmin(wmin, d);
+				}
+		CHECK_NUM(wmin, >=, WALL - 1e-9);
+		CHECK_EQ_INT(rule_breaks(&f, v, dg + 1e-9, &front), 0);
+		CHECK_NUM(front, >, 1000);
+		REQUIRE(top - L >= 0);
+		sect[corners] = 0;
+		for (size_t i = 0; i < np; i++)
+			sect[corners] += v[(size_t)(top - L) * np + i];
+		vol[corners] = f.volume_mm3;
+		CHECK_EQ_INT(f.voids, 1);
+		mem_free(v);
+		hl_fill_fini(&f);
+	}
+	printf("cylinder r %.0f mm: %d layers under the top, section %zu px round, %zu px "
+	       "mitred; void %.3f -> %.3f mm3\n", r, L, sect[0], sect[1], vol[0], vol[1]);
+	CHECK_NUM((double)sect[1], >=, (2.0 * L - 1) * (2.0 * L - 1));
+	CHECK_NUM((double)sect[1], >=, 1.25 * (double)sect[0]);
+	CHECK_NUM(vol[1], >, vol[0]);
+	mem_free(m.v);
+	mem_free(m.tri);
+}
+
 int main(void)
 {
 	RUN(test_box);
@@ -647,5 +750,6 @@ int main(void)
 	RUN(test_keep_half_plane);
 	RUN(test_rotated_map_empty);
 	RUN(test_births_apart);
+	RUN(test_mitre_corners);
 	return harness_report();
 }
