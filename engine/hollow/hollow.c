@@ -123,9 +123,9 @@ static const struct param_desc hollow_desc[] = {
 	{.name = "mitre_corners", .type = PARAM_BOOL,
 	 .offset = offsetof(struct hollow_params, mitre_corners), .min = 0, .max = 1, .def = 1,
 	 .unit = "",
-	 .help = "Fill, with lean_walls: a void's convex corners grow square, one pixel a layer "
-		 "along both axes, where the exact support rule allows (more volume removed: the "
-		 "50 mm ball 72.2 -> 76.7 % at SL1 pitch); false: every front grows round, a "
+	 .help = "Fill, with lean_walls: a void's convex corners grow square where the exact "
+		 "support rule allows (at SL1 pitch one pixel a layer along both axes; more volume "
+		 "removed: the 50 mm ball 72.2 -> 76.7 %); false: every front grows round, a "
 		 "diamond at SL1 pitch (docs/hollow.md 4.3)."},
 	{.name = "optimise_work", .type = PARAM_NUM,
 	 .offset = offsetof(struct hollow_params, optimise_work), .min = 0, .max = 86400,

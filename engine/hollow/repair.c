@@ -164,11 +164,13 @@ static int inside_draw(struct inside *in, struct err *e)
  * mended): a solid component (gray >= VERIFY_THRESHOLD, 8-connected, the
  * verifier's islands) with no solid pixel of layer k (cur) under any of
  * its pixels.  One that holds a mended pixel gets its mended pixels' gray
- * under them (the mending made it).  One drawn so (a speck of a collapsed
- * top's gray, docs/hollow.md 3.8) gets its own gray under its pixels where
- * the part alone is wholly solid at layer k (in: drawn here when such an
- * island is found): over the void, not over the part's outside, whose own
- * islands need external supports and stay as they are.  lab: w h scratch.
+ * under them (the mending made it).  One drawn so, wholly inside the crop
+ * (a speck of a collapsed top's gray, docs/hollow.md 3.8; one the crop's
+ * border cuts may stand outside it), gets its own gray under its pixels
+ * where the part alone is wholly solid at layer k (in: drawn here when
+ * such an island is found): over the void, not over the part's outside,
+ * whose own islands need external supports and stay as they are.  lab:
+ * w h scratch.
  * 0, ERR_NOMEM or inside_draw's error. */
 static int hold_islands(struct raster *cur, const struct raster *above,
 			const struct raster *above_drawn, struct inside *in, int32_t *lab,
@@ -198,6 +200,22 @@ static int hold_islands(struct raster *cur, const struct raster *above,
 		for (size_t i = 0; i < np; i++)
 			if (lab[i] && cur->px[i] >= VERIFY_THRESHOLD)
 				need[lab[i]] = 3;
+		/* a component the crop's border cuts may stand outside it (the
+		 * fill's solid crosses the optimised voids' box): left alone */
+		for (int x = 0; x < cur->w; x++) {
+			size_t a = (size_t)x, b = (size_t)(cur->h - 1) * (size_t)cur->w + (size_t)x;
+			if (lab[a] && need[lab[a]] == 1)
+				need[lab[a]] = 3;
+			if (lab[b] && need[lab[b]] == 1)
+				need[lab[b]] = 3;
+		}
+		for (int y = 0; y < cur->h; y++) {
+			size_t a = (size_t)y * (size_t)cur->w, b = a + (size_t)cur->w - 1;
+			if (lab[a] && need[lab[a]] == 1)
+				need[lab[a]] = 3;
+			if (lab[b] && need[lab[b]] == 1)
+				need[lab[b]] = 3;
+		}
 		for (int32_t c = 1; c <= count && !drawn; c++)
 			drawn = need[c] == 1;
 		if (drawn)

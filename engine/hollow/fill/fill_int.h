@@ -237,8 +237,9 @@ struct hl_geo {
  * pixel; output s->void_out = V(k) and s->sig_out_mm (the distance to
  * carry); what each step writes and reads: struct hl_win.  Each returns 0,
  * ERR_NOMEM or an EDT error.  Keep-apart, vertical walls and islands only
- * turn void solid; births add void that keeps solid within dg; so the rule
- * of hl_step_grow() holds on the result. */
+ * turn void solid; prune (its icicles and corners) and births add void
+ * that keeps solid within dg; so the rule of hl_step_grow() holds on the
+ * result. */
 int hl_step_grow(struct hl_win *s, int ww, int wh, const struct hl_geo *g, struct err *e);
 /* Keep-apart's first half (both variants): s->step_label = the
  * 8-connected components of V(k + 1) (*count of them), s->near_void =

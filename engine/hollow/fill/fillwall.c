@@ -121,17 +121,16 @@ out:
 /* The solid 8-neighbours of pixel (x, y) (outside the window: solid), as
  * the number of 8-connected groups they make on the ring round it:
  * turning a pixel with at most one group void disconnects nothing. */
+/* The 8-neighbours in order round a pixel (consecutive ones 8-adjacent). */
 static const int HL_RING[8][2] = {{1, 0},  {1, 1},   {0, 1},  {-1, 1},
 				 {-1, 0}, {-1, -1}, {0, -1}, {1, -1}};
 
 static int ring_groups(const uint8_t *v, int ww, int wh, int x, int y)
 {
-	static const int ring[8][2] = {{1, 0},  {1, 1},   {0, 1},  {-1, 1},
-				       {-1, 0}, {-1, -1}, {0, -1}, {1, -1}};
 	int sol[8], groups = 0, any = 0;
 
 	for (int q = 0; q < 8; q++) {
-		int xn = x + ring[q][0], yn = y + ring[q][1];
+		int xn = x + HL_RING[q][0], yn = y + HL_RING[q][1];
 		sol[q] = xn < 0 || yn < 0 || xn >= ww || yn >= wh ||
 			 !v[(size_t)yn * (size_t)ww + (size_t)xn];
 		any |= sol[q];
@@ -146,6 +145,17 @@ static int ring_groups(const uint8_t *v, int ww, int wh, int x, int y)
 		if (sol[q] && !sol[(q + 7) % 8] && !(q % 2 == 0 && sol[(q + 6) % 8]))
 			groups++;
 	return groups ? groups : 1;
+}
+
+/* Has pixel (x, y) of v (1 = void) a void 8-neighbour? */
+static int next_to_void(const uint8_t *v, int ww, int wh, int x, int y)
+{
+	for (int j = 0; j < 8; j++) {
+		int qx = x + HL_RING[j][0], qy = y + HL_RING[j][1];
+		if (qx >= 0 && qy >= 0 && qx < ww && qy < wh && v[(size_t)qy * (size_t)ww + (size_t)qx])
+			return 1;
+	}
+	return 0;
 }
 
 /* Would turning pixel (x, y) of v (1 = void; outside the window: solid)
@@ -179,8 +189,8 @@ static int makes_tooth(const uint8_t *v, int ww, int wh, int x, int y)
  * behind by the moving wall: the next layer keeps it as R again and its bridge to the
  * wall grows, an icicle a pixel wide under the leaning wall (the cow, 50
  * mm: fin_mm3 2.09 without this).
- * Corners (g->corners): a pixel of E, solid above, within sqrt 2 dg of
- * V(k + 1) is a candidate too.  Growth keeps it solid because it lies
+ * Corners (g->corners): a pixel of E, solid above, beside the void and
+ * farther than dg but within sqrt 2 dg of V(k + 1) is a candidate too.  Growth keeps it solid because it lies
  * farther than dd from V(k + 1), but the rule asks only that the solid
  * of layer k + 1 lie within dg of layer k's: beside a void's convex
  * corner (a concave corner of the solid, held by both its faces) the
@@ -197,10 +207,14 @@ static int makes_tooth(const uint8_t *v, int ww, int wh, int x, int y)
  * A candidate turns void, pixel by pixel on the current state, where
  *   - its solid 8-neighbours make at most one group (nothing is cut
  *     off: a cut-off pixel would stand to the floor as an island);
- *   - it would pass keep-apart as void (within dg of V(k + 1), sqrt 2 dg
- *     for a corner, and far enough from the bisector) and is not a
- *     floor under a void of layers k + 2 .. k + mv (the vertical walls'
- *     rule);
+ *   - it lies within dg of V(k + 1) (a corner: farther than dg, so that
+ *     a straight front's pixels stay as growth made them where dd and
+ *     dg span several pixels, and within sqrt 2 dg, with a void
+ *     8-neighbour, so that no void opens inside the solid; keep-apart
+ *     would have made it solid: the one relaxation of keep-apart), far
+ *     enough from the bisector to pass keep-apart's wall between voids,
+ *     and is not a floor under a void of layers k + 2 .. k + mv (the
+ *     vertical walls' rule);
  *   - every solid pixel of layer k + 1 within dg of it that is void
  *     below (itself included) keeps another solid pixel of layer k
  *     within dg: the rule of hl_step_grow() holds.
@@ -218,12 +232,18 @@ int hl_step_prune(struct hl_win *s, int ww, int wh, const struct hl_geo *g, int 
 			for (int x = 0; x < ww; x++) {
 				size_t i = (size_t)y * (size_t)ww + (size_t)x;
 				int ok = 1;
-				double h;
+				double h, d2 = s->near_void_d2_mm2[i];
 				int corner = g->corners && s->keep[i] == HL_KEEP_E;
 				if (s->void_out[i] || !s->region[i] || s->void_above[i] ||
 				    (s->keep[i] != HL_KEEP_R && s->keep[i] != HL_KEEP_BRIDGE && !corner))
 					continue;
-				if (s->near_void_d2_mm2[i] > (corner ? 2 * dg2 : dg2) ||
+				/* a corner: beyond dg (a straight front's pixels stay with
+				 * growth), within sqrt 2 dg (1e-12 mm^2: a pixel's
+				 * diagonal at dg of exactly a pixel), beside void */
+				if (corner && (d2 <= dg2 || d2 > 2 * dg2 + 1e-12 ||
+					       !next_to_void(s->void_out, ww, wh, x, y)))
+					continue;
+				if ((!corner && d2 > dg2) ||
 				    (s->last_void[i] >= k + 2 && s->last_void[i] <= k + g->mv))
 					continue;
 				h = s->bisector_side[i] == 2 ? g->half + g->dd : g->half - g->dd;

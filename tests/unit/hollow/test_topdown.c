@@ -63,6 +63,7 @@ static void params(struct hl_fill_params *p, double min_void_mm3)
 	p->margin_rad = MARGIN_DEG * M_PI / 180;
 	p->min_void_mm3 = min_void_mm3;
 	p->lean = 1;
+	p->corners = 1; /* the default (mitre_corners) */
 	p->map.a[0][0] = 1 / PX;
 	p->map.a[1][1] = 1 / PX;
 	p->map.b[0] = B;
@@ -690,7 +691,7 @@ static void test_mitre_corners(void)
 	struct mesh m;
 	struct err e;
 	double dg = LAYER * tan(ALPHA_DEG * M_PI / 180), vol[2];
-	size_t sect[2];
+	size_t sect[2], teeth[2];
 
 	err_clear(&e);
 	REQUIRE(prism(&m, NS, c, r, h));
@@ -728,16 +729,35 @@ static void test_mitre_corners(void)
 		sect[corners] = 0;
 		for (size_t i = 0; i < np; i++)
 			sect[corners] += v[(size_t)(top - L) * np + i];
+		/* teeth: solid pixels of the void's layers with 4 or more void
+		 * 8-neighbours (solid teeth left on a diagonal front) */
+		teeth[corners] = 0;
+		for (int k = 0; k < f.n; k++)
+			for (int y = 1; y + 1 < f.h; y++)
+				for (int x = 1; x + 1 < f.w; x++) {
+					const uint8_t *l = v + (size_t)k * np;
+					int nv = 0;
+					if (l[(size_t)y * (size_t)f.w + (size_t)x])
+						continue;
+					for (int dy = -1; dy <= 1; dy++)
+						for (int dx = -1; dx <= 1; dx++)
+							nv += l[(size_t)(y + dy) * (size_t)f.w +
+								(size_t)(x + dx)];
+					teeth[corners] += nv >= 4;
+				}
 		vol[corners] = f.volume_mm3;
 		CHECK_EQ_INT(f.voids, 1);
 		mem_free(v);
 		hl_fill_fini(&f);
 	}
 	printf("cylinder r %.0f mm: %d layers under the top, section %zu px round, %zu px "
-	       "mitred; void %.3f -> %.3f mm3\n", r, L, sect[0], sect[1], vol[0], vol[1]);
+	       "mitred; void %.3f -> %.3f mm3; teeth %zu, %zu\n", r, L, sect[0], sect[1], vol[0],
+	       vol[1], teeth[0], teeth[1]);
 	CHECK_NUM((double)sect[1], >=, (2.0 * L - 1) * (2.0 * L - 1));
 	CHECK_NUM((double)sect[1], >=, 1.25 * (double)sect[0]);
 	CHECK_NUM(vol[1], >, vol[0]);
+	/* no more solid teeth than round growth leaves (makes_tooth) */
+	CHECK_NUM((double)teeth[1], <=, (double)teeth[0]);
 	mem_free(m.v);
 	mem_free(m.tri);
 }
