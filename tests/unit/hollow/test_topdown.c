@@ -111,6 +111,22 @@ static uint8_t *voxels(const struct hl_fill *f, size_t *count)
 	return v;
 }
 
+/* hl_fill_build of m under p into f, as voxels (voxels()); NULL (a
+ * failed check) when the build fails or memory runs out. */
+static uint8_t *built(const struct mesh *m, const struct hl_fill_params *p, struct hl_fill *f,
+		      size_t *count)
+{
+	struct err e;
+	int rc;
+
+	err_clear(&e);
+	memset(f, 0, sizeof *f);
+	*count = 0;
+	rc = hl_fill_build(m, NULL, p, NULL, 0, 1, f, &e);
+	CHECK_EQ_INT(rc, 0);
+	return rc ? NULL : voxels(f, count);
+}
+
 /* Is there a solid pixel centre of layer lo (f's grid; outside the grid
  * is outside the part: no support) within dg (mm) of pixel (x, y)? */
 static int supported(const struct hl_fill *f, const uint8_t *lo, int x, int y, double dg)
@@ -238,16 +254,13 @@ static void test_box(void)
 	double vol, cxy[2], vault, vol1[2];
 	int top = -1, bottom = -1;
 
-	memset(&f, 0, sizeof f);
 	err_clear(&e);
 	REQUIRE(boxes(&m, &lo, &hi, 1));
 	params(&p, 0.5);
-	REQUIRE_OK(hl_fill_build(&m, NULL, &p, NULL, 0, 1, &f, &e), &e);
+	v = built(&m, &p, &f, &count);
+	REQUIRE(v && count > 0);
 	CHECK_EQ_INT(f.n, 80); /* 4 mm / 0.05 */
 	CHECK_NEAR(f.layer_mm, LAYER, 0);
-	v = voxels(&f, &count);
-	REQUIRE(v);
-	REQUIRE(count > 0);
 	np = (size_t)f.w * (size_t)f.h;
 	for (int k = 0; k < f.n; k++)
 		for (int y = 0; y < f.h; y++)
@@ -689,24 +702,19 @@ static void test_mitre_corners(void)
 	struct hl_fill_params p;
 	struct hl_fill f;
 	struct mesh m;
-	struct err e;
 	double dg = LAYER * tan(ALPHA_DEG * M_PI / 180), vol[2];
 	size_t sect[2], teeth[2];
 
-	err_clear(&e);
 	REQUIRE(prism(&m, NS, c, r, h));
 	for (int corners = 0; corners <= 1; corners++) {
 		uint8_t *v;
 		size_t count = 0, np, front = 0;
 		int top = -1;
 		double wmin = INFINITY;
-		memset(&f, 0, sizeof f);
 		params(&p, 0.5);
 		p.corners = corners;
-		REQUIRE_OK(hl_fill_build(&m, NULL, &p, NULL, 0, 1, &f, &e), &e);
-		v = voxels(&f, &count);
-		REQUIRE(v);
-		REQUIRE(count > 0);
+		v = built(&m, &p, &f, &count);
+		REQUIRE(v && count > 0);
 		np = (size_t)f.w * (size_t)f.h;
 		for (int k = 0; k < f.n; k++)
 			for (int y = 0; y < f.h; y++)
