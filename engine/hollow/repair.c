@@ -170,8 +170,7 @@ static int inside_draw(struct inside *in, struct err *e)
  * where the part alone is wholly solid at layer k (in: drawn here when
  * such an island is found): over the void, not over the part's outside,
  * whose own islands need external supports and stay as they are.  lab:
- * w h scratch.
- * 0, ERR_NOMEM or inside_draw's error. */
+ * w h scratch.  0, ERR_NOMEM or inside_draw's error. */
 static int hold_islands(struct raster *cur, const struct raster *above,
 			const struct raster *above_drawn, struct inside *in, int32_t *lab,
 			struct err *e)

@@ -118,13 +118,13 @@ out:
 	return rc;
 }
 
-/* The solid 8-neighbours of pixel (x, y) (outside the window: solid), as
- * the number of 8-connected groups they make on the ring round it:
- * turning a pixel with at most one group void disconnects nothing. */
 /* The 8-neighbours in order round a pixel (consecutive ones 8-adjacent). */
 static const int HL_RING[8][2] = {{1, 0},  {1, 1},   {0, 1},  {-1, 1},
 				 {-1, 0}, {-1, -1}, {0, -1}, {1, -1}};
 
+/* The solid 8-neighbours of pixel (x, y) (outside the window: solid), as
+ * the number of 8-connected groups they make on the ring round it:
+ * turning a pixel with at most one group void disconnects nothing. */
 static int ring_groups(const uint8_t *v, int ww, int wh, int x, int y)
 {
 	int sol[8], groups = 0, any = 0;
@@ -186,20 +186,20 @@ static int makes_tooth(const uint8_t *v, int ww, int wh, int x, int y)
  * walls only).  A pixel hl_step_grow() kept solid (R, or a bridge:
  * s->keep) because the pixel above had no solid of layer k within dg may
  * have some now: the wall band keep-apart added.  Kept anyway, it is left
- * behind by the moving wall: the next layer keeps it as R again and its bridge to the
- * wall grows, an icicle a pixel wide under the leaning wall (the cow, 50
- * mm: fin_mm3 2.09 without this).
+ * behind by the moving wall: the next layer keeps it as R again and its
+ * bridge to the wall grows, an icicle a pixel wide under the leaning wall
+ * (the cow, 50 mm: fin_mm3 2.09 without this).
  * Corners (g->corners): a pixel of E, solid above, beside the void and
- * farther than dg but within sqrt 2 dg of V(k + 1) is a candidate too.  Growth keeps it solid because it lies
- * farther than dd from V(k + 1), but the rule asks only that the solid
- * of layer k + 1 lie within dg of layer k's: beside a void's convex
- * corner (a concave corner of the solid, held by both its faces) the
- * pixel diagonal to the corner may turn void, and the corner grows
- * square, one pixel a layer along both axes (at SL1 pitch, 1.06 px
- * allowed, round growth bounds a void by axis-aligned edges advancing a
- * pixel a layer and diagonal ones advancing 0.71 px; mitred, the
- * axis-aligned edges also lengthen by a pixel at each end a layer, and
- * the void tends to a square with chamfered corners).  It is taken only
+ * farther than dg but within sqrt 2 dg of V(k + 1) is a candidate too.
+ * Growth keeps it solid because it lies farther than dd from V(k + 1),
+ * but the rule asks only that the solid of layer k + 1 lie within dg of
+ * layer k's: beside a void's convex corner (a concave corner of the
+ * solid, held by both its faces) the pixel diagonal to the corner may
+ * turn void, and the corner grows square (at SL1 pitch, 1.06 px allowed,
+ * round growth bounds a void by axis-aligned edges advancing a pixel a
+ * layer and diagonal ones advancing 0.71 px; mitred, the axis-aligned
+ * edges also lengthen by a pixel at each end a layer, and the void tends
+ * to a square with chamfered corners).  It is taken only
  * where no solid 8-neighbour of it is left with 4 or more void
  * 8-neighbours (makes_tooth): along a diagonal front every other pixel
  * could go, and the solid teeth left between them stood to the floor as
