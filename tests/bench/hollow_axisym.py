@@ -2,10 +2,12 @@
 """What round growth would give: a model of the top-down fill on a ball.
 
 The fill (docs/hollow.md section 4) grows each void by the exact rule on binary
-pixels: a front advances one pixel a layer along the pixel axes and none
-diagonally, so a void grown from a point is a diamond, not a disc, in every
-layer.  This script measures what that costs on a ball by running the same
-top-down greedy in continuous, axisymmetric form, where growth is round.
+pixels: grown round (`mitre_corners=false`) a front advances one pixel a layer
+along the pixel axes and none diagonally, so a void grown from a point is a
+diamond, not a disc, in every layer (with its convex corners mitred, the
+default, it tends to a square instead, docs/hollow.md 4.3).  This script
+measures what round growth gives on a ball by running the same top-down greedy
+in continuous, axisymmetric form.
 
 Model (units mm; rho = distance from the vertical axis, z = height from the
 ball's centre):
@@ -24,13 +26,13 @@ Self-check: with one void only, the void is the cone from the ball's top down to
 the equator plus the lower half ball, pi r^3 (checked within 0.1 %).
 
 Prints one line per birth distance: reduction (void / ball volume), voids; then
-the same at the rate binary pixels allow.  With h tan(alpha) between 1 and
-sqrt(2) pixels (SL1: 0.05 mm layers, 0.047 mm pixels, alpha 45: 1.064 px) a
-solid pixel of layer k + 1 needs a solid pixel of layer k among itself and its
-four neighbours, so V(k) can be at most V(k + 1) grown by that cross: a void
-grown from a point is a diamond gaining one pixel a layer at its corners, whose
-area is that of a disc gaining sqrt(2 / pi) = 0.798 px a layer.  The model run
-at that equal-area rate estimates what any binary layout keeps.
+the same at the rate of round growth on binary pixels.  With h tan(alpha)
+between 1 and sqrt(2) pixels (SL1: 0.05 mm layers, 0.047 mm pixels, alpha 45:
+1.064 px) growth by the distance threshold takes only a void's four-neighbours
+a layer: a void grown from a point is a diamond gaining one pixel a layer at its
+corners, whose area is that of a disc gaining sqrt(2 / pi) = 0.798 px a layer.
+The model run at that equal-area rate estimates what the fill keeps grown
+round; mitred corners are not modelled.
 `hollow_axisym.py --write-ball PATH [R]` writes instead the ball the bench
 hollows for comparison (tests/support/meshgen.py write_ball_stl: closed,
 9,024 triangles, radius R mm, 25 by default).
@@ -112,7 +114,7 @@ def main():
     pixel_mm, layer_mm = 0.047, 0.05  # the SL1's
     rate = math.sqrt(2 / math.pi) * pixel_mm / layer_mm
     red, n = layout(R, t, w, alpha, 3.0, grow_mm_per_mm=rate)
-    print("axisym at binary pixels' rate (SL1 pitch: diamonds, equal-area %.3f mm a layer, "
+    print("axisym at round binary growth's rate (SL1 pitch: diamonds, equal-area %.3f mm a layer, "
           "%.1f deg), births beyond 3.0 mm: %.2f %% in %d voids"
           % (rate * layer_mm, math.degrees(math.atan(rate)), 100 * red, n))
     return 0

@@ -1,11 +1,12 @@
 #!/usr/bin/env python3
 """Round growth drawn with grey edge pixels: would the verifier pass it?
 
-docs/hollow.md (4.3, 11 limit 3) traces the fill's shortfall on a bulky part
-to binary pixels: a front at 45 degrees to the pixel axes advances 0.707 px a
-layer where the rule allows 1.064.  The remedy proposed there is a fill whose
-fronts are sub-pixel level sets drawn as grey edge pixels, read back by the
-verifier's anti-aliased model.  This script measures that remedy's two
+docs/hollow.md (4.3, 11 limit 3): on binary pixels a front at 45 degrees to the
+pixel axes advances 0.707 px a layer where the rule allows 1.064 (the fill's
+mitred corners make up for it on a ball, not on the diagonal fronts, and no
+binary pixel follows a slope under one pixel a layer).  A fill whose fronts are
+sub-pixel level sets drawn as grey edge pixels, read back by the verifier's
+anti-aliased model, would lift both.  This script measures that fill's two
 premises before anyone builds it, apart from the engine:
 
 - it runs the round-growth model of hollow_axisym.py (the fill's top-down
