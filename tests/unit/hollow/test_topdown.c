@@ -31,6 +31,7 @@
 #include "engine/mesh/mesh.h"
 
 #include "boxgen.h"
+#include "unit/slice/meshgen.h"
 
 #define PX 0.05
 #define LAYER 0.05
@@ -653,38 +654,6 @@ static void test_births_apart(void)
 	mem_free(m.tri);
 }
 
-/* A prism of ns sides round the z axis through (c, c): circumradius r,
- * height h (mm), normals out; 0 when out of memory. */
-static int prism(struct mesh *m, int ns, double c, double r, double h)
-{
-	m->v = mem_alloc((size_t)(2 * ns + 2) * sizeof *m->v);
-	m->tri = mem_alloc((size_t)(4 * ns) * 3 * sizeof *m->tri);
-	m->nv = m->nt = 0;
-	if (!m->v || !m->tri)
-		return 0;
-	for (int i = 0; i < ns; i++) {
-		double a = 2 * M_PI * i / ns;
-		m->v[2 * i] = (struct vec3){c + r * cos(a), c + r * sin(a), 0};
-		m->v[2 * i + 1] = (struct vec3){c + r * cos(a), c + r * sin(a), h};
-	}
-	m->v[2 * ns] = (struct vec3){c, c, 0};
-	m->v[2 * ns + 1] = (struct vec3){c, c, h};
-	m->nv = (size_t)(2 * ns + 2);
-	for (int i = 0; i < ns; i++) {
-		uint32_t a0 = (uint32_t)(2 * i), a1 = a0 + 1, b0 = (uint32_t)(2 * ((i + 1) % ns)),
-			 b1 = b0 + 1, t[4][3] = {{a0, b0, b1}, {a0, b1, a1},
-						 {(uint32_t)(2 * ns), b0, a0},
-						 {(uint32_t)(2 * ns + 1), a1, b1}};
-		for (int j = 0; j < 4; j++) {
-			uint32_t *q = m->tri + 3 * m->nt++;
-			q[0] = t[j][0];
-			q[1] = t[j][1];
-			q[2] = t[j][2];
-		}
-	}
-	return 1;
-}
-
 /* Mitred corners (p.corners): in a cylinder the void is born under the
  * flat top of the interior, a blob of 20 pixels round its centre, and
  * grows down.  Round growth on these pixels (dg = 1 px a layer) advances
@@ -701,11 +670,25 @@ static void test_mitre_corners(void)
 	const double c = 3.5, r = 3, h = 4, ri = r * cos(M_PI / NS);
 	struct hl_fill_params p;
 	struct hl_fill f;
-	struct mesh m;
-	double dg = LAYER * tan(ALPHA_DEG * M_PI / 180), vol[2];
+	struct mesh *m = tm_new();
+	double dg = LAYER * tan(ALPHA_DEG * M_PI / 180), vol[2], poly[NS][2];
+	int fan[NS - 2][3];
 	size_t sect[2], teeth[2];
 
-	REQUIRE(prism(&m, NS, c, r, h));
+	/* the 64-gon round (c, c), circumradius r, its caps fanned from its
+	 * first corner, from z 0 to h */
+	REQUIRE(m);
+	for (int i = 0; i < NS; i++) {
+		poly[i][0] = c + r * cos(2 * M_PI * i / NS);
+		poly[i][1] = c + r * sin(2 * M_PI * i / NS);
+	}
+	for (int i = 0; i < NS - 2; i++) {
+		fan[i][0] = 0;
+		fan[i][1] = i + 1;
+		fan[i][2] = i + 2;
+	}
+	tm_prism(m, (const double(*)[2])poly, NS, (const int(*)[3])fan, NS - 2, 0, h);
+	REQUIRE(m->v && m->tri);
 	for (int corners = 0; corners <= 1; corners++) {
 		uint8_t *v;
 		size_t count = 0, np, front = 0;
@@ -713,7 +696,7 @@ static void test_mitre_corners(void)
 		double wmin = INFINITY;
 		params(&p, 0.5);
 		p.corners = corners;
-		v = built(&m, &p, &f, &count);
+		v = built(m, &p, &f, &count);
 		REQUIRE(v && count > 0);
 		np = (size_t)f.w * (size_t)f.h;
 		for (int k = 0; k < f.n; k++)
@@ -766,8 +749,7 @@ static void test_mitre_corners(void)
 	CHECK_NUM(vol[1], >, vol[0]);
 	/* no more solid teeth than round growth leaves (makes_tooth) */
 	CHECK_NUM((double)teeth[1], <=, (double)teeth[0]);
-	mem_free(m.v);
-	mem_free(m.tri);
+	tm_free(m);
 }
 
 int main(void)
