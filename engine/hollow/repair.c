@@ -171,6 +171,14 @@ static int inside_draw(struct inside *in, struct err *e)
  * such an island is found): over the void, not over the part's outside,
  * whose own islands need external supports and stay as they are.  lab:
  * w h scratch.  0, ERR_NOMEM or inside_draw's error. */
+/* What hold_islands reads of a component's pixels (flags). */
+enum {
+	HOLD_SEEN = 1,   /* a component */
+	HOLD_MENDED = 2, /* holds a mended pixel */
+	HOLD_STANDS = 4, /* stands on layer k: not an island */
+	HOLD_BORDER = 8, /* touches the crop's border */
+};
+
 static int hold_islands(struct raster *cur, const struct raster *above,
 			const struct raster *above_drawn, struct inside *in, int32_t *lab,
 			struct err *e)
@@ -187,45 +195,30 @@ static int hold_islands(struct raster *cur, const struct raster *above,
 	rc = label_components8(mask, cur->w, cur->h, lab, &count, e);
 	if (!rc && !(need = mem_calloc((size_t)count + 1, 1)))
 		rc = ERR_SET(e, ERR_NOMEM, "hollow: out of memory (mending layers)");
-	if (!rc) {
-		/* need: 1 = drawn, 2 = holds a mended pixel, 3 = stands on
-		 * layer k */
-		for (size_t i = 0; i < np; i++)
-			if (lab[i] && !need[lab[i]])
-				need[lab[i]] = 1;
-		for (size_t i = 0; i < np; i++)
-			if (lab[i] && above->px[i] != above_drawn->px[i])
-				need[lab[i]] = 2;
-		for (size_t i = 0; i < np; i++)
-			if (lab[i] && cur->px[i] >= VERIFY_THRESHOLD)
-				need[lab[i]] = 3;
-		/* a component the crop's border cuts may stand outside it (the
-		 * fill's solid crosses the optimised voids' box): left alone */
+	/* need: what each component's pixels show, one pass */
+	for (int y = 0; !rc && y < cur->h; y++)
 		for (int x = 0; x < cur->w; x++) {
-			size_t a = (size_t)x, b = (size_t)(cur->h - 1) * (size_t)cur->w + (size_t)x;
-			if (lab[a] && need[lab[a]] == 1)
-				need[lab[a]] = 3;
-			if (lab[b] && need[lab[b]] == 1)
-				need[lab[b]] = 3;
+			size_t i = (size_t)y * (size_t)cur->w + (size_t)x;
+			uint8_t f = HOLD_SEEN;
+			if (!lab[i])
+				continue;
+			f |= above->px[i] != above_drawn->px[i] ? HOLD_MENDED : 0;
+			f |= cur->px[i] >= VERIFY_THRESHOLD ? HOLD_STANDS : 0;
+			/* a component the crop's border cuts may stand outside it
+			 * (the fill's solid crosses the optimised voids' box) */
+			f |= x == 0 || y == 0 || x == cur->w - 1 || y == cur->h - 1 ? HOLD_BORDER : 0;
+			need[lab[i]] |= f;
 		}
-		for (int y = 0; y < cur->h; y++) {
-			size_t a = (size_t)y * (size_t)cur->w, b = a + (size_t)cur->w - 1;
-			if (lab[a] && need[lab[a]] == 1)
-				need[lab[a]] = 3;
-			if (lab[b] && need[lab[b]] == 1)
-				need[lab[b]] = 3;
-		}
-		for (int32_t c = 1; c <= count && !drawn; c++)
-			drawn = need[c] == 1;
-		if (drawn)
-			rc = inside_draw(in, e);
-	}
+	for (int32_t c = 1; !rc && c <= count && !drawn; c++)
+		drawn = need[c] == HOLD_SEEN;
+	if (drawn)
+		rc = inside_draw(in, e);
 	for (size_t i = 0; !rc && i < np; i++) {
-		int c = need && lab[i] ? need[lab[i]] : 0;
-		if (above->px[i] <= cur->px[i])
+		uint8_t c = lab[i] ? need[lab[i]] : 0;
+		if (!c || (c & HOLD_STANDS) || above->px[i] <= cur->px[i])
 			continue;
-		if ((c == 2 && above->px[i] != above_drawn->px[i]) ||
-		    (c == 1 && in->img->px[i] == 255))
+		if ((c & HOLD_MENDED) ? above->px[i] != above_drawn->px[i]
+				      : !(c & HOLD_BORDER) && in->img->px[i] == 255)
 			cur->px[i] = above->px[i];
 	}
 	mem_free(need);
