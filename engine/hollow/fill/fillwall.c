@@ -122,6 +122,12 @@ out:
 static const int HL_RING[8][2] = {{1, 0},  {1, 1},   {0, 1},  {-1, 1},
 				 {-1, 0}, {-1, -1}, {0, -1}, {1, -1}};
 
+/* Is pixel (x, y) of v (1 = void, ww x wh) void?  Outside the window: no. */
+static int void_at(const uint8_t *v, int ww, int wh, int x, int y)
+{
+	return x >= 0 && y >= 0 && x < ww && y < wh && v[(size_t)y * (size_t)ww + (size_t)x];
+}
+
 /* The solid 8-neighbours of pixel (x, y) (outside the window: solid), as
  * the number of 8-connected groups they make on the ring round it:
  * turning a pixel with at most one group void disconnects nothing. */
@@ -130,9 +136,7 @@ static int ring_groups(const uint8_t *v, int ww, int wh, int x, int y)
 	int sol[8], groups = 0, any = 0;
 
 	for (int q = 0; q < 8; q++) {
-		int xn = x + HL_RING[q][0], yn = y + HL_RING[q][1];
-		sol[q] = xn < 0 || yn < 0 || xn >= ww || yn >= wh ||
-			 !v[(size_t)yn * (size_t)ww + (size_t)xn];
+		sol[q] = !void_at(v, ww, wh, x + HL_RING[q][0], y + HL_RING[q][1]);
 		any |= sol[q];
 	}
 	if (!any)
@@ -150,11 +154,9 @@ static int ring_groups(const uint8_t *v, int ww, int wh, int x, int y)
 /* Has pixel (x, y) of v (1 = void) a void 8-neighbour? */
 static int next_to_void(const uint8_t *v, int ww, int wh, int x, int y)
 {
-	for (int j = 0; j < 8; j++) {
-		int qx = x + HL_RING[j][0], qy = y + HL_RING[j][1];
-		if (qx >= 0 && qy >= 0 && qx < ww && qy < wh && v[(size_t)qy * (size_t)ww + (size_t)qx])
+	for (int j = 0; j < 8; j++)
+		if (void_at(v, ww, wh, x + HL_RING[j][0], y + HL_RING[j][1]))
 			return 1;
-	}
 	return 0;
 }
 
@@ -168,13 +170,11 @@ static int makes_tooth(const uint8_t *v, int ww, int wh, int x, int y)
 
 	for (int j = 0; j < 8 && !tooth; j++) {
 		int qx = x + HL_RING[j][0], qy = y + HL_RING[j][1], n = 0;
-		if (qx < 0 || qy < 0 || qx >= ww || qy >= wh || v[(size_t)qy * (size_t)ww + (size_t)qx])
+		if (qx < 0 || qy < 0 || qx >= ww || qy >= wh || void_at(v, ww, wh, qx, qy))
 			continue;
 		for (int t = 0; t < 8; t++) {
 			int ux = qx + HL_RING[t][0], uy = qy + HL_RING[t][1];
-			if (ux < 0 || uy < 0 || ux >= ww || uy >= wh)
-				continue;
-			n += (ux == x && uy == y) || v[(size_t)uy * (size_t)ww + (size_t)ux];
+			n += (ux == x && uy == y) || void_at(v, ww, wh, ux, uy);
 		}
 		tooth = n >= 4;
 	}
@@ -199,11 +199,11 @@ static int makes_tooth(const uint8_t *v, int ww, int wh, int x, int y)
  * round growth bounds a void by axis-aligned edges advancing a pixel a
  * layer and diagonal ones advancing 0.71 px; mitred, the axis-aligned
  * edges also lengthen by a pixel at each end a layer, and the void tends
- * to a square with chamfered corners).  It is taken only
- * where no solid 8-neighbour of it is left with 4 or more void
- * 8-neighbours (makes_tooth): along a diagonal front every other pixel
- * could go, and the solid teeth left between them stood to the floor as
- * pillars a pixel wide (the 50 mm ball: 95 mm3 of slivers).
+ * to a square with chamfered corners).  It is taken only where no solid
+ * 8-neighbour of it is left with 4 or more void 8-neighbours
+ * (makes_tooth): along a diagonal front every other pixel could go, and
+ * the solid teeth left between them stood to the floor as pillars a pixel
+ * wide (the 50 mm ball: 95 mm3 of slivers).
  * A candidate turns void, pixel by pixel on the current state, where
  *   - its solid 8-neighbours make at most one group (nothing is cut
  *     off: a cut-off pixel would stand to the floor as an island);
